@@ -70,6 +70,8 @@ class Substructure:
         kind: a short description of the model (``"rod/assumed-modes"``, ``"fixed-free"`` ...).
         geometry: how to draw it, or ``None``.
         meta: model data worth keeping in results (lengths, element order, basis size ...).
+        position: maps a point reference to its ``(3,)`` coordinates in space (for drawing
+            attachments where they are attached), or ``None``.
     """
 
     name: str
@@ -81,6 +83,7 @@ class Substructure:
     kind: str = "matrices"
     geometry: Geometry | None = None
     meta: dict[str, Any] = field(default_factory=dict)
+    position: Callable[[Any], np.ndarray] | None = None
 
     def __post_init__(self) -> None:
         n = self.M.shape[0]
@@ -130,7 +133,7 @@ class Substructure:
         return Substructure(
             name=self.name, M=project(self.M), K=project(self.K), C=project(self.C),
             dof_labels=labels, locate=locate, kind=kind, geometry=geometry,
-            meta={**self.meta, **meta},
+            meta={**self.meta, **meta}, position=self.position,
         )
 
 

@@ -223,3 +223,43 @@ def test_fe_rejects_bad_input(kwargs, match):
         rod_fe(**args)
     with pytest.raises(ValueError, match="rod"):
         rod_fe(**args)
+
+
+def test_paper_literal_mapping_reproduces_table_1():
+    """Rod (n=8, g=4) + a, b fixed-free + c, d free-free, compatibility by a null-space basis.
+
+    Only the paper-literal mapping gives Table 1 (to its printed digits); the physical mapping
+    gives other frequencies (DESIGN.md section 2).
+    """
+    from substruct.models.discrete import fixed_free, free_free
+
+    EA, m = paper_taper(EA_PAPER, M_PAPER, L_PAPER)
+    points = (L_PAPER / 4, L_PAPER / 2, 3 * L_PAPER / 4, L_PAPER)
+
+    def coupled(mapping, extra_constraint):
+        rod = modal_truncation(rod_assumed_modes("rod", L_PAPER, EA, m, 8, mapping=mapping), 4)
+        subs = [rod, fixed_free("a", 1, 3000), fixed_free("b", 1, 9000),
+                free_free("c", 1, 7000), free_free("d", 1, 3000)]
+        M = sla.block_diag(*[s.M.toarray() for s in subs])
+        K = sla.block_diag(*[s.K.toarray() for s in subs])
+        off = np.cumsum([0] + [s.n_dof for s in subs])
+        rows = []
+        for i, x in enumerate(points, start=1):
+            r = np.zeros(off[-1])
+            r[:4] = rod.row(x).toarray()
+            r[off[i]:off[i + 1]] -= subs[i].row("boundary").toarray().ravel()
+            rows.append(r)
+        if extra_constraint:  # eq 52
+            r = np.zeros(off[-1])
+            r[:4] = sum(c * rod.row(x).toarray().ravel() for c, x in zip((2, -5, -4, 3), points))
+            rows.append(r)
+        N = sla.null_space(np.array(rows))
+        return np.sqrt(sla.eigh(N.T @ K @ N, N.T @ M @ N, eigvals_only=True))
+
+    assert np.array_equal(np.round(coupled("paper-literal", False), 1),
+                          [21.7, 54.8, 59.0, 83.7, 97.1, 135.0])
+    # with (52): Table 1 lists 0 (a spurious root, not a mode) then these
+    assert np.array_equal(np.round(coupled("paper-literal", True), 1),
+                          [21.7, 54.8, 74.2, 83.7, 97.1])
+    physical = coupled("physical", False)
+    assert abs(physical[0] - 21.7) > 0.5
