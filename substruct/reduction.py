@@ -74,7 +74,8 @@ def undamped_modes(sub: Substructure, n_modes: int, *, dense_limit: int = 2000,
     .. math::  \\Phi^T M \\Phi = I, \\qquad \\Phi^T K \\Phi = \\operatorname{diag}(\\omega_j^2)
 
     Eigenvectors are sorted by frequency and signed so that their first entry larger than
-    ``1e-8`` times their largest is positive.  For ``n > dense_limit`` the modes come from shift-invert Lanczos about ``sigma``
+    ``1e-8`` times their largest is positive.  For ``n > dense_limit`` the modes come from
+    shift-invert Lanczos about ``sigma``
     (default a small negative shift, :math:`-10^{-9}\\,\\mathrm{tr}K/\\mathrm{tr}M`, so that
     ``K - sigma M`` is positive definite even with rigid-body modes), followed by a Rayleigh-Ritz
     step on the converged vectors which makes them M-orthonormal within repeated eigenvalues.

@@ -54,7 +54,7 @@ class Geometry:
         return replace(self, interp=sp.csr_array(self.interp @ T))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class Substructure:
     """A linear substructure with sparse matrices and named points.
 

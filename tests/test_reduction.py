@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 from substruct.models.discrete import free_free
 from substruct.models.rod import paper_taper, rod_assumed_modes, rod_fe, uniform_rod_frequencies
@@ -105,7 +106,7 @@ def test_sparse_path_uses_given_factorization():
 
     def factorize(A):
         calls.append(A.shape)
-        lu = sp.linalg.splu(sp.csc_matrix(A))
+        lu = spla.splu(sp.csc_matrix(A))
         return lu.solve
 
     red = modal_truncation(rod, 3, dense_limit=10, factorize=factorize)

@@ -55,7 +55,8 @@ def _geometry(row_origin: int | None, row_below: int | None, n: int,
               glyphs: dict[str, int]) -> Geometry:
     """Two drawing nodes, the origin and ``(0, -1, 0)``; ``None`` means a node that stays put."""
     points = np.array([[0.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
-    entries = [(3 * node, col) for node, col in ((0, row_origin), (1, row_below)) if col is not None]
+    pairs = ((0, row_origin), (1, row_below))
+    entries = [(3 * node, col) for node, col in pairs if col is not None]
     r, c = zip(*entries)
     interp = sp.csr_array((np.ones(len(r)), (r, c)), shape=(6, n))
     return Geometry(points=points, cells=[("line", np.array([[0, 1]]))], interp=interp,
