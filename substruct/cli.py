@@ -3,13 +3,20 @@
 ::
 
     substruct run CASE.yaml [--out DIR] [--set key.path=value ...] [--force] [--quiet] [--json]
+    substruct converge CASE.yaml [--levels quick|default|fine|"assumed=4:256; ..."]
+                       [--variants constrained,unconstrained,bare] [--out DIR]
+                       [--set key.path=value ...] [--tol 1e-6] [--reference richardson|finest]
+                       [--force] [--quiet] [--json]
     substruct info RESULT.h5 [--json]
     substruct export RESULT.h5 --format vtu|xdmf [--modes 1-6] [--variant NAME] [--out DIR]
 
 Exit codes: 0 success; 2 bad input (one line ``substruct: error: <message>`` on stderr, no
-traceback, nothing written); 1 internal error (with its traceback); 130 interrupted.
+traceback, nothing written); 1 internal error (with its traceback); 130 interrupted (Ctrl-C);
+143 terminated (SIGTERM; partly written files are removed either way).
 ``run`` checks that the output directory can be written and that the result does not exist
-(unless ``--force``) before computing anything.
+(unless ``--force``) before computing anything; so does ``converge`` (a convergence study of the
+case's rod, :mod:`substruct.convergence`), which writes ``DIR/<name>_convergence.h5`` and
+``.png``.
 """
 
 from __future__ import annotations
@@ -51,7 +58,7 @@ def _parser() -> argparse.ArgumentParser:
                      "substructures, from a case file.")
     from substruct import __version__
     parser.add_argument("--version", action="version", version=f"substruct {__version__}")
-    sub = parser.add_subparsers(dest="command", metavar="{run,info,export}",
+    sub = parser.add_subparsers(dest="command", metavar="{run,converge,info,export}",
                                 parser_class=_Parser)
 
     run = sub.add_parser("run", help="run the analyses of a case file",
@@ -69,6 +76,33 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--json", action="store_true",
                      help="print a machine-readable summary instead of the table")
     run.set_defaults(func=_cmd_run)
+
+    conv = sub.add_parser("converge", help="convergence study of a rod case",
+                          description="Refine the case's rod by assumed modes, an enriched Ritz "
+                          "basis and P1/P2 finite elements, with its attachments and "
+                          "constraints; write DIR/<name>_convergence.h5 and .png, print "
+                          "errors, fitted orders and costs.")
+    conv.add_argument("case", metavar="CASE.yaml", help="the case file (one rod)")
+    conv.add_argument("--levels", default=None, metavar="SPEC",
+                      help="quick, default or fine, or items such as "
+                      "'assumed=4:256; enriched=1,2,4; p1=8:1024; p2=4:512; g=4' "
+                      "(default: default, g from the rod's reduce.modes)")
+    conv.add_argument("--variants", default="constrained,unconstrained,bare", metavar="LIST",
+                      help="comma list of constrained, unconstrained, bare "
+                      "(default: all three)")
+    conv.add_argument("--out", default="results", metavar="DIR",
+                      help="output directory (default: results)")
+    conv.add_argument("--set", action="append", default=[], metavar="KEY.PATH=VALUE",
+                      help="override a case value (repeatable), as for run")
+    conv.add_argument("--tol", type=float, default=1e-6,
+                      help="tolerance of the 'DOFs to reach' summary (default: 1e-6)")
+    conv.add_argument("--reference", choices=("richardson", "finest"), default="richardson",
+                      help="limit the errors are measured against (default: richardson)")
+    conv.add_argument("--force", action="store_true", help="overwrite existing outputs")
+    conv.add_argument("--quiet", action="store_true", help="no progress bar and no table")
+    conv.add_argument("--json", action="store_true",
+                      help="print a machine-readable summary instead of the table")
+    conv.set_defaults(func=_cmd_converge)
 
     info = sub.add_parser("info", help="print what a result file holds")
     info.add_argument("result", metavar="RESULT.h5")
@@ -124,18 +158,21 @@ def _module(name: str) -> Any:
 
 
 class _Bar:
-    """A plain progress bar on stderr for sweeps of more than :data:`PROGRESS_MIN` points."""
+    """A plain progress bar on stderr for sweeps of more than ``minimum`` points
+    (:data:`PROGRESS_MIN`); ``title`` and ``unit`` name the sweep (``FRF``, ``frequencies``)."""
 
-    def __init__(self, stream: TextIO, width: int = 30):
+    def __init__(self, stream: TextIO, width: int = 30, *, title: str = "FRF",
+                 unit: str = "frequencies", minimum: int = PROGRESS_MIN):
         self.stream, self.width, self.last = stream, width, -1
+        self.title, self.unit, self.minimum = title, unit, minimum
 
     def __call__(self, done: int, total: int, label: str) -> None:
-        if total <= PROGRESS_MIN:
+        if total <= self.minimum:
             return
         tty = getattr(self.stream, "isatty", lambda: False)()
         if not tty:  # a log file: one line per sweep, no carriage returns
             if done >= total:
-                self.stream.write(f"FRF {label}: {total} frequencies done\n")
+                self.stream.write(f"{self.title} {label}: {total} {self.unit} done\n")
                 self.stream.flush()
             return
         filled = int(self.width * done / total)
@@ -143,7 +180,7 @@ class _Bar:
             return
         self.last = filled
         bar = "#" * filled + "." * (self.width - filled)
-        self.stream.write(f"\rFRF {label:<20s} [{bar}] {done}/{total}")
+        self.stream.write(f"\r{self.title} {label:<20s} [{bar}] {done}/{total}")
         if done >= total:
             self.stream.write("\n")
             self.last = -1
@@ -284,10 +321,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
     out = Path(args.out)
     target = out / f"{case.name}.h5"
     _writable_dir(out, "--out")
-    if target.exists() and not args.force:
-        raise InputError(f"{target} exists; use --force to overwrite it")
-    if target.exists() and target.is_dir():
-        raise InputError(f"{target} is a directory")
+    for path in [target, *(_picture_paths(case, out) if case.output.pictures else [])]:
+        if path.exists() and not args.force:
+            raise InputError(f"{path} exists; use --force to overwrite it")
+        if path.is_dir():
+            raise InputError(f"{path} is a directory")
     model = build_model(case)
     results = _module("results")
     show = not args.quiet and not args.json
@@ -309,6 +347,18 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _picture_paths(case, out: Path) -> list[Path]:
+    """Every picture :func:`_pictures` may write for ``case`` (checked before running)."""
+    name, modes = case.name, case.analysis.modes
+    paths = []
+    if modes is not None:
+        paths += [out / f"{name}_modes.png"]
+        paths += [out / f"{name}_modes_{v.name}.png" for v in modes.variants]
+    if case.analysis.frf is not None:
+        paths.append(out / f"{name}_frf.png")
+    return paths
+
+
 def _pictures(result, out: Path, name: str) -> list[Path]:
     plotting = _module("plotting")
     files = []
@@ -321,6 +371,58 @@ def _pictures(result, out: Path, name: str) -> list[Path]:
     if result.frf is not None:
         files.append(Path(plotting.plot_frf(result, out / f"{name}_frf.png")))
     return files
+
+
+def _cmd_converge(args: argparse.Namespace) -> int:
+    from substruct.case import load_case
+    from substruct.convergence import VARIANTS, parse_levels, study_variants
+    from substruct.convergence_case import spec_from_case
+    report = _module("convergence_report")
+
+    variants = [v.strip() for v in args.variants.split(",") if v.strip()]
+    if not variants or any(v not in VARIANTS for v in variants):
+        raise InputError(f"--variants: expected a comma list of {', '.join(VARIANTS)}, "
+                         f"got {args.variants!r}")
+    if not (math.isfinite(args.tol) and args.tol > 0):
+        raise InputError(f"--tol: must be a positive number, got {args.tol:g}")
+    case = load_case(args.case, args.set)
+    spec, fixed_g = spec_from_case(case)
+    try:
+        levels = parse_levels(args.levels, fixed_g=fixed_g)
+    except ValueError as err:
+        raise InputError(f"--levels: {str(err).removeprefix('levels: ')}") from None
+    if not levels.fe_p1 and not levels.fe_p2:
+        raise InputError("--levels: no finite-element series (p1 or p2); the study measures "
+                         "its errors against the finest of them")
+    if not study_variants(spec, variants):
+        raise InputError(f"--variants {args.variants}: nothing to study (case {case.name} has "
+                         "no active constraints, so no constrained variant)")
+    out = Path(args.out)
+    _writable_dir(out, "--out")
+    targets = report.output_paths(out, spec.name)
+    for target in targets:
+        if target.is_dir():
+            raise InputError(f"{target} is a directory")
+        if target.exists() and not args.force:
+            raise InputError(f"{target} exists; use --force to overwrite it")
+    progress = None
+    if not args.quiet:
+        bar = _Bar(sys.stderr, title="converge", unit="levels", minimum=0)
+        width = 48 if getattr(sys.stderr, "isatty", lambda: False)() else 0
+
+        def progress(done: int, total: int, what: str) -> None:
+            label = spec.name if done >= total else what
+            label = label if len(label) <= 48 else label[:45] + "..."
+            bar(done, total, f"{label:<{width}s}")  # one width: \r overwrites it all
+    result, h5, png = report.run_convergence(spec, out, levels, variants=variants,
+                                             progress=progress, tol=args.tol,
+                                             reference=args.reference, echo=False)
+    if args.json:
+        print(json.dumps(report.summary_json(result, args.tol, [h5, png]), indent=1))
+    elif not args.quiet:
+        report.print_table(result, tol=args.tol)
+        print(f"written: {h5}, {png}")
+    return 0
 
 
 def _load_result(path: str) -> Any:
@@ -394,6 +496,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if getattr(args, "func", None) is None:
         return _fail("choose a command: run, info or export (see substruct --help)")
     from substruct.case import CaseError
+    restore = _terminate_on_sigterm()
     try:
         return int(args.func(args))
     except (InputError, CaseError) as err:
@@ -401,12 +504,35 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         sys.stderr.write("substruct: interrupted\n")
         return 130
+    except Terminated:  # temporary files were removed on the way out
+        sys.stderr.write("substruct: terminated\n")
+        return 143
     except BrokenPipeError:  # the reader went away (substruct info ... | head)
         _silence_stdout()
         return 0
     except Exception:  # an internal error: show everything
         traceback.print_exc()
         return 1
+    finally:
+        restore()
+
+
+class Terminated(BaseException):
+    """SIGTERM arrived while a command ran; it unwinds like Ctrl-C, so that partly written
+    files (``*.part``) are removed on the way out (exit code 143)."""
+
+
+def _terminate_on_sigterm() -> Any:
+    """Turn SIGTERM into :class:`Terminated` until the returned undo function is called."""
+    import signal
+    import threading
+    if threading.current_thread() is not threading.main_thread():
+        return lambda: None
+
+    def handler(signum: int, frame: Any) -> None:
+        raise Terminated()
+    previous = signal.signal(signal.SIGTERM, handler)
+    return lambda: signal.signal(signal.SIGTERM, previous)
 
 
 def _silence_stdout() -> None:

@@ -34,7 +34,8 @@ import scipy.sparse as sp
 from substruct.assembly import Assembly, Connection, LinearConstraint, PointRef, assemble
 from substruct.case import (Case, DiscreteSpec, FiniteElements, MatrixSpec, RodSpec,
                             parse_point)
-from substruct.constraints import ConstraintError
+from substruct.case_fields import gigabytes
+from substruct.constraints import ConstraintError, independent_rows
 from substruct.coupling import receptance
 from substruct.expressions import ExpressionError, scalar
 from substruct.modes import Modes, coupled_modes, modes_agreement
@@ -53,6 +54,8 @@ Progress = Callable[[int, int, str], None]
 DENSE_MODES_LIMIT = 2500
 #: Largest number of coordinates for the dense null-space receptance check.
 DENSE_FRF_LIMIT = 4000
+#: Largest constraint matrix (entries) whose consistency is checked densely before computing.
+CONSISTENCY_LIMIT = 5_000_000
 #: Frequencies per receptance call in a sweep (progress is reported between calls).
 CHUNK = 10
 
@@ -292,9 +295,11 @@ def build_model(case: Case) -> Model:
     """Make the substructures, resolve the points and assemble ``A u = b + R F``.
 
     Raises:
-        CaseError: a point off its substructure or on an unknown one, a reduction that cannot
-            be made, constraints whose terms cancel.
+        CaseError: a model too large for the dense eigenproblem (refused before building),
+            a point off its substructure or on an unknown one, a reduction that cannot be
+            made, constraints whose terms cancel, nonhomogeneous constraints that cannot hold.
     """
+    _check_dense_sizes(case, _min_size(case))
     specs = {s.name: s for s in case.substructures}
     uses = _point_uses(case)
     resolved: dict[str, tuple[str, Any]] = {}
@@ -342,9 +347,65 @@ def build_model(case: Case) -> Model:
     except ValueError as err:
         name = str(err).split(":")[0]
         k = next((k for k, c in enumerate(case.constraints) if c.name == name), None)
-        loc = ("constraints", k, "terms") if k is not None else ("constraints",)
-        raise case.error(loc, str(err)) from None
+        if k is None:
+            raise case.error(("constraints",), str(err)) from None
+        raise case.error(("constraints", k, "terms"), str(err),
+                         dict(case.constraints[k].terms)) from None
+    _check_consistent(case, asm, len(connections))
     return Model(asm, active, _drawings(asm, chains), points)
+
+
+def _check_consistent(case: Case, asm: Assembly, n_connections: int) -> None:
+    r"""Refuse nonhomogeneous constraints that cannot hold, before anything is computed.
+
+    A row of ``A`` that is a combination ``W`` of independent rows must have the same
+    combination of right-hand sides (``b`` and ``R``):
+
+    .. math::  A_d = W A_k \;\Rightarrow\; b_d = W b_k,\; R_d = W R_k
+
+    (the check :func:`substruct.constraints.check_consistent` makes again when the receptances
+    are computed; here it names the constraint in the case file).
+    """
+    A = asm.A
+    m, N = A.shape
+    if m == 0 or (asm.R.nnz == 0 and not np.any(asm.b)) or m * N > CONSISTENCY_LIMIT:
+        return
+    rows = independent_rows(A)
+    if rows.dropped.size == 0:
+        return
+    labels = list(asm.constraint_labels)
+    for field, rhs in (("rhs", asm.b.reshape(m, 1)), ("rhs_force", asm.R.toarray())):
+        scale = max(float(np.abs(rhs).max()), 1e-300)
+        err = np.abs(rhs[rows.dropped] - rows.combination @ rhs[rows.keep]).max(axis=1) / scale
+        bad = np.flatnonzero(err > 1e-8)
+        if bad.size:
+            # the dependency  sum_r c_r A_r = 0  whose right-hand sides do not cancel
+            c = np.zeros(m)
+            c[rows.keep] = -rows.combination[bad[0]]
+            c[rows.dropped[bad[0]]] = 1.0
+            involved = np.flatnonzero(np.abs(c) > 1e-12 * np.abs(c).max())
+            # blame the last user constraint involved (connections have no right-hand side)
+            t = int(max(involved, key=lambda r: (r >= n_connections, r)))
+            _inconsistent(case, field, labels, n_connections, t,
+                          {int(r): -c[r] / c[t] for r in involved if r != t},
+                          float(np.abs(c @ rhs).max() / abs(c[t]) / scale))
+
+
+def _inconsistent(case: Case, field: str, labels: list[str], n_connections: int, t: int,
+                  combination: dict[int, float], diff: float) -> None:
+    """Raise the :class:`CaseError` for row ``t = sum combination[r] row r`` of ``A``."""
+    terms = sorted(combination.items(), key=lambda kv: -abs(kv[1]))
+    combo = " + ".join(f"{w:.4g} x ({labels[r]})" for r, w in terms[:3])
+    combo += " + ..." if len(terms) > 3 else ""
+    problem = (f"inconsistent constraints: the left-hand side of {labels[t]!r} is {combo}, "
+               f"but its {field} is not the same combination (differs by {diff:.3g}, "
+               f"relative)")
+    if t < n_connections:
+        raise case.error(("constraints",), problem)
+    con = [c for c in case.constraints if c.active][t - n_connections]
+    k = case.constraints.index(con)
+    raise case.error(("constraints", k, field), problem,
+                     dict(con.rhs_force) if field == "rhs_force" else con.rhs)
 
 
 # --------------------------------------------------------------------------- analyses
@@ -373,19 +434,36 @@ def _modes(case: Case, asm: Assembly, A: sp.csr_array, loc: tuple) -> ModeResult
     return _mode_result(main, agreement)
 
 
-def _check_dense_modes(case: Case, asm: Assembly) -> None:
-    N = asm.n_dof
+def _min_size(case: Case) -> int:
+    """A lower bound of the number of stacked coordinates, known before building."""
+    total = 0
+    for spec in case.substructures:
+        n = spec.n_dof() if hasattr(spec, "n_dof") else None
+        disc = getattr(spec, "discretization", None)
+        if n is None and isinstance(disc, FiniteElements):
+            n = max(disc.elements * disc.order - 1, 1)  # nodes less at most two supports
+        total += n or 0
+    return total
+
+
+def _check_dense_sizes(case: Case, N: int, at_least: bool = True) -> None:
+    """Refuse dense eigenproblems (and dense receptance checks) too large for the memory."""
+    size = f"at least {N}" if at_least else f"{N}"
     if case.analysis.modes is not None and N > DENSE_MODES_LIMIT:
         need = 8 * 8 * (2 * N) ** 2  # dense state-space pencil, eigenvectors, workspace
         raise case.error(("analysis", "modes"), f"the coupled eigenproblem is dense and the "
-                         f"model has {N} coordinates (about {need / 1e9:.3g} GB); at most "
+                         f"model has {size} coordinates (about {gigabytes(need)}); at most "
                          f"{DENSE_MODES_LIMIT}: reduce the large substructures "
                          f"(reduce: {{modes: ...}})", N)
     frf = case.analysis.frf
     if frf is not None and "null-space" in (frf.method, *frf.check) and N > DENSE_FRF_LIMIT:
         raise case.error(("analysis", "frf", "check"), f"the null-space receptance is dense: "
-                         f"{N} coordinates need about {16 * N * N * 3 / 1e9:.3g} GB; at most "
+                         f"{size} coordinates need about {gigabytes(16 * N * N * 3)}; at most "
                          f"{DENSE_FRF_LIMIT}: use kkt", N)
+
+
+def _check_dense_modes(case: Case, asm: Assembly) -> None:
+    _check_dense_sizes(case, asm.n_dof, at_least=False)
 
 
 def _sweep(asm: Assembly, omegas: np.ndarray, R, method: str, E, O,

@@ -325,19 +325,112 @@ def test_numbers_with_exponents_are_numbers():
     assert yaml.safe_load("x: 6e6")["x"] == "6e6"  # PyYAML itself is left alone
 
 
-def test_inconsistent_constraints_are_a_case_error():
-    from substruct.run import run_case
-    case = load_case(CASES / "three_dof_frf_nonhomogeneous.yaml", [
+NONHOMOGENEOUS = CASES / "three_dof_frf_nonhomogeneous.yaml"
+
+
+def test_inconsistent_constraints_are_refused_before_computing():
+    # eq41 reads q1 + 2 q3 = F1 + F2 + 3 F3; twice its left side with another right side
+    case = load_case(NONHOMOGENEOUS, [
         "constraints[1]={name: again, terms: {P@q1: 2, P@q3: 4}, rhs_force: {P@q1: 1}}"])
-    with pytest.raises(CaseError, match="analysis.frf: inconsistent constraints: again is a "
-                                        "combination of the other rows"):
-        run_case(case)
+    with pytest.raises(CaseError, match=r"constraints.again.rhs_force: inconsistent constraints: "
+                                        r"the left-hand side of 'again' is 2 x \(eq41\), but its "
+                                        r"rhs_force is not the same combination \(differs by 2, "
+                                        r"relative\), got \{\"P@q1\": 1.0\}"):
+        build_model(case)
+    # constant right-hand sides too
+    case = load_case(NONHOMOGENEOUS, [
+        "constraints.eq41.rhs=1",
+        "constraints[1]={name: again, terms: {P@q1: 2, P@q3: 4}, rhs: 1, "
+        "rhs_force: {P@q1: 2, P@q2: 2, P@q3: 6}}"])
+    with pytest.raises(CaseError, match=r"constraints.again.rhs: inconsistent constraints: .*"
+                                        r"its rhs is not the same combination.*, got 1.0$"):
+        build_model(case)
+
+
+def test_redundant_but_consistent_constraints_are_accepted():
+    case = load_case(NONHOMOGENEOUS, [
+        "constraints[1]={name: again, terms: {P@q1: 2, P@q3: 4}, "
+        "rhs_force: {P@q1: 2, P@q2: 2, P@q3: 6}}"])
+    assert build_model(case).assembly.A.shape == (2, 3)
 
 
 def test_dense_eigenproblem_is_refused_up_front():
-    from substruct.run import run_case
+    from substruct import run
     case = load_case(CASES / "tapered_rod_fe.yaml", [
         "substructures.rod.reduce=null", "substructures.rod.discretization.elements=1500"])
+    # 1500 P2 elements: at least 2999 free nodes, plus 6 coordinates of the attachments
     with pytest.raises(CaseError, match=r"analysis.modes: the coupled eigenproblem is dense and "
-                                        r"the model has 3006 coordinates \(about"):
-        run_case(case)
+                                        r"the model has at least 3005 coordinates \(about 2.31 GB"):
+        build_model(case)  # before anything is built
+    with pytest.raises(CaseError, match=r"the model has 3006 coordinates \(about 2.31 GB"):
+        run._check_dense_sizes(case, 3006, at_least=False)  # the exact count, once built
+
+
+# ---------------------------------------------------------------- hostile YAML and files
+
+
+def test_anchors_and_merge_keys_still_work():
+    text = (CASES / "tapered_rod_table1.yaml").read_text().replace(
+        "  - {name: a, type: fixed-free, mass: 1, stiffness: 3000}",
+        "  - &spring {name: a, type: fixed-free, mass: 1, stiffness: 3000}").replace(
+        "  - {name: b, type: fixed-free, mass: 1, stiffness: 9000}",
+        "  - {<<: *spring, name: b, stiffness: 9000}")
+    case = parse_case(text)
+    assert case.substructures[2].stiffness == 9000 and case.substructures[2].mass == 1
+
+
+def test_alias_bombs_and_deep_nesting_are_refused_quickly():
+    import time
+    bomb = "a0: &a0 [x, x, x, x, x, x, x, x, x, x]\n" + "".join(
+        f"a{i}: &a{i} [{', '.join([f'*a{i - 1}'] * 10)}]\n" for i in range(1, 9))
+    start = time.perf_counter()
+    assert "invalid YAML: aliases expand to more than 1000000 values" in error_of(text=bomb)
+    assert "invalid YAML: a structure that contains itself" in \
+        error_of(text="name: &x [*x]\n")
+    assert error_of(text="name: " + "[" * 5000 + "]" * 5000) == \
+        "cases/x.yaml: line 1, column 107: invalid YAML: nested more than 100 levels deep"
+    assert "nested more than 100 levels deep" in error_of(
+        text="".join(" " * i + "- \n" for i in range(300)))
+    assert time.perf_counter() - start < 5
+
+
+def test_matrix_file_headers_are_read_before_the_data(tmp_path):
+    data = copy.deepcopy(THREE)
+    data.pop("parameters")
+    data["substructures"][0].update(M=[[1, 0, 0], [0, 2, 0], [0, 0, 4]],
+                                    K=[[20, -10, 0], [-10, 30, -20], [0, -20, 20]], C=None)
+
+    def bad(name):
+        return error_of(changed(data, ("substructures", 0, "K"), {"file": name}),
+                        base_dir=tmp_path)
+    # an .npy header that promises 10^5 x 10^5 doubles (80 GB) over 8 bytes of data
+    header = np.lib.format.header_data_from_array_1_0(np.zeros((1, 1)))
+    header["shape"] = (100_000, 100_000)
+    with open(tmp_path / "huge.npy", "wb") as f:
+        np.lib.format.write_array_header_1_0(f, header)
+        f.write(np.zeros(1).tobytes())
+    assert "substructures.P.K.file: a 100000 x 100000 matrix with 10000000000 stored entries " \
+           "would need about 160 GB of memory, more than the 4 GB allowed, got 'huge.npy'" in \
+        bad("huge.npy")
+    # the same inside an .npz
+    import zipfile
+    with zipfile.ZipFile(tmp_path / "huge.npz", "w") as z:
+        z.write(tmp_path / "huge.npy", "K.npy")
+    assert "a 100000 x 100000 matrix with 10000000000 stored entries" in bad("huge.npz")
+    scipy.io.mmwrite(str(tmp_path / "c.mtx"), sp.coo_matrix(np.eye(3) * 1j))
+    assert "substructures.P.K.file: must be a real matrix, the file holds a complex one" in \
+        bad("c.mtx")
+    np.save(tmp_path / "s.npy", np.array([["a", "b"], ["c", "d"]]))
+    assert "substructures.P.K.file: must hold a real matrix, holds <U1 entries" in bad("s.npy")
+    np.save(tmp_path / "empty.npy", np.zeros((0, 0)))
+    data["substructures"][0]["M"] = {"file": "empty.npy"}
+    assert "substructures.P.M: must have at least one row" in bad("empty.npy")
+
+
+def test_receptances_too_large_for_memory_are_refused():
+    message = error_of(changed(THREE, ("analysis", "frf"), {
+        "omega": {"start": 1, "stop": 2, "num": 50000}, "inputs": ["P@q1"] * 100,
+        "outputs": ["P@q2"] * 100, "check": ["kkt"]}))
+    assert "analysis.frf: the receptances would need about 16 GB of memory (50000 frequencies x " \
+           "100 outputs x 100 inputs, complex, for 2 formulation(s)), more than the 4 GB " \
+           "allowed, got {\"frequencies\": 50000, \"outputs\": 100, \"inputs\": 100}" in message
