@@ -494,7 +494,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SystemExit as exc:  # --help, --version
         return int(exc.code or 0)
     if getattr(args, "func", None) is None:
-        return _fail("choose a command: run, info or export (see substruct --help)")
+        return _fail("choose a command: run, converge, info or export (see substruct --help)")
     from substruct.case import CaseError
     restore = _terminate_on_sigterm()
     try:

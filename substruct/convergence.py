@@ -47,17 +47,17 @@ from the null-space form :math:`u = Z p`, :math:`A Z = 0` (:func:`lowest_modes`)
 (identity on all but ``rank(A)`` eliminated coordinates), then a dense symmetric solve for small
 or dense models and shift-invert Lanczos with a SuperLU factorization for large sparse ones
 (DESIGN.md section 6).  Damped systems go through the first companion form.
+
+**Elsewhere.**  The table, the HDF5 file and the plot: :mod:`substruct.convergence_report`;
+a :class:`RodSystemSpec` from a case file: :mod:`substruct.convergence_case`; the command
+``substruct converge``: :mod:`substruct.cli`.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import json
-import os
-import tempfile
 import time
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any, Callable, Sequence
 
 import numpy as np
@@ -83,17 +83,22 @@ __all__ = [
     "VariantResult",
     "ConvergenceResult",
     "lowest_modes",
+    "VARIANTS",
+    "study_variants",
     "convergence_study",
     "dofs_to_reach",
-    "print_table",
-    "save_h5",
-    "load_h5",
-    "plot",
-    "run_convergence",
 ]
 
 ROD = "rod"
+#: ``progress(done, total, description)``, called after each level.
 Progress = Callable[[int, int, str], None]
+#: The versions of the system a study can run (see :func:`study_variants`).
+VARIANTS = ("constrained", "unconstrained", "bare")
+#: Largest number of sine functions a level may ask for (the mass and stiffness quadrature is
+#: dense: about ``1250 n^2`` bytes, 1.3 GB at this size).
+MAX_RITZ = 1024
+#: Largest number of elements a level may ask for.
+MAX_ELEMENTS = 1_000_000
 
 # ------------------------------------------------------------------------------ the system
 
@@ -259,31 +264,42 @@ _LEVEL_KEYS = {"assumed": "assumed", "am": "assumed", "enriched": "enriched",
                "fixed_g": "fixed_g"}
 
 
-def parse_levels(text: str | None) -> StudyLevels:
+def parse_levels(text: str | None, *, fixed_g: int | None = 4) -> StudyLevels:
     """Levels from a command-line string.
 
-    Either a preset name (``quick``, ``default``, ``fine``) or ``;``-separated items
-    ``key=values`` over the default levels, ``values`` a comma list or ``a:b`` (powers of two
-    from ``a`` to ``b``), ``key`` one of ``assumed``, ``enriched``, ``p1``, ``p2``, ``g``
-    (``g=none`` drops the fixed-g series, an empty list drops a series)::
+    A preset name (``quick``, ``default``, ``fine``), or ``;``-separated items ``key=values``
+    over the default levels (or over a preset named as the first item), ``values`` a comma
+    list or ``a:b`` (powers of two from ``a`` up to ``b``), ``key`` one of ``assumed``,
+    ``enriched``, ``p1``, ``p2``, ``g`` (``g=none`` drops the fixed-g series, an empty list
+    drops a series)::
 
         "assumed=4:256; p1=8:1024; p2=4,8,16,32,64; g=4"
+        "quick; g=none"
+
+    Args:
+        text: the string (``None`` or blank: the default levels).
+        fixed_g: ``g`` of the fixed-g series unless ``text`` sets one (``None``: no such
+            series); a case file's ``reduce: {modes: g}``.
 
     Raises:
-        ValueError: an unknown key or a value that is not a positive integer.
+        ValueError: an unknown key, a value that is not a positive integer, a range ``a:b``
+            with ``a > b``, more than :data:`MAX_RITZ` functions or :data:`MAX_ELEMENTS`
+            elements.
     """
-    if text is None or not text.strip():
-        return StudyLevels()
-    text = text.strip()
-    if text in StudyLevels.PRESETS:
-        return StudyLevels.preset(text)
-    changes: dict[str, Any] = {}
-    for item in filter(None, (s.strip() for s in text.split(";"))):
+    if fixed_g is not None:
+        fixed_g = _positive_int(str(fixed_g), f"g={fixed_g}")
+    items = [s.strip() for s in (text or "").split(";") if s.strip()]
+    base = StudyLevels()
+    if items and items[0] in StudyLevels.PRESETS:
+        base = StudyLevels.preset(items.pop(0))
+    changes: dict[str, Any] = {"fixed_g": fixed_g}
+    for item in items:
         key, sep, value = item.partition("=")
         key = key.strip().lower()
         if not sep or key not in _LEVEL_KEYS:
             raise ValueError(f"levels: bad item {item!r}; expected key=values with key one of "
-                             "assumed, enriched, p1, p2, g, or a preset " f"{StudyLevels.PRESETS}")
+                             "assumed, enriched, p1, p2, g, or a preset " f"{StudyLevels.PRESETS}"
+                             " first")
         field_name = _LEVEL_KEYS[key]
         value = value.strip()
         if field_name == "fixed_g":
@@ -292,13 +308,20 @@ def parse_levels(text: str | None) -> StudyLevels:
             continue
         if ":" in value:
             lo, hi = (_positive_int(v, item) for v in value.split(":", 1))
+            if lo > hi:
+                raise ValueError(f"levels: empty range {value!r} in {item!r} (a:b needs a <= b)")
             vals = [lo]
             while vals[-1] * 2 <= hi:
                 vals.append(vals[-1] * 2)
         else:
             vals = [_positive_int(v, item) for v in value.split(",") if v.strip()]
+        most = MAX_RITZ if field_name in ("assumed", "enriched") else MAX_ELEMENTS
+        if vals and max(vals) > most:
+            what = "functions" if most == MAX_RITZ else "elements"
+            raise ValueError(f"levels: {max(vals)} in {item!r} is more than the {most} {what} "
+                             "a level may have")
         changes[field_name] = tuple(sorted(set(vals)))
-    return dataclasses.replace(StudyLevels(), **changes)
+    return dataclasses.replace(base, **changes)
 
 
 def _positive_int(text: str, item: str) -> int:
@@ -324,7 +347,8 @@ class SeriesResult:
         level: the size parameter (``n`` or target number of elements).
         dofs: Ritz functions or free FE DOFs of the rod (before modal reduction).
         coupled_dofs: coordinates of the assembled system.
-        seconds: wall time of each level (build, assemble, solve).
+        seconds: wall time of each level (build, assemble, solve; a rod model reused from
+            another series or variant is charged the time its build took).
         eigenvalues: complex roots ``(levels, modes)`` (``i omega`` if undamped; NaN if the
             level has fewer roots).
         rel_error: ``|lambda - lambda_ref| / |lambda_ref|`` (``inf`` where the level has fewer
@@ -530,28 +554,64 @@ class _Method:
     label: str
     levels: tuple[int, ...]
     theory: float
-    build: Callable[[int], Substructure]
+    build: Callable[[int], tuple[Substructure, float]]  # the rod and the seconds to charge
 
 
-def _methods(spec: RodSystemSpec, levels: StudyLevels, smooth: bool) -> list[_Method]:
+class _Rods:
+    """Rod models built once per study: the plain sines serve both assumed-modes series, and
+    the variants with the same points share every model.  A reused model is charged the time it
+    took to build, so each level's cost reads as if it had been built for it."""
+
+    def __init__(self) -> None:
+        self._built: dict[tuple[Any, ...], tuple[Substructure, float]] = {}
+
+    def get(self, key: tuple[Any, ...], make: Callable[[], Substructure]
+            ) -> tuple[Substructure, float]:
+        """``(model, seconds to charge)``: 0 if built now (the caller times it), else the time
+        the first build took."""
+        if key in self._built:
+            return self._built[key]
+        t = time.perf_counter()
+        rod = make()
+        self._built[key] = (rod, time.perf_counter() - t)
+        return rod, 0.0
+
+
+def _methods(spec: RodSystemSpec, levels: StudyLevels, smooth: bool,
+             rods: _Rods | None = None) -> list[_Method]:
     pts = spec.points
     L, EA, m, sup = spec.length, spec.EA, spec.m, spec.support
+    rods = rods or _Rods()
+
+    def sines(n: int) -> tuple[Substructure, float]:
+        return rods.get(("sines", n, pts),
+                        lambda: rod_assumed_modes(ROD, L, EA, m, n, sup, nodes_at=pts))
+
+    def truncated(n: int, g: int) -> tuple[Substructure, float]:
+        rod, charge = sines(n)
+        return modal_truncation(rod, g), charge
+
+    def made(key: tuple[Any, ...], make: Callable[[], Substructure]
+             ) -> tuple[Substructure, float]:
+        return rods.get(key + (pts,), make)
+
     out = [_Method("assumed", "assumed modes (g = n)", tuple(levels.assumed),
-                   np.nan if smooth else 1.0,
-                   lambda n: rod_assumed_modes(ROD, L, EA, m, n, sup, nodes_at=pts))]
+                   np.nan if smooth else 1.0, sines)]
     g = levels.fixed_g
     if g is not None:
         out.append(_Method(f"assumed-g{g}", f"assumed modes (g = {g})",
                            tuple(n for n in levels.assumed if n >= g), np.nan,
-                           lambda n: modal_truncation(
-                               rod_assumed_modes(ROD, L, EA, m, n, sup, nodes_at=pts), g)))
+                           lambda n: truncated(n, g)))
     if pts:
         out.append(_Method("enriched", "enriched assumed modes", tuple(levels.enriched), np.nan,
-                           lambda n: rod_assumed_modes_enriched(ROD, L, EA, m, n, pts, sup)))
+                           lambda n: made(("enriched", n), lambda: rod_assumed_modes_enriched(
+                               ROD, L, EA, m, n, pts, sup))))
     out.append(_Method("fe-p1", "FE P1", tuple(levels.fe_p1), 2.0,
-                       lambda n: rod_fe(ROD, L, EA, m, n, 1, sup, nodes_at=pts)))
+                       lambda n: made(("p1", n), lambda: rod_fe(ROD, L, EA, m, n, 1, sup,
+                                                                nodes_at=pts))))
     out.append(_Method("fe-p2", "FE P2", tuple(levels.fe_p2), 4.0,
-                       lambda n: rod_fe(ROD, L, EA, m, n, 2, sup, nodes_at=pts)))
+                       lambda n: made(("p2", n), lambda: rod_fe(ROD, L, EA, m, n, 2, sup,
+                                                                nodes_at=pts))))
     return [mt for mt in out if mt.levels]
 
 
@@ -591,20 +651,20 @@ def _richardson(lf: np.ndarray, lc: np.ndarray, ratio: float, order: float) -> n
 
 def _run_variant(key: str, label: str, spec: RodSystemSpec, levels: StudyLevels,
                  reference: str, fit_points: int, error_floor: float,
-                 tick: Callable[[str], None]) -> VariantResult:
+                 tick: Callable[[str], None], rods: _Rods) -> VariantResult:
     t0 = time.perf_counter()
     smooth = not spec.points
     k = spec.n_modes
     raw: dict[str, dict[str, Any]] = {}
-    for mt in _methods(spec, levels, smooth):
+    for mt in _methods(spec, levels, smooth, rods):
         rec: dict[str, list[Any]] = {"level": [], "dofs": [], "coupled": [], "sec": [],
                                      "lam": [], "n_el": []}
         for n in mt.levels:
             t = time.perf_counter()
-            rod = mt.build(n)
+            rod, charge = mt.build(n)
             asm = spec.assemble(rod)
             lam = lowest_modes(asm, k)
-            rec["sec"].append(time.perf_counter() - t)
+            rec["sec"].append(time.perf_counter() - t + charge)
             rec["level"].append(n)
             rec["dofs"].append(int(rod.meta.get("reduced_from", rod.n_dof)))
             rec["coupled"].append(asm.n_dof)
@@ -665,10 +725,21 @@ def _run_variant(key: str, label: str, spec: RodSystemSpec, levels: StudyLevels,
                          seconds=time.perf_counter() - t0)
 
 
-def _variants(spec: RodSystemSpec, which: Sequence[str]) -> list[tuple[str, str, RodSystemSpec]]:
+def study_variants(spec: RodSystemSpec, which: Sequence[str] = VARIANTS
+                   ) -> list[tuple[str, str, RodSystemSpec]]:
+    """The versions of ``spec`` a study runs, as ``(key, label, spec)``, in the order asked.
+
+    ``"constrained"``: ``spec`` as given (skipped if it has no extra constraints: it would
+    repeat ``"unconstrained"``); ``"unconstrained"``: without its extra constraints (skipped
+    when it is the bare rod and ``"bare"`` is asked too); ``"bare"``: the rod alone.  Repeated
+    keys count once.
+
+    Raises:
+        ValueError: a key that is not one of :data:`VARIANTS`.
+    """
     names = spec.constraint_names()
     out: list[tuple[str, str, RodSystemSpec]] = []
-    for v in which:
+    for v in dict.fromkeys(which):
         if v == "constrained":
             if spec.constraints:
                 out.append((v, f"with {names}", spec))
@@ -680,12 +751,12 @@ def _variants(spec: RodSystemSpec, which: Sequence[str]) -> list[tuple[str, str,
             out.append((v, "bare rod (no attachments, no constraints)",
                         dataclasses.replace(spec, attachments=(), constraints=())))
         else:
-            raise ValueError(f"unknown variant {v!r}; expected constrained, unconstrained, bare")
+            raise ValueError(f"unknown variant {v!r}; expected one of {', '.join(VARIANTS)}")
     return out
 
 
 def convergence_study(spec: RodSystemSpec, levels: StudyLevels | None = None, *,
-                      variants: Sequence[str] = ("constrained", "unconstrained", "bare"),
+                      variants: Sequence[str] = VARIANTS,
                       reference: str = "richardson", fit_points: int = 3,
                       error_floor: float = 1e-10,
                       progress: Progress | None = None) -> ConvergenceResult:
@@ -717,7 +788,7 @@ def convergence_study(spec: RodSystemSpec, levels: StudyLevels | None = None, *,
     if reference not in ("richardson", "finest"):
         raise ValueError(f"reference must be 'richardson' or 'finest', got {reference!r}")
     levels = levels or StudyLevels()
-    todo = _variants(spec, variants)
+    todo = study_variants(spec, variants)
     total = sum(len(mt.levels) for _, _, s in todo
                 for mt in _methods(s, levels, not s.points))
     done = 0
@@ -729,7 +800,9 @@ def convergence_study(spec: RodSystemSpec, levels: StudyLevels | None = None, *,
             progress(done, total, what)
 
     t0 = time.perf_counter()
-    out = {key: _run_variant(key, label, s, levels, reference, fit_points, error_floor, tick)
+    rods = _Rods()
+    out = {key: _run_variant(key, label, s, levels, reference, fit_points, error_floor, tick,
+                             rods)
            for key, label, s in todo}
     return ConvergenceResult(
         name=spec.name, n_modes=spec.n_modes, variants=out,
@@ -750,252 +823,3 @@ def dofs_to_reach(series: SeriesResult, tol: float) -> int | None:
         return None
     first = ok.size - int(np.argmin(ok[::-1])) if not ok.all() else 0
     return int(series.dofs[first])
-
-
-# -------------------------------------------------------------------------------- output
-
-
-def _fmt(x: float, spec: str = ".1e") -> str:
-    if np.isposinf(x):
-        return "n/a"
-    return "-" if not np.isfinite(x) else format(x, spec)
-
-
-def _reach_text(s: SeriesResult, tol: float) -> str:
-    n = dofs_to_reach(s, tol)
-    if n is not None:
-        return str(n)
-    worst = s.worst_error[-1]
-    if np.isposinf(worst):
-        have = int(np.sum(np.isfinite(s.eigenvalues[-1])))
-        return f"not reached (only {have} of {s.eigenvalues.shape[1]} roots)"
-    return f"not reached (worst {_fmt(worst)} at {s.dofs[-1]} DOFs)"
-
-
-def print_table(result: ConvergenceResult, tol: float = 1e-6, file: Any = None) -> str:
-    """A text table: limits, errors per level and mode, fitted rates, cost; returns and prints it.
-
-    Args:
-        result: the study.
-        tol: tolerance for the "DOFs to reach" summary.
-        file: where to print (``sys.stdout`` if ``None``; ``False`` for no printing).
-    """
-    k = result.n_modes
-    W, P = 11, 31  # column width, width of the row titles
-
-    def cols(values: Any, spec: str = ".1e") -> str:
-        return "".join(f"{_fmt(x, spec):>{W}}" for x in values)
-
-    modes = "".join(f"{'mode ' + str(j + 1):>{W}}" for j in range(k))
-    lines = [f"Convergence study: {result.name}   ({k} modes, total {result.seconds:.1f} s)"]
-    for v in result.variants.values():
-        ref = "Richardson" if result.attrs.get("reference") == "richardson" else "finest"
-        lines += ["", f"== {v.label} ==  ({v.seconds:.1f} s)",
-                  f"limit: {v.limit_source}; errors against {ref}",
-                  f"{'':{P}}{modes}",
-                  f"{'|lambda| finest (rad/s)':{P}}" + cols(abs(v.limit_finest), ".9g"),
-                  f"{'|lambda| Richardson (rad/s)':{P}}" + cols(abs(v.limit_richardson), ".9g"),
-                  f"{'relative difference':{P}}" + cols(v.limit_difference),
-                  f"{'observed order (no limit)':{P}}" + cols(v.reference_order, ".2f"),
-                  "",
-                  f"{'method':12}{'level':>6}{'DOFs':>6}{'sec':>7}{modes}{'worst':>{W}}"]
-        for s in v.series.values():
-            for i in range(s.level.size):
-                lines.append(f"{s.key:12}{s.level[i]:>6}{s.dofs[i]:>6}{s.seconds[i]:>7.3f}"
-                             + cols(s.rel_error[i]) + f"{_fmt(s.worst_error[i]):>{W}}")
-            theory = "" if not np.isfinite(s.theory_rate) else f" (theory {s.theory_rate:g})"
-            lines.append(f"{'  fitted order' + theory:{P}}" + cols(s.rate, ".2f"))
-            if np.any(np.isfinite(s.extrapolated_difference)):
-                lines.append(f"{'  own extrapolation vs limit':{P}}"
-                             + cols(s.extrapolated_difference))
-        lines.append(f"DOFs for worst error <= {tol:g}: "
-                     + "; ".join(f"{s.key} {_reach_text(s, tol)}" for s in v.series.values()))
-    text = "\n".join(lines)
-    if file is not False:
-        print(text, file=file)
-    return text
-
-
-def _atomic_path(path: Path) -> tuple[int, str]:
-    """A temporary file next to ``path`` (same file system, so ``os.replace`` is atomic)."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    return tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-
-
-def _publish(tmp: str, path: Path) -> None:
-    """Give the temporary file the usual permissions (``mkstemp`` makes it 0600) and move it
-    into place atomically."""
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(tmp, 0o666 & ~umask)
-    os.replace(tmp, path)
-
-
-def save_h5(result: ConvergenceResult, path: str | os.PathLike[str]) -> Path:
-    """Write ``result`` to HDF5 atomically (temporary file in the same folder, then
-    ``os.replace``): a reader never sees a half-written file.
-
-    Layout: root attributes ``name``, ``n_modes``, ``seconds``, ``levels`` and ``attrs`` (JSON);
-    a group per variant (attributes ``label``, ``limit_source``, ``seconds``; datasets
-    ``limit_finest``, ``limit_richardson``, ``limit``, ``limit_difference``,
-    ``reference_order``, ``floor``) holding a group per series (attributes ``label``,
-    ``theory_rate``; datasets ``level``, ``dofs``, ``coupled_dofs``, ``seconds``,
-    ``eigenvalues`` (complex), ``rel_error``, ``rate``, ``fit_mask``,
-    ``extrapolated_difference``).
-    """
-    import h5py
-
-    path = Path(path)
-    fd, tmp = _atomic_path(path)
-    os.close(fd)
-    try:
-        with h5py.File(tmp, "w") as f:
-            f.attrs["name"] = result.name
-            f.attrs["n_modes"] = result.n_modes
-            f.attrs["seconds"] = result.seconds
-            f.attrs["levels"] = json.dumps(result.levels)
-            f.attrs["attrs"] = json.dumps(result.attrs)
-            f.attrs["variant_order"] = json.dumps(list(result.variants))
-            for v in result.variants.values():
-                g = f.create_group(v.key)
-                g.attrs["label"] = v.label
-                g.attrs["limit_source"] = v.limit_source
-                g.attrs["seconds"] = v.seconds
-                g.attrs["series_order"] = json.dumps(list(v.series))
-                for name in ("limit_finest", "limit_richardson", "limit", "limit_difference",
-                             "reference_order", "floor"):
-                    g.create_dataset(name, data=getattr(v, name))
-                for s in v.series.values():
-                    h = g.create_group(s.key)
-                    h.attrs["label"] = s.label
-                    h.attrs["theory_rate"] = s.theory_rate
-                    for name in ("level", "dofs", "coupled_dofs", "seconds", "eigenvalues",
-                                 "rel_error", "rate", "fit_mask", "extrapolated_difference"):
-                        h.create_dataset(name, data=getattr(s, name))
-        _publish(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-    return path
-
-
-def load_h5(path: str | os.PathLike[str]) -> ConvergenceResult:
-    """Read a file written by :func:`save_h5`."""
-    import h5py
-
-    with h5py.File(path, "r") as f:
-        variants: dict[str, VariantResult] = {}
-        for vkey in json.loads(f.attrs["variant_order"]):
-            g = f[vkey]
-            series: dict[str, SeriesResult] = {}
-            for skey in json.loads(g.attrs["series_order"]):
-                h = g[skey]
-                series[skey] = SeriesResult(
-                    key=skey, label=str(h.attrs["label"]),
-                    theory_rate=float(h.attrs["theory_rate"]),
-                    **{name: h[name][()] for name in (
-                        "level", "dofs", "coupled_dofs", "seconds", "eigenvalues", "rel_error",
-                        "rate", "fit_mask", "extrapolated_difference")})
-            variants[vkey] = VariantResult(
-                key=vkey, label=str(g.attrs["label"]), series=series,
-                limit_source=str(g.attrs["limit_source"]), seconds=float(g.attrs["seconds"]),
-                **{name: g[name][()] for name in ("limit_finest", "limit_richardson", "limit",
-                                                  "limit_difference", "reference_order",
-                                                  "floor")})
-        return ConvergenceResult(name=str(f.attrs["name"]), n_modes=int(f.attrs["n_modes"]),
-                                 variants=variants, levels=json.loads(f.attrs["levels"]),
-                                 seconds=float(f.attrs["seconds"]),
-                                 attrs=json.loads(f.attrs["attrs"]))
-
-
-_STYLE = {"assumed": ("C0", "o", "-"), "enriched": ("C2", "s", "-"), "fe-p1": ("C1", "^", "-"),
-          "fe-p2": ("C3", "v", "-")}
-
-
-def plot(result: ConvergenceResult, png: str | os.PathLike[str], tol: float | None = 1e-6
-         ) -> Path:
-    """Log-log relative error vs rod DOFs, one line per series; a row per variant, columns
-    mode 1 and the worst mode (largest error over the modes at each level).  Levels used in the
-    rate fits have filled markers; legends give the fitted orders (the range over the modes in
-    the worst-mode column); ``tol`` is a dotted line.
-    Written atomically (temporary file, ``os.replace``)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    vs = list(result.variants.values())
-    fig, axes = plt.subplots(len(vs), 2, figsize=(15, 3.9 * len(vs)), squeeze=False,
-                             layout="constrained")
-    for row, v in zip(axes, vs):
-        for col, (ax, which) in enumerate(zip(row, ("mode 1", "worst mode"))):
-            for s in v.series.values():
-                color, marker, ls = _STYLE.get(s.key, ("C7", "x", "--"))
-                err = s.rel_error[:, 0] if col == 0 else s.worst_error
-                fitted = s.fit_mask[:, 0] if col == 0 else s.fit_mask.any(axis=1)
-                ok = np.isfinite(err) & (err > 0)
-                rates = s.rate[:1] if col == 0 else s.rate
-                rates = rates[np.isfinite(rates)]
-                label = s.label
-                if rates.size == 1 or (rates.size and np.ptp(rates) < 0.005):
-                    label += f", order {rates[0]:.2f}"
-                elif rates.size:
-                    label += f", orders {rates.min():.2f}-{rates.max():.2f}"
-                ax.loglog(s.dofs[ok], err[ok], ls, color=color, marker=marker, mfc="white",
-                          label=label)
-                sel = ok & fitted
-                ax.loglog(s.dofs[sel], err[sel], "none", color=color, marker=marker)
-            if tol:
-                ax.axhline(tol, color="0.5", ls=":", lw=1)
-            ax.set_title(f"{v.label}: {which}", fontsize=10)
-            ax.set_xlabel("rod DOFs (Ritz functions / FE unknowns)")
-            ax.set_ylabel("relative error of the root")
-            ax.grid(True, which="major", alpha=0.3)
-            ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
-    fig.suptitle(f"{result.name}: convergence to the FE limit", fontsize=11)
-    path = Path(png)
-    fd, tmp = _atomic_path(path)
-    os.close(fd)
-    try:
-        fig.savefig(tmp, dpi=90, format="png", bbox_inches="tight")
-        _publish(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-    finally:
-        plt.close(fig)
-    return path
-
-
-def run_convergence(spec: RodSystemSpec, out_dir: str | os.PathLike[str],
-                    levels: StudyLevels | str | None = None, *,
-                    variants: Sequence[str] = ("constrained", "unconstrained", "bare"),
-                    progress: Progress | None = None, tol: float = 1e-6,
-                    reference: str = "richardson", fit_points: int = 3,
-                    echo: bool = True) -> tuple[ConvergenceResult, Path, Path]:
-    """The ``substruct converge`` command: study, table, ``<name>_convergence.h5`` and ``.png``.
-
-    Args:
-        spec: the system.
-        out_dir: output folder (created).
-        levels: :class:`StudyLevels`, a string for :func:`parse_levels`, or ``None``.
-        variants: see :func:`convergence_study`.
-        progress: ``progress(done, total, description)`` after each level.
-        tol: tolerance of the "DOFs to reach" summary and the plot's dotted line.
-        reference, fit_points: see :func:`convergence_study`.
-        echo: print the table.
-
-    Returns:
-        ``(result, h5_path, png_path)``.
-    """
-    lv = levels if isinstance(levels, StudyLevels) else parse_levels(levels)
-    result = convergence_study(spec, lv, variants=variants, reference=reference,
-                               fit_points=fit_points, progress=progress)
-    out = Path(out_dir)
-    h5 = save_h5(result, out / f"{spec.name}_convergence.h5")
-    png = plot(result, out / f"{spec.name}_convergence.png", tol=tol)
-    if echo:
-        print_table(result, tol=tol)
-    return result, h5, png

@@ -1,7 +1,16 @@
-"""Shared fixtures: the three-DOF system of the paper's Fig. 2 (eqs 35-36)."""
+"""Shared fixtures: the three-DOF system of the paper's Fig. 2 (eqs 35-36).
 
-import numpy as np
-import pytest
+BLAS is pinned to one thread before numpy loads: the dense solves here are small, and on two
+cores threaded BLAS makes them several times slower.
+"""
+
+import os
+
+for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
 
 
 @pytest.fixture
