@@ -40,8 +40,9 @@ from substruct.case_fields import (DENSE_CHECK, MAX_ASSUMED_MODES, MAX_ELEMENTS,
                                    MAX_FREQUENCIES, MAX_MATRIX_SIZE, MEMORY_LIMIT, Name,
                                    Number, Point, StrictModel, parse_point)
 from substruct.case_matrices import MatrixSpec
+from substruct.case_solids import InterfaceSpec, SolidSpec
 from substruct.case_substructures import (AssumedModes, DiscreteSpec, FiniteElements,
-                                          ModalDamping, Reduce, RodSpec)
+                                          MassSpec, ModalDamping, Reduce, RodSpec, SpringSpec)
 from substruct.case_yaml import apply_overrides, load_yaml
 from substruct.expressions import CONSTANTS, FUNCTIONS
 
@@ -79,7 +80,8 @@ __all__ = [
 #: Largest case file read (matrices belong in ``.npz``/``.mtx`` files).
 MAX_CASE_FILE = 20_000_000
 
-SubstructureSpec = Annotated[Union[RodSpec, DiscreteSpec, MatrixSpec],
+SubstructureSpec = Annotated[Union[RodSpec, DiscreteSpec, SpringSpec, MassSpec, MatrixSpec,
+                                   SolidSpec],
                              Field(discriminator="type")]
 
 
@@ -103,6 +105,7 @@ class Case(StrictModel):
     substructures: Annotated[list[SubstructureSpec], Field(min_length=1)]
     connections: list[Annotated[list[Point], Field(min_length=2)]] = Field(default_factory=list)
     constraints: list[ConstraintSpec] = Field(default_factory=list)
+    interfaces: list[InterfaceSpec] = Field(default_factory=list)
     analysis: Analysis
     output: Output = Field(default_factory=Output)
 

@@ -81,6 +81,9 @@ class FieldError(ValueError):
 
 # ------------------------------------------------------------------------ field paths
 
+#: Keys whose value selects a member of a tagged union in the case schema.
+_DISCRIMINATORS = ("type", "method")
+
 
 def field_path(loc: Sequence[str | int], raw: Any) -> str:
     """``substructures.rod.length`` / ``connections[2]`` from a location in the raw data.
@@ -93,6 +96,9 @@ def field_path(loc: Sequence[str | int], raw: Any) -> str:
     node = raw
     for i, el in enumerate(loc):
         last = i == len(loc) - 1
+        if isinstance(node, dict) and not last and isinstance(el, str) and \
+                any(node.get(key) == el for key in _DISCRIMINATORS):
+            continue  # a union tag pydantic put into the location (``type: mass``)
         if isinstance(node, dict) and isinstance(el, str) and el in node:
             out += ("." if out else "") + el
             node = node[el]
@@ -189,7 +195,8 @@ _SIMPLE = {
     "model_attributes_type": "must be a mapping (key: value)",
     "tuple_type": "must be a list",
 }
-_TAGS = {"type": "rod, fixed-free, free-free, matrices", "method": "assumed-modes, fe"}
+_TAGS = {"type": "rod, fixed-free, free-free, matrices, spring, mass, solid",
+         "method": "assumed-modes, fe"}
 
 
 def _problem(err: Mapping[str, Any], loc: tuple, root: type[BaseModel]

@@ -1,4 +1,5 @@
-"""Case-file substructures made by substruct: rods and spring-mass-damper attachments.
+"""Case-file substructures made by substruct: rods, spring-mass-damper attachments, springs
+between two points (or to ground) and point masses.
 
 A rod (section 6) is discretized by assumed modes (eqs 45-51) or Lagrange finite elements and
 optionally reduced to its lowest modes (eqs 21-22); its ``EA(x)`` and ``m(x)`` are checked to
@@ -21,7 +22,7 @@ from substruct.case_fields import (MAX_ASSUMED_MODES, MAX_ELEMENTS, MEMORY_LIMIT
 from substruct.expressions import ExpressionError, profile
 
 __all__ = ["AssumedModes", "FiniteElements", "Discretization", "ModalDamping", "Reduce",
-           "RodSpec", "DiscreteSpec"]
+           "RodSpec", "DiscreteSpec", "SpringSpec", "MassSpec"]
 
 
 class AssumedModes(StrictModel):
@@ -177,3 +178,36 @@ class DiscreteSpec(StrictModel):
     def n_dof(self) -> int:
         """1 for fixed-free (the mass is the boundary), 2 for free-free."""
         return 1 if self.type == "fixed-free" else 2
+
+
+class SpringSpec(StrictModel):
+    """A massless spring ``stiffness`` (and damper ``damping``) between two points ``i`` and
+    ``j``, ``K = k [[1, -1], [-1, 1]]``; with ``ground: true`` between point ``i`` and ground,
+    ``K = [[k]]`` (:func:`substruct.models.discrete.spring`)."""
+
+    name: Name
+    type: Literal["spring"]
+    stiffness: Positive
+    damping: NonNegative = 0.0
+    ground: bool = False
+
+    def points(self) -> tuple[str, ...]:
+        """The spring's points: ``("i", "j")``, or ``("i",)`` when grounded."""
+        return ("i",) if self.ground else ("i", "j")
+
+    def n_dof(self) -> int:
+        """2 (the two ends), 1 when grounded."""
+        return len(self.points())
+
+
+class MassSpec(StrictModel):
+    """A point mass ``mass`` with one coordinate ``mass`` and no stiffness
+    (:func:`substruct.models.discrete.point_mass`)."""
+
+    name: Name
+    type: Literal["mass"]
+    mass: Positive
+
+    def n_dof(self) -> int:
+        """1."""
+        return 1

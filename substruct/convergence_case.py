@@ -24,12 +24,13 @@ a ``matrices`` substructure, modal damping of the rod, a discrete substructure t
 attached to the rod (or attached twice, or at its mass when it has a separate boundary), a
 connection that joins two rod points or no rod point, a constraint with a nonzero ``rhs``, with
 ``rhs_force`` terms, with a term off the rod, or whose terms cancel (inactive constraints are
-left out, as ``substruct run`` leaves them out).
+left out, as ``substruct run`` leaves them out), a ``spring`` or ``mass`` substructure.
 """
 
 from __future__ import annotations
 
 from substruct.case import Case, DiscreteSpec, MatrixSpec, RodSpec, parse_point
+from substruct.case_substructures import MassSpec, SpringSpec
 from substruct.convergence import Attachment, PointConstraint, RodSystemSpec
 from substruct.run import _PointUse, _rod_position
 
@@ -83,6 +84,11 @@ def _the_rod(case: Case) -> tuple[int, RodSpec]:
             raise case.error(("substructures", i, "type"), "a convergence study refines a rod "
                              "with spring-mass attachments; a matrices substructure cannot be "
                              "refined", s.type)
+        if isinstance(s, (SpringSpec, MassSpec)):
+            raise case.error(("substructures", i, "type"), "a convergence study refines one "
+                             "rod with fixed-free/free-free attachments; spring and mass "
+                             "substructures are not supported by it (use substruct run with "
+                             "rod discretizations of increasing size)", s.type)
     i, rod = rods[0]
     if rod.reduce is not None and rod.reduce.damping is not None:
         raise case.error(("substructures", i, "reduce", "damping"), "a convergence study "

@@ -95,9 +95,10 @@ def _layout(drawings: list[Drawing]) -> _Layout:
 
 
 def _stretch_springs(drawings, mesh, pts, t, axis_t, size):
-    """In the axial view, give short attachment springs a readable length (schematic only)."""
+    """In the axial view, give short attachment springs a readable length (schematic only).
+    A ``spring`` between two points is left as placed: its ends are where it is connected."""
     for i, d in enumerate(drawings):
-        if not _is_spring(d):
+        if not _is_spring(d) or d.kind == "spring":
             continue
         sl = slice(mesh.point_offsets[i], mesh.point_offsets[i + 1])
         p = pts[sl]
@@ -316,6 +317,11 @@ def _draw_spring(pv, plotter, d: Drawing, p0, p, s, lay: _Layout, kw) -> None:
     if lay.axial is not None and len(p0):
         low = p0[np.argmin(p0[:, t])].copy()
         low[lay.axial] += 0.04 * size
+        if d.kind == "spring" and len(p0) == 2:  # beside the middle of a two-point spring
+            low = p0.mean(axis=0)
+            along = abs(p0[1] - p0[0])
+            low[t if along[lay.axial] > along[t] else lay.axial] += \
+                (-0.06 if along[lay.axial] > along[t] else 0.04) * size
         plotter.add_point_labels(low[None, :], [_vtk_text(d.name)], font_size=11,
                                  text_color="#444444",
                                  shape=None, show_points=False, always_visible=True,

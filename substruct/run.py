@@ -24,6 +24,7 @@ the field of the case file.
 from __future__ import annotations
 
 import math
+import sys
 from dataclasses import dataclass
 from datetime import datetime, timezone
 from typing import Any, Callable, NamedTuple, Sequence
@@ -35,14 +36,18 @@ from substruct.assembly import Assembly, Connection, LinearConstraint, PointRef,
 from substruct.case import (Case, DiscreteSpec, FiniteElements, MatrixSpec, RodSpec,
                             parse_point)
 from substruct.case_fields import gigabytes
+from substruct.case_solids import SolidSpec
+from substruct.case_substructures import MassSpec, SpringSpec
 from substruct.constraints import ConstraintError, independent_rows
 from substruct.coupling import receptance
 from substruct.expressions import ExpressionError, scalar
 from substruct.modes import Modes, coupled_modes, modes_agreement
-from substruct.models.discrete import fixed_free, free_free
+from substruct.models.discrete import fixed_free, free_free, point_mass, spring
 from substruct.models.rod import rod_assumed_modes, rod_fe
 from substruct.reduction import modal_truncation
 from substruct.result import Drawing, FrfResult, ModelInfo, ModeResult, Result
+from substruct.run_solids import (build_solid, modes_solver, solid_where, sparse_mode_result,
+                                  tie_and_reduce)
 from substruct.substructure import Geometry, PointError, Substructure, as_csr
 
 __all__ = ["Model", "build_model", "run_case", "Progress"]
@@ -130,6 +135,15 @@ def _where(case: Case, spec: Any, where: str | None, use: _PointUse) -> Any:
         return _rod_position(case, spec, where, use)
     if isinstance(spec, DiscreteSpec):
         return "boundary" if where is None else where
+    if isinstance(spec, MassSpec):
+        return "mass" if where is None else where
+    if isinstance(spec, SpringSpec):
+        if where is None and not spec.ground:
+            raise case.error(use.loc, f"spring {spec.name!r} has two ends: write "
+                             f"{spec.name}@i or {spec.name}@j", use.text)
+        return "i" if where is None else where
+    if isinstance(spec, SolidSpec):
+        return solid_where(case, spec, where, use)
     # matrices: a label, or a 1-based index
     if where is None:
         raise case.error(use.loc, f"a point on {spec.name!r} needs a coordinate, as in "
@@ -217,6 +231,12 @@ def _substructures(case: Case, positions: dict[str, list[float]]) -> list[Substr
         elif isinstance(spec, DiscreteSpec):
             make = fixed_free if spec.type == "fixed-free" else free_free
             subs.append(make(spec.name, spec.mass, spec.stiffness, spec.damping))
+        elif isinstance(spec, SpringSpec):
+            subs.append(spring(spec.name, spec.stiffness, spec.damping, grounded=spec.ground))
+        elif isinstance(spec, MassSpec):
+            subs.append(point_mass(spec.name, spec.mass))
+        elif isinstance(spec, SolidSpec):
+            subs.append(build_solid(case, i, spec))
         else:
             subs.append(_matrices_substructure(spec))
     return subs
@@ -232,36 +252,106 @@ def _lift(interp: sp.csr_array, offset: int, n_total: int) -> sp.csr_array:
                         shape=(interp.shape[0], n_total))
 
 
-def _place(sub: Substructure, where: Any, placed: dict[str, np.ndarray]) -> np.ndarray | None:
-    """Coordinates in space of a point of ``sub`` (``None`` if unknown)."""
+def _is_rod(sub: Substructure) -> bool:
+    return sub.kind.startswith("rod") or (sub.kind == "modal" and
+                                          str(sub.meta.get("reduced_kind", "")).startswith("rod"))
+
+
+def _place(sub: Substructure, where: Any, placed: dict[str, np.ndarray],
+           shifts: dict[str, float] | None = None, scale: float = 1.0) -> np.ndarray | None:
+    """Coordinates in space of a point of ``sub`` (``None`` if unknown); rods drawn shifted
+    along ``x`` by ``shifts``, discrete systems ``scale`` times their local size."""
     if sub.position is not None:
         return np.asarray(sub.position(where), dtype=float)
     if sub.name in placed:  # a discrete system already placed
         g = sub.geometry
         if g is not None and isinstance(where, str) and where in g.glyphs:
-            return g.points[g.glyphs[where]] + placed[sub.name]
+            return g.points[g.glyphs[where]] * scale + placed[sub.name]
         return placed[sub.name]
-    if sub.kind.startswith("rod") or (sub.kind == "modal" and
-                                      str(sub.meta.get("reduced_kind", "")).startswith("rod")):
-        return np.array([float(where), 0.0, 0.0])
+    if _is_rod(sub):
+        return np.array([float(where) + (shifts or {}).get(sub.name, 0.0), 0.0, 0.0])
     g = sub.geometry
     if g is not None and isinstance(where, str) and where in g.glyphs:
         return g.points[g.glyphs[where]]
     return None
 
 
+def _rod_shifts(subs: dict[str, Substructure], connections: list[list[PointRef]],
+                gap: float) -> dict[str, float]:
+    """Where rods joined to each other (directly, or through a ``spring``) are drawn: one
+    after the other along ``x``, the joined points together (or a spring length ``gap``
+    apart), beyond the end of the first rod that its joined point is nearer to.  Other rods
+    stay put."""
+    rods = {name for name, s in subs.items() if _is_rod(s) and s.geometry is not None}
+    links: list[tuple[PointRef, PointRef, float]] = []
+    ends: dict[tuple[str, Any], PointRef] = {}
+    for chain in connections:
+        on_rods = [p for p in chain if p.substructure in rods]
+        links += [(a, b, 0.0) for a, b in zip(on_rods, on_rods[1:])
+                  if a.substructure != b.substructure]
+        for p in chain:
+            if subs[p.substructure].kind == "spring" and on_rods:
+                ends.setdefault((p.substructure, p.where), on_rods[0])
+    links += [(ends[(n, "i")], ends[(n, "j")], gap) for n, s in subs.items()
+              if s.kind == "spring" and (n, "i") in ends and (n, "j") in ends
+              and ends[(n, "i")].substructure != ends[(n, "j")].substructure]
+
+    def span(name: str) -> tuple[float, float]:
+        x = np.asarray(subs[name].geometry.points)[:, 0]
+        return float(x.min()), float(x.max())
+
+    shifts: dict[str, float] = {}
+    todo = list(links)
+    while todo:
+        for a, b, g in todo:
+            if (a.substructure in shifts) != (b.substructure in shifts):
+                break
+        else:  # no link touches a placed rod: the first rod of the next link stays put
+            a, b, g = todo[0]
+            shifts[a.substructure] = 0.0
+        if b.substructure in shifts:
+            a, b = b, a
+        lo, hi = span(a.substructure)
+        side = 1.0 if float(a.where) >= (lo + hi) / 2 else -1.0
+        shifts[b.substructure] = shifts[a.substructure] + float(a.where) + side * g \
+            - float(b.where)
+        todo = [t for t in todo if not (t[0].substructure in shifts and
+                                        t[1].substructure in shifts)]
+    return shifts
+
+
+def _spring_points(g: Geometry, ends: dict[str, np.ndarray], scale: float) -> np.ndarray:
+    """A two-ended spring drawn from each connected end to where it is connected; an end
+    connected to nothing at its local place, ``scale`` times, from the other end."""
+    local = np.asarray(g.points, dtype=float) * scale
+    if "i" in ends:
+        anchor = ends["i"] - local[g.glyphs["i"]]
+    elif "j" in ends:
+        anchor = ends["j"] - local[g.glyphs["j"]]
+    else:
+        anchor = np.zeros(3)
+    points = local + anchor
+    for glyph, pos in ends.items():
+        points[g.glyphs[glyph]] = pos
+    return points
+
+
 def _drawings(asm: Assembly, connections: list[list[PointRef]]) -> list[Drawing]:
     """Each substructure's geometry over the stacked coordinates; discrete systems are drawn
-    at the point they are attached to, scaled to a tenth of the rest of the scene."""
+    at the point they are attached to, scaled to a tenth of the rest of the scene (a spring
+    between two points from one to the other); rods joined end to end one after the other."""
     subs = {s.name: s for s in asm.substructures}
-    discrete = {s.name for s in asm.substructures if s.kind in ("fixed-free", "free-free")}
+    discrete = {s.name for s in asm.substructures
+                if s.kind in ("fixed-free", "free-free", "spring", "spring/grounded", "mass")}
     extent = 0.0
     for s in asm.substructures:
         if s.name not in discrete and s.geometry is not None and len(s.geometry.points):
             p = s.geometry.points
             extent = max(extent, float(np.ptp(p, axis=0).max()))
     scale = extent / 10 if extent > 0 else 1.0
+    shifts = _rod_shifts(subs, connections, scale)
     placed: dict[str, np.ndarray] = {}
+    ends: dict[str, dict[str, np.ndarray]] = {}
     for chain in connections:
         for p in chain:
             if p.substructure not in discrete or p.substructure in placed:
@@ -269,9 +359,19 @@ def _drawings(asm: Assembly, connections: list[list[PointRef]]) -> list[Drawing]
             for q in chain:
                 if q.substructure == p.substructure:
                     continue
-                pos = _place(subs[q.substructure], q.where, placed)
+                pos = _place(subs[q.substructure], q.where, placed, shifts, scale)
                 if pos is not None:
                     placed[p.substructure] = pos
+                    break
+    for chain in connections:  # each end of a spring where it is connected
+        for p in chain:
+            if subs[p.substructure].kind != "spring" or p.where in ends.get(p.substructure, {}):
+                continue
+            for q in chain:
+                pos = None if q.substructure == p.substructure else \
+                    _place(subs[q.substructure], q.where, placed, shifts, scale)
+                if pos is not None:
+                    ends.setdefault(p.substructure, {})[p.where] = pos
                     break
     out = []
     for k, s in enumerate(asm.substructures):
@@ -279,8 +379,12 @@ def _drawings(asm: Assembly, connections: list[list[PointRef]]) -> list[Drawing]
         if g is None:
             continue
         points = np.array(g.points, dtype=float)
-        if s.name in discrete:
+        if s.kind == "spring":
+            points = _spring_points(g, ends.get(s.name, {}), scale)
+        elif s.name in discrete:
             points = points * scale + placed.get(s.name, np.zeros(3))
+        elif s.name in shifts:
+            points[:, 0] += shifts[s.name]
         out.append(Drawing(name=s.name, kind=s.kind, points=points,
                            cells=[(t, np.asarray(c)) for t, c in g.cells],
                            interp=_lift(g.interp, int(asm.offsets[k]), asm.n_dof),
@@ -311,11 +415,14 @@ def build_model(case: Case) -> Model:
                              f"{', '.join(specs)})", use.text)
         value = _where(case, specs[sub], where, use)
         resolved[use.text] = (sub, value)
+        if isinstance(specs[sub], SolidSpec):
+            positions.setdefault(sub, []).append(value)
         if isinstance(specs[sub], RodSpec):
             positions.setdefault(sub, [])
             if all(abs(value - x) > 1e-12 * specs[sub].length for x in positions[sub]):
                 positions[sub].append(value)
     subs = _substructures(case, positions)
+    subs, interface_ties = tie_and_reduce(case, subs, positions)
     by_name = {s.name: s for s in subs}
     points: dict[str, PointRef] = {}
     for use in uses:
@@ -342,6 +449,7 @@ def build_model(case: Case) -> Model:
             force_terms=tuple((points[p], c) for p, c in con.rhs_force.items()),
             name=con.name))
         active.append(con.name)
+    connections += interface_ties  # rows of A after the case's connections
     try:
         asm = assemble(subs, connections, constraints)
     except ValueError as err:
@@ -352,7 +460,31 @@ def build_model(case: Case) -> Model:
         raise case.error(("constraints", k, "terms"), str(err),
                          dict(case.constraints[k].terms)) from None
     _check_consistent(case, asm, len(connections))
+    _warn_free_springs(case)
     return Model(asm, active, _drawings(asm, chains), points)
+
+
+def _warn_free_springs(case: Case) -> None:
+    """One line on stderr for each ``spring`` with an end that no connection or active
+    constraint uses: the spring then carries no force (the solver sets its massless free end
+    aside, an infinite root), which is almost always a modelling slip (not an error)."""
+    used = set()
+    for use in _point_uses(case):
+        if use.loc[0] in ("connections", "constraints"):
+            sub, where = parse_point(use.text)
+            used.add((sub, "i" if where is None else where))
+    for k, spec in enumerate(case.substructures):
+        if not isinstance(spec, SpringSpec):
+            continue
+        free = [p for p in spec.points() if (spec.name, p) not in used]
+        if free:
+            ends = " and ".join(f"{spec.name}@{p}" for p in free)
+            what = "is" if len(free) == 1 else "are"
+            hint = ", or ground: true for a spring to ground" if free == ["j"] else ""
+            message = case.error(("substructures", k), f"spring {spec.name!r}: {ends} {what} "
+                                 f"in no connection or constraint, so the spring carries no "
+                                 f"force (connect {'it' if len(free) == 1 else 'them'}{hint})")
+            sys.stderr.write(f"substruct: warning: {message}\n")
 
 
 def _check_consistent(case: Case, asm: Assembly, n_connections: int) -> None:
@@ -424,6 +556,8 @@ def _checks(main: str, check: Sequence[str]) -> list[str]:
 
 def _modes(case: Case, asm: Assembly, A: sp.csr_array, loc: tuple) -> ModeResult:
     spec = case.analysis.modes
+    if modes_solver(case, asm.n_dof, DENSE_MODES_LIMIT, asm) == "sparse":
+        return sparse_mode_result(case, asm, A, loc)
     try:
         main = coupled_modes(asm.M, asm.C, asm.K, A, spec.method, spec.count)
         agreement = {m: modes_agreement(coupled_modes(asm.M, asm.C, asm.K, A, m, spec.count),
@@ -446,15 +580,17 @@ def _min_size(case: Case) -> int:
     return total
 
 
-def _check_dense_sizes(case: Case, N: int, at_least: bool = True) -> None:
+def _check_dense_sizes(case: Case, N: int, at_least: bool = True,
+                       asm: Assembly | None = None) -> None:
     """Refuse dense eigenproblems (and dense receptance checks) too large for the memory."""
     size = f"at least {N}" if at_least else f"{N}"
-    if case.analysis.modes is not None and N > DENSE_MODES_LIMIT:
+    if case.analysis.modes is not None and N > DENSE_MODES_LIMIT and \
+            modes_solver(case, N, DENSE_MODES_LIMIT, asm, at_least) == "dense":
         need = 8 * 8 * (2 * N) ** 2  # dense state-space pencil, eigenvectors, workspace
         raise case.error(("analysis", "modes"), f"the coupled eigenproblem is dense and the "
                          f"model has {size} coordinates (about {gigabytes(need)}); at most "
                          f"{DENSE_MODES_LIMIT}: reduce the large substructures "
-                         f"(reduce: {{modes: ...}})", N)
+                         f"(reduce: {{modes: ...}}), or solver: auto for an undamped model", N)
     frf = case.analysis.frf
     if frf is not None and "null-space" in (frf.method, *frf.check) and N > DENSE_FRF_LIMIT:
         raise case.error(("analysis", "frf", "check"), f"the null-space receptance is dense: "
@@ -463,7 +599,7 @@ def _check_dense_sizes(case: Case, N: int, at_least: bool = True) -> None:
 
 
 def _check_dense_modes(case: Case, asm: Assembly) -> None:
-    _check_dense_sizes(case, asm.n_dof, at_least=False)
+    _check_dense_sizes(case, asm.n_dof, at_least=False, asm=asm)
 
 
 def _sweep(asm: Assembly, omegas: np.ndarray, R, method: str, E, O,

@@ -16,6 +16,16 @@ Points are named ``"mass"`` and ``"boundary"``.  Both systems displace along the
 axis.  Their drawings use *local* coordinates: the boundary (attachment point) at the origin
 and the other end of the spring at ``(0, -1, 0)``; an assembler places them by translating the
 points to the attachment position.
+
+Two more discrete elements join structures and load them at a point:
+
+* a *spring* (:func:`spring`): a spring ``k`` and damper ``c`` between two massless coordinates
+  ``"i"`` and ``"j"``, or, ``grounded``, between one massless coordinate ``"i"`` and ground;
+* a *point mass* (:func:`point_mass`): a mass ``m`` with one coordinate ``"mass"`` and no
+  stiffness.
+
+Their drawings follow the same convention: point ``"i"`` (or ``"mass"``) at the local origin,
+the other end of a spring (``"j"`` or ``"ground"``) at ``(0, -1, 0)``.
 """
 
 from __future__ import annotations
@@ -27,7 +37,7 @@ import scipy.sparse as sp
 
 from substruct.substructure import Geometry, PointError, Substructure, as_csr
 
-__all__ = ["fixed_free", "free_free"]
+__all__ = ["fixed_free", "free_free", "spring", "point_mass"]
 
 
 def _value(name: str, field: str, value: Any, *, positive: bool) -> float:
@@ -112,4 +122,69 @@ def free_free(name: str, mass: float, stiffness: float, damping: float = 0.0) ->
         locate=_locator(name, {"mass": 0, "boundary": 1}, 2), kind="free-free",
         geometry=_geometry(1, 0, 2, {"boundary": 0, "mass": 1}),
         meta={"mass": m, "stiffness": k, "damping": c},
+    )
+
+
+def spring(name: str, stiffness: float, damping: float = 0.0, grounded: bool = False
+           ) -> Substructure:
+    """A massless spring (and damper) between two points, or between a point and ground.
+
+    Between two points, coordinates ``z = (z_i, z_j)`` (the displacements of its ends):
+
+    .. math::
+
+        M = 0, \\quad
+        C = c \\begin{bmatrix} 1 & -1 \\\\ -1 & 1 \\end{bmatrix}, \\quad
+        K = k \\begin{bmatrix} 1 & -1 \\\\ -1 & 1 \\end{bmatrix}
+
+    so the end forces are ``f_i = -f_j = k (z_i - z_j) + c (dz_i - dz_j)``.  Grounded
+    (``grounded=True``), one coordinate ``z_i`` with :math:`K = [k]`, :math:`C = [c]`,
+    :math:`M = [0]`.  Every coordinate is massless (the ``s`` block of eq 6): an end that no
+    connection reaches is an infinite root of the coupled problem, and the spring then carries
+    no force.
+
+    Points ``"i"`` and ``"j"`` (``"i"`` only when grounded).  Drawing: ``"i"`` at the local
+    origin, ``"j"`` (or the grounded end, glyph ``"ground"``) at ``(0, -1, 0)``; an assembler
+    may move each end to where it is connected.
+
+    Raises:
+        ValueError: ``stiffness`` not positive, ``damping`` negative, or not finite.
+    """
+    k = _value(name, "stiffness", stiffness, positive=True)
+    c = _value(name, "damping", damping, positive=False)
+    meta = {"stiffness": k, "damping": c, "grounded": bool(grounded)}
+    if grounded:
+        return Substructure(
+            name=name, M=as_csr(np.zeros((1, 1))), K=as_csr([[k]]), C=as_csr([[c]]),
+            dof_labels=("i",), locate=_locator(name, {"i": 0}, 1), kind="spring/grounded",
+            geometry=_geometry(0, None, 1, {"i": 0, "ground": 1}), meta=meta,
+        )
+    pattern = np.array([[1.0, -1.0], [-1.0, 1.0]])
+    return Substructure(
+        name=name, M=as_csr(np.zeros((2, 2))), K=as_csr(k * pattern), C=as_csr(c * pattern),
+        dof_labels=("i", "j"), locate=_locator(name, {"i": 0, "j": 1}, 2), kind="spring",
+        geometry=_geometry(0, 1, 2, {"i": 0, "j": 1}), meta=meta,
+    )
+
+
+def point_mass(name: str, mass: float) -> Substructure:
+    """A point mass: one coordinate ``"mass"`` with :math:`M = [m]`, :math:`K = C = [0]`.
+
+    .. math::  m \\ddot z = f
+
+    On its own it is a rigid-body mode (``omega = 0``); attached to a point of a structure
+    (a connection ``[rod@x, m1]``) it adds ``m`` to the mass matrix there.  Drawing: one node
+    at the local origin, glyph ``"mass"``.
+
+    Raises:
+        ValueError: ``mass`` not positive, or not finite.
+    """
+    m = _value(name, "mass", mass, positive=True)
+    geometry = Geometry(points=np.zeros((1, 3)), cells=[("vertex", np.array([[0]]))],
+                        interp=sp.csr_array(([1.0], ([0], [0])), shape=(3, 1)),
+                        glyphs={"mass": 0})
+    return Substructure(
+        name=name, M=as_csr([[m]]), K=as_csr(np.zeros((1, 1))), C=as_csr(np.zeros((1, 1))),
+        dof_labels=("mass",), locate=_locator(name, {"mass": 0}, 1), kind="mass",
+        geometry=geometry, meta={"mass": m},
     )
