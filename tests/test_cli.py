@@ -15,6 +15,7 @@ import yaml
 from substruct import cli
 from substruct.case import load_case
 from substruct.run import run_case
+from cli_helpers import run, assert_one_line_error
 
 CASES = Path(__file__).resolve().parent.parent / "cases"
 ALL = sorted(CASES.glob("*.yaml"))
@@ -26,20 +27,6 @@ H40 = [["0.0246-0.0295i", "0.0082-0.0098i", "-0.0082+0.0098i"],
        ["-0.0082+0.0098i", "0.1639+0.0033i", "0.0861-0.0033i"]]
 TABLE1_WITH = [21.7, 54.8, 74.2, 83.7, 97.1]          # the printed "0" is a spurious root
 TABLE1_WITHOUT = [21.7, 54.8, 59.0, 83.7, 97.1, 135.0]
-
-
-def run(capsys, *args):
-    code = cli.main([str(a) for a in args])
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def assert_one_line_error(code, out, err, *fragments):
-    assert code == 2, err
-    assert err.startswith("substruct: error: ") and err.count("\n") == 1, err
-    assert "Traceback" not in err and out == ""
-    for fragment in fragments:
-        assert fragment in err, err
 
 
 def mode_table(text: str) -> list[list[float]]:

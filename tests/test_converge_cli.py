@@ -17,25 +17,12 @@ from substruct.case import CaseError, load_case
 from substruct.convergence import StudyLevels, dofs_to_reach, paper_rod_spec
 from substruct.convergence_case import spec_from_case
 from substruct.convergence_report import load_h5
+from cli_helpers import run, assert_one_line_error
 
 CASES = Path(__file__).resolve().parent.parent / "cases"
 ROD = CASES / "tapered_rod.yaml"
 #: A small study (a fraction of a second per variant): every series, three levels each.
 TINY = "assumed=4,8,16; enriched=2,4,8; p1=8,16,32; p2=4,8,16"
-
-
-def run(capsys, *args):
-    code = cli.main([str(a) for a in args])
-    out, err = capsys.readouterr()
-    return code, out, err
-
-
-def assert_one_line_error(code, out, err, *fragments):
-    assert code == 2, err
-    assert err.startswith("substruct: error: ") and err.count("\n") == 1, err
-    assert "Traceback" not in err and out == ""
-    for fragment in fragments:
-        assert fragment in err, err
 
 
 def rod_case(tmp_path, edit=None, name="case.yaml"):

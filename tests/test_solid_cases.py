@@ -9,9 +9,9 @@ import meshio
 import numpy as np
 import pytest
 
-from substruct import cli
 from substruct.case import CaseError, parse_case
 from substruct.run import build_model, run_case
+from cli_helpers import run
 
 ROOT = Path(__file__).resolve().parent.parent
 CASES = ROOT / "cases"
@@ -23,12 +23,6 @@ PLATE = CASES / "plate_2d.yaml"
 FULL_UNDAMPED = ["substructures.left.reduce=null", "substructures.right.reduce=null",
                  "substructures.tmd1.damping=0", "substructures.tmd2.damping=0",
                  "analysis.frf=null", "output.pictures=false"]
-
-
-def run(capsys, *args):
-    code = cli.main([str(a) for a in args])
-    out, err = capsys.readouterr()
-    return code, out, err
 
 
 def omegas(capsys, *args):

@@ -1,0 +1,19 @@
+"""Running the substruct command in-process, and what a bad-input answer must look like."""
+
+from substruct import cli
+
+
+def run(capsys, *args):
+    """``(exit code, stdout, stderr)`` of ``substruct ARGS`` run in this process."""
+    code = cli.main([str(a) for a in args])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def assert_one_line_error(code, out, err, *fragments):
+    """Exit code 2, one line on stderr naming the problem, nothing on stdout, no traceback."""
+    assert code == 2, err
+    assert err.startswith("substruct: error: ") and err.count("\n") == 1, err
+    assert "Traceback" not in err and out == ""
+    for fragment in fragments:
+        assert fragment in err, err
