@@ -10,8 +10,8 @@ Meshes:
   matching nodes.  Physical groups: volume ``solid``; faces ``clamp`` (``x = 0``, left half),
   ``interface`` (``x = L/2``, both halves), ``tip`` (``x = L``, right half).
 * ``box_beam_right_fine.msh``: the right half meshed twice as finely across and more coarsely
-  along ``x`` (a non-matching interface: tie it with ``tie_nonmatching``, the left half as
-  master).
+  along ``x`` (a non-matching interface: tie it with ``tie_nonmatching``, the finer right
+  half as the slave whose nodes follow the left half).
 * ``plate.msh``: a 2D cantilever plate ``1.0 x 0.2`` of triangles; physical groups: surface
   ``plate``, lines ``clamp`` (``x = 0``) and ``tip`` (``x = 1``).
 

@@ -208,8 +208,11 @@ def tie_nonmatching(master: Substructure, slave: Substructure,
     .. math::  u^s_c(x_k) - \sum_j \phi^m_j(x_k)\, q^m_{j} = 0 \qquad
                \text{for every slave node } x_k \text{ on the interface}
 
-    The slave's nodes follow the master's surface (the master is the finer or the stiffer
-    side by convention; the tie is one-sided, as in mortar-free node-to-surface coupling).  A
+    The slave's nodes follow the master's surface (the tie is one-sided, as in mortar-free
+    node-to-surface coupling).  Make the *finer* mesh the slave: where its interface trace
+    space holds the master's, the ties make the two traces equal everywhere (a conforming,
+    upper-bound model); the other way round the finer side is free between the coarse nodes
+    and the joint comes out too soft.  A
     slave node that falls outside the master's mesh by less than ``tol`` (default ``1e-6`` times
     the mesh size) is moved onto the master's nearest node direction until found.
 
