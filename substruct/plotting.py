@@ -468,7 +468,12 @@ def plot_modes(result: Result, png_path: str | os.PathLike, n_modes: int = 6,
 def _camera(plotter, lay: _Layout, bounds: list[float], title_room: float = 0.14) -> None:
     """Frame ``bounds`` in the current subplot, leaving ``title_room`` of its height on top."""
     if lay.axial is None:
-        plotter.view_isometric()
+        planar = len(lay.points) and np.ptp(lay.points[:, 2]) <= 1e-9 * lay.size
+        if planar:  # a 2D model seen from above, in its own plane
+            plotter.view_xy()
+            plotter.enable_parallel_projection()
+        else:
+            plotter.view_isometric()
         plotter.reset_camera(bounds=bounds)
         plotter.camera.zoom(0.95)
         plotter.add_axes(line_width=2, color=_INK, viewport=(0.0, 0.0, 0.16, 0.24))
