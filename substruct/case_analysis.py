@@ -57,7 +57,7 @@ class ModesAnalysis(StrictModel):
     check: list[Method] = Field(default_factory=list)
     variants: list[Variant] = Field(default_factory=list)
     #: dense (eqs 28-34), sparse (undamped shift-invert Lanczos) or auto (sparse above
-    #: DENSE_MODES_LIMIT coordinates when undamped); see substruct.run_solids.modes_solver
+    #: SPARSE_ABOVE coordinates when undamped); see substruct.run_solids.modes_solver
     solver: Literal["auto", "dense", "sparse"] = "auto"
 
 

@@ -1,8 +1,8 @@
 """Substructures given by their matrices: inline rows or ``.npz``/``.npy``/``.mtx`` files.
 
 :class:`MatrixSpec` loads ``M``, ``K`` and ``C`` while the case is validated and checks what
-the coupler relies on: square, of one size, finite, ``M`` and ``K`` symmetric and ``M``
-positive semidefinite.  A file's header is read before its data, so that a matrix too large for
+the coupler relies on: square, of one size, finite, ``M`` and ``K`` symmetric and positive
+semidefinite.  A file's header is read before its data, so that a matrix too large for
 the memory (or a header that lies about its size) is refused up front with an estimate instead
 of being allocated.
 """
@@ -229,7 +229,8 @@ class MatrixSpec(StrictModel):
                     raise FieldError(field, f"must be symmetric: max |{field} - {field}^T| = "
                                      f"{asym:.3g}", shown)
             mats[field] = mat
-        self._check_mass(mats["M"])
+        self._check_semidefinite("M", mats["M"], 1e-12)
+        self._check_semidefinite("K", mats["K"], 1e-12)
         n = mats["M"].shape[0]
         if self.labels is not None:
             if len(self.labels) != n:
@@ -241,19 +242,32 @@ class MatrixSpec(StrictModel):
         self._matrices = mats
         return self
 
-    def _check_mass(self, M: Any) -> None:
-        """``M`` positive semidefinite: its diagonal always, its eigenvalues up to
-        :data:`~substruct.case_fields.DENSE_CHECK` coordinates."""
-        diag = M.diagonal()
+    def _check_semidefinite(self, field: str, X: Any, rtol: float) -> None:
+        """``M`` or ``K`` positive semidefinite: its diagonal always, its eigenvalues up to
+        :data:`~substruct.case_fields.DENSE_CHECK` coordinates (smallest below ``-rtol``
+        times the largest in magnitude refused).
+
+        An indefinite ``K`` is a statically unstable structure: ``lambda^2 M + K`` has a real
+        root pair ``+-lambda`` (divergence), which eqs (30)-(34) report as two "modes" of
+        damping ratio ``+-1``.  A rigid-body motion written with a few digits
+        (``[[0.33333333, -0.33333334], ...]``) is such a pair near zero, and it takes the
+        place of an elastic mode in the ``count`` lowest: it is refused too, with a hint.
+        """
+        diag = X.diagonal()
         if np.any(diag < 0):
-            raise FieldError("M", f"must be positive semidefinite: diagonal entry "
-                             f"{float(diag.min()):g}", self._shown("M"))
-        if M.shape[0] <= DENSE_CHECK:
-            dense = M.toarray() if sp.issparse(M) else M
+            raise FieldError(field, f"must be positive semidefinite: diagonal entry "
+                             f"{float(diag.min()):g}", self._shown(field))
+        if X.shape[0] <= DENSE_CHECK:
+            dense = X.toarray() if sp.issparse(X) else X
             eig = np.linalg.eigvalsh((dense + dense.T) / 2)
-            if eig.size and eig[0] < -1e-12 * max(abs(eig).max(), 1e-300):
-                raise FieldError("M", f"must be positive semidefinite: smallest eigenvalue "
-                                 f"{eig[0]:.6g}", self._shown("M"))
+            top = max(abs(eig).max(), 1e-300) if eig.size else 1.0
+            if eig.size and eig[0] < -rtol * top:
+                hint = ""
+                if field == "K" and eig[0] > -1e-6 * top:
+                    hint = (f" ({-eig[0] / top:.1e} of the largest: a rigid-body motion "
+                            f"needs K u = 0 to rounding; write K with all its digits)")
+                raise FieldError(field, f"must be positive semidefinite: smallest eigenvalue "
+                                 f"{eig[0]:.6g}{hint}", self._shown(field))
 
     def matrix(self, name: str) -> Any:
         """The loaded ``M``, ``K`` or ``C`` (``None`` for an absent ``C``)."""

@@ -201,8 +201,19 @@ def _num(x: float) -> Any:
     return x if math.isfinite(x) else (None if math.isnan(x) else ("inf" if x > 0 else "-inf"))
 
 
-def _complex(z: complex, digits: int = 4) -> str:
+def _complex(z: complex, digits: int = 4, scientific: bool = False) -> str:
+    """``a+bi`` with ``digits`` decimals, or ``digits`` significant figures in scientific
+    notation (``1.234e-09-5.678e-11i``)."""
+    if scientific:
+        return f"{z.real:.{digits - 1}e}{z.imag:+.{digits - 1}e}i"
     return f"{z.real:.{digits}f}{z.imag:+.{digits}f}i"
+
+
+def _scientific(H: np.ndarray) -> bool:
+    """Whether a receptance matrix needs scientific notation: fixed decimals would print
+    the small receptances of stiff structures in SI units (``1e-9 m/N``) as ``0.0000``."""
+    scale = float(np.abs(H).max()) if np.size(H) else 0.0
+    return scale != 0.0 and not 0.1 <= scale < 1e5
 
 
 # ------------------------------------------------------------------------ summaries
@@ -307,8 +318,10 @@ def _print_frf(frf, out: TextIO) -> None:
         for k, wk in enumerate(w):
             out.write(f"  H at omega = {wk:g} rad/s (rows: outputs, columns: inputs "
                       f"{', '.join(frf.inputs)}):\n")
+            sci = _scientific(H[k])
             for i, name in enumerate(frf.outputs):
-                row = "  ".join(f"{_complex(z):>16s}" for z in H[k, i])
+                row = "  ".join(f"{_complex(z, scientific=sci):>{22 if sci else 16}s}"
+                                for z in H[k, i])
                 out.write(f"    {name:<{width}s}  {row}\n")
         return
     for i, o in enumerate(frf.outputs[:6]):

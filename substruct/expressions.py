@@ -205,6 +205,8 @@ def profile(spec: Any, L: float, parameters: Mapping[str, float] | None = None
 
     Raises:
         ExpressionError: anything that is not one of the three forms, or a bad expression.
+            The message does not repeat ``spec``: the case validation appends the value
+            (``..., got {"poly": []}``) once.
     """
     params = dict(parameters or {})
     env = {**params, "L": float(L)}
@@ -220,15 +222,15 @@ def profile(spec: Any, L: float, parameters: Mapping[str, float] | None = None
         return f
     if isinstance(spec, Mapping):
         if set(spec) != {"poly"}:
-            raise ExpressionError(f"a polynomial is written {{poly: [c0, c1, ...]}}, "
-                                  f"got keys {sorted(map(str, spec))}")
+            extra = sorted(map(str, set(spec) - {"poly"}))
+            raise ExpressionError(f"a polynomial is written {{poly: [c0, c1, ...]}}"
+                                  + (f" (unknown keys: {', '.join(extra)})" if extra else ""))
         coeffs = spec["poly"]
         if not isinstance(coeffs, (list, tuple)) or not coeffs:
-            raise ExpressionError(f"poly needs a non-empty list of coefficients, got {coeffs!r}")
+            raise ExpressionError("poly needs a non-empty list of coefficients")
         c = np.array([scalar(v, env) for v in coeffs], dtype=float)
         return lambda x: np.polynomial.polynomial.polyval(np.asarray(x, dtype=float), c)
-    raise ExpressionError(f"expected a number, an expression string or {{poly: [c0, c1, ...]}}, "
-                          f"got {spec!r}")
+    raise ExpressionError("expected a number, an expression string or {poly: [c0, c1, ...]}")
 
 
 def scalar(spec: Any, values: Mapping[str, float]) -> float:

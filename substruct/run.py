@@ -440,6 +440,7 @@ def build_model(case: Case) -> Model:
         for j in range(len(chain) - 1):
             connections.append(Connection(refs[j], refs[j + 1],
                                           name=f"{chain[j]} = {chain[j + 1]}"))
+            _check_connection_row(case, by_name, refs[j], refs[j + 1], (i, j + 1), chain)
     constraints, active = [], []
     for con in case.constraints:
         if not con.active:
@@ -462,6 +463,29 @@ def build_model(case: Case) -> Model:
     _check_consistent(case, asm, len(connections))
     _warn_free_springs(case)
     return Model(asm, active, _drawings(asm, chains), points)
+
+
+def _check_connection_row(case: Case, by_name: dict[str, Substructure], a: PointRef,
+                          b: PointRef, loc: tuple[int, int], chain: Sequence[str]) -> None:
+    r"""Refuse a connection whose row ``r_a - r_b`` of ``A`` (eq 24) is empty.
+
+    That is the same point twice (``[rod@0.5, rod@L/2]``) or two supported points: the
+    "connection" joins nothing, which is a slip, and a user constraint with an empty row is
+    refused likewise (:func:`substruct.assembly.assemble`).
+    """
+    ra = by_name[a.substructure].row(a.where)
+    rb = by_name[b.substructure].row(b.where)
+    if a.substructure == b.substructure:
+        empty = not np.any(np.abs(sp.csr_array(ra - rb).toarray()) > 0)
+    else:
+        empty = not (np.any(sp.csr_array(ra).toarray()) or np.any(sp.csr_array(rb).toarray()))
+    if empty:
+        i, j = loc
+        what = ("the same coordinate" if a.substructure == b.substructure and
+                np.any(sp.csr_array(ra).toarray()) else "supported (they cannot move)")
+        raise case.error(("connections", i, j), f"connects nothing: {chain[j - 1]} and "
+                         f"{chain[j]} are {what}, so u({chain[j - 1]}) = u({chain[j]}) is "
+                         f"an empty row of A", chain[j])
 
 
 def _warn_free_springs(case: Case) -> None:

@@ -250,10 +250,15 @@ def _massless(M: sp.csr_array) -> np.ndarray:
     return np.asarray(abs(M).sum(axis=1)).ravel() == 0.0
 
 
+def _stiffness_over_mass(K: sp.sparray, M: sp.sparray) -> float:
+    r""":math:`\operatorname{tr} K / \operatorname{tr} M`, the scale of the eigenvalues."""
+    return max(abs(K.diagonal()).sum() / max(abs(M.diagonal()).sum(), 1e-300), 1e-300)
+
+
 def _default_shift(K: sp.sparray, M: sp.sparray) -> float:
     r"""A small negative shift, :math:`-10^{-9} \operatorname{tr} K / \operatorname{tr} M`,
     so that ``K - sigma M`` is definite even with rigid-body modes."""
-    return -1e-9 * max(abs(K.diagonal()).sum() / max(abs(M.diagonal()).sum(), 1e-300), 1e-300)
+    return -1e-9 * _stiffness_over_mass(K, M)
 
 
 def _norm2(A: sp.csr_array) -> float:
@@ -279,6 +284,9 @@ def _finish(lam: np.ndarray, U: np.ndarray, K: sp.sparray, M: sp.sparray, A: sp.
     lam, U = lam[order], U[:, order]
     scale = max(abs(lam).max(initial=0.0), 1e-300)
     lam = np.where(lam < 0, np.where(lam > -1e-8 * scale, 0.0, lam), lam)
+    # a rigid-body mode's omega^2 is round-off of the size eps |K| / |M|: zero, as the dense
+    # path reports it (a free-free rod of 600 coordinates gave omega = 1e-5 rad/s otherwise)
+    lam = np.where(lam <= 1e-12 * _stiffness_over_mass(K, M), 0.0, lam)
     big = np.argmax(np.abs(U), axis=0)
     U = U * np.sign(U[big, np.arange(U.shape[1])])
     U = U / np.sqrt(np.einsum("ij,ij->j", U, M @ U))
