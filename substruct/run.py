@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from datetime import datetime, timezone
 from typing import Any, Callable, NamedTuple, Sequence
 
@@ -351,6 +351,7 @@ def _drawings(asm: Assembly, connections: list[list[PointRef]]) -> list[Drawing]
     scale = extent / 10 if extent > 0 else 1.0
     shifts = _rod_shifts(subs, connections, scale)
     placed: dict[str, np.ndarray] = {}
+    axes: dict[str, int] = {}  # discrete systems on a displacement component of a solid
     ends: dict[str, dict[str, np.ndarray]] = {}
     for chain in connections:
         for p in chain:
@@ -362,6 +363,9 @@ def _drawings(asm: Assembly, connections: list[list[PointRef]]) -> list[Drawing]
                 pos = _place(subs[q.substructure], q.where, placed, shifts, scale)
                 if pos is not None:
                     placed[p.substructure] = pos
+                    axis = _component_axis(q.where)
+                    if axis is not None:
+                        axes[p.substructure] = axis
                     break
     for chain in connections:  # each end of a spring where it is connected
         for p in chain:
@@ -372,6 +376,9 @@ def _drawings(asm: Assembly, connections: list[list[PointRef]]) -> list[Drawing]
                     _place(subs[q.substructure], q.where, placed, shifts, scale)
                 if pos is not None:
                     ends.setdefault(p.substructure, {})[p.where] = pos
+                    axis = _component_axis(q.where)
+                    if axis is not None:
+                        axes[p.substructure] = axis
                     break
     out = []
     for k, s in enumerate(asm.substructures):
@@ -379,6 +386,11 @@ def _drawings(asm: Assembly, connections: list[list[PointRef]]) -> list[Drawing]
         if g is None:
             continue
         points = np.array(g.points, dtype=float)
+        interp = g.interp
+        if s.name in axes:
+            g = replace(g, points=_hang_along(points, axes[s.name]),
+                        interp=_move_along(g.interp, axes[s.name]))
+            points, interp = np.array(g.points, dtype=float), g.interp
         if s.kind == "spring":
             points = _spring_points(g, ends.get(s.name, {}), scale)
         elif s.name in discrete:
@@ -387,9 +399,37 @@ def _drawings(asm: Assembly, connections: list[list[PointRef]]) -> list[Drawing]
             points[:, 0] += shifts[s.name]
         out.append(Drawing(name=s.name, kind=s.kind, points=points,
                            cells=[(t, np.asarray(c)) for t, c in g.cells],
-                           interp=_lift(g.interp, int(asm.offsets[k]), asm.n_dof),
+                           interp=_lift(interp, int(asm.offsets[k]), asm.n_dof),
                            glyphs=dict(g.glyphs)))
     return out
+
+
+def _component_axis(where: Any) -> int | None:
+    """The axis (0, 1, 2) of a point ``{"component": "z", ...}`` on a solid, else ``None``."""
+    if not isinstance(where, dict) or "component" not in where:
+        return None
+    c = where["component"]
+    return int(c) if isinstance(c, (int, np.integer)) else "xyz".index(str(c).lower())
+
+
+def _hang_along(points: np.ndarray, axis: int) -> np.ndarray:
+    """A discrete system's local drawing (hanging along ``-y``) turned to hang along
+    ``-axis``, the direction it acts in on a solid."""
+    out = np.zeros_like(points)
+    out[:, axis] = points[:, 1]
+    return out
+
+
+def _move_along(interp: sp.csr_array, axis: int) -> sp.csr_array:
+    """Rows of a discrete system's drawing ``interp`` moved from ``x`` (its local direction of
+    motion) to ``axis``: on a solid it moves along the component it is attached to."""
+    if axis == 0:
+        return interp
+    n_rows = interp.shape[0]
+    order = np.arange(n_rows)
+    base = order - order % 3
+    swapped = np.where(order % 3 == 0, base + axis, np.where(order % 3 == axis, base, order))
+    return sp.csr_array(interp[swapped])
 
 
 # ---------------------------------------------------------------------------- model

@@ -195,3 +195,29 @@ def test_auto_takes_the_sparse_path_for_a_large_undamped_rod_and_keeps_its_rigid
     data["substructures"][0]["discretization"]["elements"] = 150  # 301 coordinates: dense
     small = run_case(case_of(data)).modes
     assert small.method == "generalized-inverse" and small.omega[0] == 0.0
+
+
+# ---------------------------------------- an absorber on a solid is drawn along its component
+
+
+@pytest.mark.parametrize("component, axis", [("z", 2), ("y", 1), ("x", 0)])
+def test_an_absorber_on_a_solid_is_drawn_moving_along_its_component(component, axis):
+    """``[beam@1,0.05,0.1:z, tmd]``: the absorber's mass moves (and hangs) along z in the
+    picture, as it does in the model; before, every discrete system was drawn moving along x."""
+    data = {"name": "beam_tmd",
+            "substructures": [
+                {"name": "beam", "type": "solid",
+                 "box": {"lengths": [1.0, 0.1, 0.1], "divisions": [4, 1, 1]},
+                 "E": 2.1e11, "nu": 0.3, "rho": 7850, "fixed": ["xmin"]},
+                {"name": "tmd", "type": "free-free", "mass": 0.5, "stiffness": 2.0e5}],
+            "connections": [[f"beam@1,0.05,0.1:{component}", "tmd"]],
+            "analysis": {"modes": {"count": 2}}}
+    model = build_model(case_of(data))
+    tmd = next(d for d in model.drawings if d.name == "tmd")
+    j = model.assembly.offsets[1]  # the absorber's coordinates: mass, boundary
+    u = np.zeros(model.assembly.n_dof)
+    u[j] = 1.0
+    moves = np.asarray(tmd.interp @ u).reshape(-1, 3)[tmd.glyphs["mass"]]
+    np.testing.assert_array_equal(moves, np.eye(3)[axis])
+    hang = tmd.points[tmd.glyphs["mass"]] - tmd.points[tmd.glyphs["boundary"]]
+    assert hang[axis] < 0 and np.count_nonzero(hang) == 1
