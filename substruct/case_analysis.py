@@ -56,8 +56,8 @@ class ModesAnalysis(StrictModel):
     method: Method = "generalized-inverse"
     check: list[Method] = Field(default_factory=list)
     variants: list[Variant] = Field(default_factory=list)
-    #: dense (eqs 28-34), sparse (undamped shift-invert Lanczos) or auto (sparse above
-    #: SPARSE_ABOVE coordinates when undamped); see substruct.run_solids.modes_solver
+    #: dense (eqs 28-34, all roots), sparse (shift-invert, the lowest count roots) or auto
+    #: (sparse above SPARSE_ABOVE coordinates); see substruct.run_solids.modes_solver
     solver: Literal["auto", "dense", "sparse"] = "auto"
 
 

@@ -223,7 +223,7 @@ def profile(spec: Any, L: float, parameters: Mapping[str, float] | None = None
     if isinstance(spec, Mapping):
         if set(spec) != {"poly"}:
             extra = sorted(map(str, set(spec) - {"poly"}))
-            raise ExpressionError(f"a polynomial is written {{poly: [c0, c1, ...]}}"
+            raise ExpressionError("a polynomial is written {poly: [c0, c1, ...]}"
                                   + (f" (unknown keys: {', '.join(extra)})" if extra else ""))
         coeffs = spec["poly"]
         if not isinstance(coeffs, (list, tuple)) or not coeffs:

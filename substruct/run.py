@@ -620,7 +620,7 @@ def _checks(main: str, check: Sequence[str]) -> list[str]:
 
 def _modes(case: Case, asm: Assembly, A: sp.csr_array, loc: tuple) -> ModeResult:
     spec = case.analysis.modes
-    if modes_solver(case, asm.n_dof, DENSE_MODES_LIMIT, asm) == "sparse":
+    if modes_solver(case, asm.n_dof) == "sparse":
         return sparse_mode_result(case, asm, A, loc)
     try:
         main = coupled_modes(asm.M, asm.C, asm.K, A, spec.method, spec.count)
@@ -644,17 +644,16 @@ def _min_size(case: Case) -> int:
     return total
 
 
-def _check_dense_sizes(case: Case, N: int, at_least: bool = True,
-                       asm: Assembly | None = None) -> None:
+def _check_dense_sizes(case: Case, N: int, at_least: bool = True) -> None:
     """Refuse dense eigenproblems (and dense receptance checks) too large for the memory."""
     size = f"at least {N}" if at_least else f"{N}"
     if case.analysis.modes is not None and N > DENSE_MODES_LIMIT and \
-            modes_solver(case, N, DENSE_MODES_LIMIT, asm, at_least) == "dense":
+            modes_solver(case, N) == "dense":
         need = 8 * 8 * (2 * N) ** 2  # dense state-space pencil, eigenvectors, workspace
         raise case.error(("analysis", "modes"), f"the coupled eigenproblem is dense and the "
                          f"model has {size} coordinates (about {gigabytes(need)}); at most "
                          f"{DENSE_MODES_LIMIT}: reduce the large substructures "
-                         f"(reduce: {{modes: ...}}), or solver: auto for an undamped model", N)
+                         f"(reduce: {{modes: ...}}), or solver: sparse", N)
     frf = case.analysis.frf
     if frf is not None and "null-space" in (frf.method, *frf.check) and N > DENSE_FRF_LIMIT:
         raise case.error(("analysis", "frf", "check"), f"the null-space receptance is dense: "
@@ -663,7 +662,7 @@ def _check_dense_sizes(case: Case, N: int, at_least: bool = True,
 
 
 def _check_dense_modes(case: Case, asm: Assembly) -> None:
-    _check_dense_sizes(case, asm.n_dof, at_least=False, asm=asm)
+    _check_dense_sizes(case, asm.n_dof, at_least=False)
 
 
 def _sweep(asm: Assembly, omegas: np.ndarray, R, method: str, E, O,

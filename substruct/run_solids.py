@@ -14,9 +14,9 @@ Called by :func:`substruct.run.build_model` and :func:`substruct.run.run_case`:
    boundary made of every coordinate that a tie, a connection, a constraint or an FRF point
    uses (so those rows stay exact) and the nodes of ``reduce.interface``.
 4. :func:`modes_solver` chooses the coupled eigensolver: dense
-   (:func:`substruct.modes.coupled_modes`) up to :data:`SPARSE_ABOVE` coordinates (damped
-   models up to ``DENSE_MODES_LIMIT``), sparse shift-invert Lanczos above it (or when asked)
-   for undamped models (:func:`substruct.sparse_modes.sparse_coupled_modes`);
+   (:func:`substruct.modes.coupled_modes`) up to :data:`SPARSE_ABOVE` coordinates, sparse
+   shift-invert above it (or when asked), undamped (Lanczos) or damped (Arnoldi on a
+   first-order pencil; :func:`substruct.sparse_modes.sparse_coupled_modes`);
    :func:`sparse_mode_result` runs it with the main formulation and the checks.
 
 Every problem is a :class:`~substruct.case.CaseError` naming the field of the case file.
@@ -38,7 +38,7 @@ from substruct.expressions import ExpressionError, scalar
 from substruct.result import ModeResult
 from substruct.substructure import PointError, Substructure
 
-__all__ = ["solid_where", "mesh_of", "build_solid", "tie_and_reduce", "declared_damping",
+__all__ = ["solid_where", "mesh_of", "build_solid", "tie_and_reduce",
            "modes_solver", "sparse_mode_result", "SPARSE_METHODS"]
 
 _AXES = ("x", "y", "z")
@@ -365,98 +365,47 @@ def tie_and_reduce(case: Any, subs: list[Substructure], positions: dict[str, lis
 # ------------------------------------------------------------------ the modes solver
 
 
-def declared_damping(case: Any) -> str | None:
-    """The field path of the first nonzero damping the case declares (``None``: undamped)."""
-    for spec in case.substructures:
-        base = f"substructures.{spec.name}"
-        d = getattr(spec, "damping", None)
-        if isinstance(d, (int, float)) and d > 0:
-            return f"{base}.damping"
-        if d is not None and not isinstance(d, (int, float)) and any(
-                v > 0 for v in getattr(d, "rayleigh", ()) or ()):
-            return f"{base}.damping"
-        reduce = getattr(spec, "reduce", None)
-        rd = getattr(reduce, "damping", None)
-        if rd is not None:
-            values = rd.rayleigh if rd.rayleigh is not None else (
-                rd.ratio if isinstance(rd.ratio, list) else [rd.ratio])
-            if any(v > 0 for v in values):
-                return f"{base}.reduce.damping"
-        if getattr(spec, "type", "") == "matrices" and getattr(spec, "C", None) is not None:
-            try:
-                C = spec.matrix("C")
-            except Exception:  # pragma: no cover - validated already
-                return f"{base}.C"
-            if C is not None and (sp.issparse(C) and C.count_nonzero() or
-                                  not sp.issparse(C) and np.any(np.asarray(C) != 0)):
-                return f"{base}.C"
-    return None
-
-
-#: ``solver: auto`` takes the sparse path for undamped models above this many coordinates:
-#: the dense state-space pencil (eqs 28-34) of a 605-coordinate free-free rod took 62 s on two
-#: busy cores, the sparse path 1 s with the same frequencies to 1e-13.
+#: ``solver: auto`` takes the sparse path above this many coordinates, damped or not: the dense
+#: state-space pencil (eqs 28-34) of a 605-coordinate free-free rod took 62 s on two busy
+#: cores, the sparse path 1 s with the same frequencies to 1e-13.
 SPARSE_ABOVE = 400
 
 
-def _damped(case: Any, asm: Assembly | None) -> str | None:
-    """Where the damping of the model comes from, ``None`` if it is undamped (the assembled
-    ``C`` decides once it exists)."""
-    declared = declared_damping(case)
-    if asm is None:
-        return declared
-    C = sp.csr_array(asm.C)
-    if C.nnz == 0 or not np.any(C.data != 0):
-        return None
-    return declared or "the assembled damping matrix"
-
-
-def modes_solver(case: Any, n: int, limit: int, asm: Assembly | None = None,
-                 at_least: bool = False) -> str:
+def modes_solver(case: Any, n: int) -> str:
     """``"dense"`` or ``"sparse"`` for the coupled modes of a model of ``n`` coordinates.
 
-    ``analysis.modes.solver``: ``dense`` always dense; ``sparse`` always sparse (undamped
-    only); ``auto`` dense up to :data:`SPARSE_ABOVE` coordinates, above it sparse when the
-    model is undamped and dense up to ``limit`` when it is damped.
-
-    Raises:
-        CaseError: a damped model that must be solved sparse.
+    ``analysis.modes.solver``: ``dense`` always dense; ``sparse`` always sparse; ``auto``
+    dense up to :data:`SPARSE_ABOVE` coordinates and sparse above it, damped or not (damped
+    models by :func:`substruct.sparse_damped.damped_sparse_modes`).
     """
     spec = case.analysis.modes
     solver = getattr(spec, "solver", "auto")
     if solver == "dense" or (solver == "auto" and n <= SPARSE_ABOVE):
         return "dense"
-    damped = _damped(case, asm)
-    if damped is None:
-        return "sparse"
-    if solver == "auto" and n <= limit:
-        return "dense"
-    size = f"at least {n}" if at_least else f"{n}"
-    if solver == "sparse":
-        raise case.error(("analysis", "modes", "solver"), f"the sparse eigensolver computes "
-                         f"undamped modes and the model is damped ({damped}): use solver: "
-                         f"dense (up to {limit} coordinates; reduce the large substructures) "
-                         f"or run it undamped", solver)
-    raise case.error(("analysis", "modes"), f"the model has {size} coordinates, more than the "
-                     f"{limit} of the dense eigenproblem, and is damped ({damped}); the "
-                     f"sparse eigensolver computes undamped modes only: reduce the large "
-                     f"substructures (reduce: {{modes: ...}} or {{method: craig-bampton, "
-                     f"modes: ...}}) or run it undamped", n)
+    return "sparse"
 
 
 def _solve(asm: Assembly, A: sp.csr_array, method: str, count: int):
     from substruct.sparse_modes import sparse_coupled_modes
 
     how, options = SPARSE_METHODS[method]
-    modes = sparse_coupled_modes(asm.M, asm.K, A, count, method=how, **options)
+    C = sp.csr_array(asm.C)
+    if C.nnz and np.any(C.data != 0):  # any C: the damped pencil, by formulation
+        modes = sparse_coupled_modes(asm.M, asm.K, A, count, method=method, C=asm.C)
+    else:
+        modes = sparse_coupled_modes(asm.M, asm.K, A, count, method=how, **options)
     modes.method = f"{method}/sparse"
     return modes
 
 
 def sparse_mode_result(case: Any, asm: Assembly, A: sp.csr_array, loc: tuple) -> ModeResult:
-    """Coupled undamped modes by the sparse path, with the main formulation and the checks of
-    ``analysis.modes``, as the dense path fills a :class:`ModeResult` (complex shapes and
-    eigenvalues ``i omega``, damping ratios 0; no spurious root is ever computed)."""
+    """Coupled modes by the sparse path, with the main formulation and the checks of
+    ``analysis.modes``, as the dense path fills a :class:`ModeResult` (complex shapes;
+    undamped: eigenvalues ``i omega``, damping ratios 0; damped: complex roots, one of each
+    conjugate pair, over-damped real roots one entry each, as the dense path reports them; no
+    spurious root is ever computed).  Damped models: ``null-space`` and
+    ``generalized-inverse`` are both the null-space pencil of
+    :func:`substruct.sparse_damped.damped_sparse_modes`, ``kkt`` its Lagrange pencil."""
     from substruct.modes import modes_agreement
 
     spec = case.analysis.modes

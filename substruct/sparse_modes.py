@@ -1,4 +1,4 @@
-r"""Coupled modes of large undamped constrained models, with no dense ``n x n`` matrix.
+r"""Coupled modes of large constrained models, undamped or damped, with no dense ``n x n`` matrix.
 
 The lowest ``k`` solutions of
 
@@ -32,6 +32,9 @@ result is restricted by :math:`P`, applied through a second saddle-point solve w
 become the eigenvalue 0 of the shift-inverted operator and are never computed.
 
 Both return :class:`substruct.modes.Modes` with real mode shapes (undamped), ``u^T M u = 1``.
+
+**Damped models** (any ``C``): :mod:`substruct.sparse_damped`, to which
+:func:`sparse_coupled_modes` dispatches when ``C`` has nonzeros.
 """
 
 from __future__ import annotations
@@ -436,15 +439,42 @@ def generalized_inverse_modes(M: sp.sparray, K: sp.sparray, A: sp.sparray | None
     return _finish(lam, U, K, M, A, "generalized-inverse/sparse")
 
 
-def sparse_coupled_modes(M: sp.sparray, K: sp.sparray, A: sp.sparray | None, n_modes: int,
-                         method: str = "null-space", **options) -> Modes:
-    """Lowest ``n_modes`` undamped modes under ``A u = 0``, sparse.
+def _has_damping(C) -> bool:
+    if C is None:
+        return False
+    C = sp.csr_array(C)
+    return bool(C.nnz and np.any(C.data != 0))
 
-    ``method``: ``"null-space"`` (:func:`null_space_modes`, the default: the smallest
-    factorization, SPD so CHOLMOD can serve) or ``"generalized-inverse"``
-    (:func:`generalized_inverse_modes`, the paper's projected operator in scalable form).
-    ``options`` go to the chosen function.
+
+def sparse_coupled_modes(M: sp.sparray, K: sp.sparray, A: sp.sparray | None, n_modes: int,
+                         method: str = "null-space", *, C: sp.sparray | None = None,
+                         **options) -> Modes:
+    """Lowest ``n_modes`` modes under ``A u = 0``, sparse; damped when ``C`` has nonzeros.
+
+    Undamped (``C`` ``None`` or zero), ``method``: ``"null-space"`` (:func:`null_space_modes`,
+    the default: the smallest factorization, SPD so CHOLMOD can serve) or
+    ``"generalized-inverse"`` (:func:`generalized_inverse_modes`, the paper's projected
+    operator in scalable form).  ``options`` go to the chosen function.
+
+    Damped: :func:`damped_sparse_modes`, ``method`` ``"null-space"`` or ``"kkt"`` (the
+    formulation); ``"generalized-inverse"`` is solved by the null-space pencil too (the
+    projected state-space form of eqs 28-34 needs the dense projector), so it is not an
+    independent check of ``"null-space"``: ``"kkt"`` is.  The method string is then
+    ``"generalized-inverse/sparse"``.  ``ncv``, ``extra`` and ``elimination`` of ``options``
+    go to :func:`damped_sparse_modes`; the others (``sigma`` in units of ``omega^2``,
+    ``project``, ``factorization``) belong to the undamped functions and are ignored.
     """
+    if _has_damping(C):
+        from .sparse_damped import damped_sparse_modes
+        if method not in ("null-space", "generalized-inverse", "kkt"):
+            raise ValueError(f"unknown method {method!r}; expected 'null-space', "
+                             "'generalized-inverse' or 'kkt'")
+        keep = {k: v for k, v in options.items() if k in ("ncv", "extra", "elimination")}
+        modes = damped_sparse_modes(M, C, K, A, n_modes,
+                                    formulation="kkt" if method == "kkt" else "null-space",
+                                    **keep)
+        modes.method = f"{method}/sparse"
+        return modes
     if method == "null-space":
         return null_space_modes(M, K, A, n_modes, **options)
     if method == "generalized-inverse":

@@ -9,7 +9,7 @@ import meshio
 import numpy as np
 import pytest
 
-from substruct.case import CaseError, parse_case
+from substruct.case import parse_case
 from substruct.run import build_model, run_case
 from cli_helpers import run
 
@@ -221,12 +221,11 @@ def test_dense_and_sparse_solvers_agree_on_a_small_solid_case():
         assert min(np.abs(u - v).max(), np.abs(u + v).max()) < 1e-6 * np.abs(u).max()
 
 
-def test_auto_solver_is_dense_when_small_and_refuses_sparse_when_damped():
+def test_auto_solver_is_dense_when_small_and_sparse_solves_damped_models():
     assert modes_of(small_case(check="[]")).method == "generalized-inverse"
-    with pytest.raises(CaseError, match=r"analysis.modes.solver: the sparse eigensolver "
-                       r"computes undamped modes and the model is damped "
-                       r"\(substructures.tmd.damping\)"):
-        modes_of(small_case(solver="sparse", damping=10))
+    # damped models are no longer refused by the sparse path (tests/test_sparse_damped.py)
+    damped = modes_of(small_case(solver="sparse", damping=10))
+    assert damped.method == "generalized-inverse/sparse" and damped.damping_ratio.max() > 1e-3
 
 
 def test_craig_bampton_converges_to_the_unreduced_model():
@@ -276,11 +275,8 @@ def test_modal_truncation_of_a_solid_and_points_by_node():
      "connections[0][0]: no displacement component 'w' on solid 'right' (one of x, y, z)"),
     (["connections[0][0]=right@1,0.05,0.1"],
      "connections[0][0]: a point on solid 'right' needs a displacement component"),
-    (["substructures.left.reduce=null", "substructures.right.reduce=null"],
-     "analysis.modes: the model has 4900 coordinates, more than the 2500 of the dense "
-     "eigenproblem, and is damped (substructures.tmd1.damping)"),
 ], ids=["unknown set", "missing mesh", "non-matching interface", "point off the mesh",
-        "bad component", "no component", "large and damped"])
+        "bad component", "no component"])
 def test_bad_solid_input_is_one_line_and_exit_2(overrides, fragment, tmp_path, capsys):
     args = [a for s in overrides for a in ("--set", s)]
     code, out, err = run(capsys, "run", BOX_BEAM, "--out", tmp_path / "out", *args)
