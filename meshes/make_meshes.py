@@ -1,7 +1,7 @@
 """Write the meshes of the solid cases (Gmsh 2.2 files with physical groups), at any refinement.
 
     python meshes/make_meshes.py                 # the small files kept in the repository
-    python meshes/make_meshes.py --refine 4 --out build/meshes # larger ones
+    python meshes/make_meshes.py --refine 4 --out build/meshes   # larger ones
 
 Meshes:
 
