@@ -39,17 +39,9 @@ from substruct.result import ModeResult
 from substruct.substructure import PointError, Substructure
 
 __all__ = ["solid_where", "mesh_of", "build_solid", "tie_and_reduce",
-           "modes_solver", "sparse_mode_result", "SPARSE_METHODS"]
+           "modes_solver", "sparse_mode_result"]
 
 _AXES = ("x", "y", "z")
-
-#: How each formulation of ``analysis.modes`` is solved by the sparse path: the paper's
-#: projected operator, master-slave elimination, and the Lagrange (KKT) shift-invert without
-#: the projection.
-SPARSE_METHODS = {"generalized-inverse": ("generalized-inverse", {}),
-                  "null-space": ("null-space", {}),
-                  "kkt": ("generalized-inverse", {"project": False})}
-
 
 # ---------------------------------------------------------------------------- points
 
@@ -385,19 +377,6 @@ def modes_solver(case: Any, n: int) -> str:
     return "sparse"
 
 
-def _solve(asm: Assembly, A: sp.csr_array, method: str, count: int):
-    from substruct.sparse_modes import sparse_coupled_modes
-
-    how, options = SPARSE_METHODS[method]
-    C = sp.csr_array(asm.C)
-    if C.nnz and np.any(C.data != 0):  # any C: the damped pencil, by formulation
-        modes = sparse_coupled_modes(asm.M, asm.K, A, count, method=method, C=asm.C)
-    else:
-        modes = sparse_coupled_modes(asm.M, asm.K, A, count, method=how, **options)
-    modes.method = f"{method}/sparse"
-    return modes
-
-
 def sparse_mode_result(case: Any, asm: Assembly, A: sp.csr_array, loc: tuple) -> ModeResult:
     """Coupled modes by the sparse path, with the main formulation and the checks of
     ``analysis.modes``, as the dense path fills a :class:`ModeResult` (complex shapes;
@@ -405,14 +384,23 @@ def sparse_mode_result(case: Any, asm: Assembly, A: sp.csr_array, loc: tuple) ->
     conjugate pair, over-damped real roots one entry each, as the dense path reports them; no
     spurious root is ever computed).  Damped models: ``null-space`` and
     ``generalized-inverse`` are both the null-space pencil of
-    :func:`substruct.sparse_damped.damped_sparse_modes`, ``kkt`` its Lagrange pencil."""
+    :func:`substruct.sparse_damped.damped_sparse_modes` (so neither is reported as a check of
+    the other), ``kkt`` its Lagrange pencil."""
     from substruct.modes import modes_agreement
+    from substruct.sparse_modes import has_damping, sparse_coupled_modes
 
     spec = case.analysis.modes
     checks = [m for k, m in enumerate(spec.check) if m != spec.method and m not in spec.check[:k]]
+    if has_damping(asm.C):  # one pencil for both: no check of one by the other
+        same = {"null-space", "generalized-inverse"}
+        checks = [m for m in checks if not (m in same and spec.method in same)]
+
+    def solve(method: str):
+        return sparse_coupled_modes(asm.M, asm.K, A, spec.count, method=method, C=asm.C)
+
     try:
-        main = _solve(asm, A, spec.method, spec.count)
-        agreement = {m: modes_agreement(_solve(asm, A, m, spec.count), main) for m in checks}
+        main = solve(spec.method)
+        agreement = {m: modes_agreement(solve(m), main) for m in checks}
     except (ValueError, RuntimeError) as err:
         text = " ".join(str(err).split()).replace("(use the dense coupled_modes)",
                                                    "(use solver: dense)")

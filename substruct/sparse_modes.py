@@ -58,6 +58,8 @@ __all__ = [
     "null_space_modes",
     "generalized_inverse_modes",
     "sparse_coupled_modes",
+    "has_damping",
+    "SPARSE_METHODS",
 ]
 
 Solve = Callable[[np.ndarray], np.ndarray]
@@ -439,7 +441,12 @@ def generalized_inverse_modes(M: sp.sparray, K: sp.sparray, A: sp.sparray | None
     return _finish(lam, U, K, M, A, "generalized-inverse/sparse")
 
 
-def _has_damping(C) -> bool:
+#: The formulations of :func:`sparse_coupled_modes`.
+SPARSE_METHODS = ("null-space", "generalized-inverse", "kkt")
+
+
+def has_damping(C: sp.sparray | np.ndarray | None) -> bool:
+    """Whether ``C`` has a nonzero entry."""
     if C is None:
         return False
     C = sp.csr_array(C)
@@ -452,32 +459,32 @@ def sparse_coupled_modes(M: sp.sparray, K: sp.sparray, A: sp.sparray | None, n_m
     """Lowest ``n_modes`` modes under ``A u = 0``, sparse; damped when ``C`` has nonzeros.
 
     Undamped (``C`` ``None`` or zero), ``method``: ``"null-space"`` (:func:`null_space_modes`,
-    the default: the smallest factorization, SPD so CHOLMOD can serve) or
+    the default: the smallest factorization, SPD so CHOLMOD can serve),
     ``"generalized-inverse"`` (:func:`generalized_inverse_modes`, the paper's projected
-    operator in scalable form).  ``options`` go to the chosen function.
+    operator in scalable form) or ``"kkt"`` (the same saddle-point shift-invert without the
+    projection: Lagrange multipliers).  ``options`` go to the chosen function.
 
-    Damped: :func:`damped_sparse_modes`, ``method`` ``"null-space"`` or ``"kkt"`` (the
-    formulation); ``"generalized-inverse"`` is solved by the null-space pencil too (the
-    projected state-space form of eqs 28-34 needs the dense projector), so it is not an
-    independent check of ``"null-space"``: ``"kkt"`` is.  The method string is then
-    ``"generalized-inverse/sparse"``.  ``ncv``, ``extra`` and ``elimination`` of ``options``
-    go to :func:`damped_sparse_modes`; the others (``sigma`` in units of ``omega^2``,
-    ``project``, ``factorization``) belong to the undamped functions and are ignored.
+    Damped: :func:`substruct.sparse_damped.damped_sparse_modes`, ``method`` ``"null-space"``
+    or ``"kkt"`` (the formulation); ``"generalized-inverse"`` is solved by the null-space
+    pencil too (the projected state-space form of eqs 28-34 needs the dense projector), so it
+    is not an independent check of ``"null-space"``: ``"kkt"`` is.  ``ncv``, ``extra`` and
+    ``elimination`` of ``options`` go to it; the others (``sigma`` in units of ``omega^2``,
+    ``factorization``) belong to the undamped functions and are ignored.
+
+    The method string of the result is ``"<method>/sparse"``.
     """
-    if _has_damping(C):
+    if method not in SPARSE_METHODS:
+        raise ValueError(f"unknown method {method!r}; expected one of "
+                         f"{', '.join(map(repr, SPARSE_METHODS))}")
+    if has_damping(C):
         from .sparse_damped import damped_sparse_modes
-        if method not in ("null-space", "generalized-inverse", "kkt"):
-            raise ValueError(f"unknown method {method!r}; expected 'null-space', "
-                             "'generalized-inverse' or 'kkt'")
         keep = {k: v for k, v in options.items() if k in ("ncv", "extra", "elimination")}
         modes = damped_sparse_modes(M, C, K, A, n_modes,
                                     formulation="kkt" if method == "kkt" else "null-space",
                                     **keep)
-        modes.method = f"{method}/sparse"
-        return modes
-    if method == "null-space":
-        return null_space_modes(M, K, A, n_modes, **options)
-    if method == "generalized-inverse":
-        return generalized_inverse_modes(M, K, A, n_modes, **options)
-    raise ValueError(f"unknown method {method!r}; expected 'null-space' or "
-                     "'generalized-inverse'")
+    elif method == "null-space":
+        modes = null_space_modes(M, K, A, n_modes, **options)
+    else:
+        modes = generalized_inverse_modes(M, K, A, n_modes, project=method != "kkt", **options)
+    modes.method = f"{method}/sparse"
+    return modes
