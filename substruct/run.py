@@ -513,16 +513,14 @@ def _check_connection_row(case: Case, by_name: dict[str, Substructure], a: Point
     "connection" joins nothing, which is a slip, and a user constraint with an empty row is
     refused likewise (:func:`substruct.assembly.assemble`).
     """
-    ra = by_name[a.substructure].row(a.where)
-    rb = by_name[b.substructure].row(b.where)
-    if a.substructure == b.substructure:
-        empty = not np.any(np.abs(sp.csr_array(ra - rb).toarray()) > 0)
-    else:
-        empty = not (np.any(sp.csr_array(ra).toarray()) or np.any(sp.csr_array(rb).toarray()))
+    ra = sp.csr_array(by_name[a.substructure].row(a.where))
+    rb = sp.csr_array(by_name[b.substructure].row(b.where))
+    same = a.substructure == b.substructure
+    moves = ra.count_nonzero() > 0
+    empty = (ra - rb).count_nonzero() == 0 if same else not (moves or rb.count_nonzero())
     if empty:
         i, j = loc
-        what = ("the same coordinate" if a.substructure == b.substructure and
-                np.any(sp.csr_array(ra).toarray()) else "supported (they cannot move)")
+        what = "the same coordinate" if same and moves else "supported (they cannot move)"
         raise case.error(("connections", i, j), f"connects nothing: {chain[j - 1]} and "
                          f"{chain[j]} are {what}, so u({chain[j - 1]}) = u({chain[j]}) is "
                          f"an empty row of A", chain[j])
