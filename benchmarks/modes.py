@@ -77,8 +77,8 @@ MPC = [((1.0, 0.5, 1.0), 2.0), ((2.0, 0.5, 1.0), -5.0), ((3.0, 0.5, 1.0), -4.0),
 
 def substruct_model(target: int):
     """The two halves, the absorbers, and the connections and constraint (substruct API)."""
-    from substruct.assembly import Connection, LinearConstraint, PointRef
-    from substruct.interfaces import tie_nodes
+    from substruct.assembly.stack import Connection, LinearConstraint, PointRef
+    from substruct.assembly.interfaces import tie_nodes
     from substruct.models.discrete import free_free
     from substruct.models.solid import solid_box
     nxh, m = divisions(target)
@@ -167,7 +167,7 @@ def _timed(run, repeat: int) -> tuple[list[float], list[float], object]:
 
 
 def best_factorization() -> str:
-    from substruct.sparse_modes import _has_cholmod
+    from substruct.analysis.sparse_modes import _has_cholmod
     return "cholmod" if _has_cholmod() else "superlu"
 
 
@@ -175,8 +175,8 @@ def worker(kind: str, size: int, factorization: str, repeat: int) -> dict:
     """One measurement, in this (fresh) process."""
     t0 = time.perf_counter()
     if kind == "a":
-        from substruct.assembly import assemble
-        from substruct.sparse_modes import null_space_modes
+        from substruct.assembly.stack import assemble
+        from substruct.analysis.sparse_modes import null_space_modes
         subs, cons, mpcs = substruct_model(size)
         build = time.perf_counter() - t0
 
@@ -185,7 +185,7 @@ def worker(kind: str, size: int, factorization: str, repeat: int) -> dict:
             modes = null_space_modes(asm.M, asm.K, asm.A, N_MODES, factorization=factorization)
             return asm.n_dof, modes.omega, float(modes.residual.max())
     elif kind == "b":
-        from substruct.sparse_modes import factorizer
+        from substruct.analysis.sparse_modes import factorizer
         Kt, Mt = monolithic_model(size)
         build = time.perf_counter() - t0
 
@@ -198,7 +198,7 @@ def worker(kind: str, size: int, factorization: str, repeat: int) -> dict:
                              return_eigenvectors=False)
             return Kt.shape[0], np.sqrt(np.sort(lam)), 0.0
     elif kind == "c":
-        from substruct.assembly import assemble
+        from substruct.assembly.stack import assemble
         subs, cons, mpcs = substruct_model(size)
         asm = assemble(subs, cons, mpcs)
         build = time.perf_counter() - t0

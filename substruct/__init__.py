@@ -21,9 +21,9 @@ __all__ = ["__version__", "load_case", "run_case"]
 def __getattr__(name: str):
     """Import the case and run layers on first use, so ``import substruct`` stays light."""
     if name == "load_case":
-        from substruct.case import load_case
+        from substruct.case.loader import load_case
         return load_case
     if name == "run_case":
-        from substruct.run import run_case
+        from substruct.run.runner import run_case
         return run_case
     raise AttributeError(f"module 'substruct' has no attribute {name!r}")

@@ -15,7 +15,7 @@ traceback, nothing written); 1 internal error (with its traceback); 130 interrup
 143 terminated (SIGTERM; partly written files are removed either way).
 ``run`` checks that the output directory can be written and that the result does not exist
 (unless ``--force``) before computing anything; so does ``converge`` (a convergence study of the
-case's rod, :mod:`substruct.convergence`), which writes ``DIR/<name>_convergence.h5`` and
+case's rod, :mod:`substruct.studies.convergence`), which writes ``DIR/<name>_convergence.h5`` and
 ``.png``.
 """
 
@@ -335,8 +335,8 @@ def _print_frf(frf, out: TextIO) -> None:
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
-    from substruct.case import load_case
-    from substruct.run import build_model, run_case
+    from substruct.case.loader import load_case
+    from substruct.run.runner import build_model, run_case
 
     case = load_case(args.case, args.set)
     out = Path(args.out)
@@ -348,7 +348,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
         if path.is_dir():
             raise InputError(f"{path} is a directory")
     model = build_model(case)
-    results = _module("results")
+    results = _module("io.hdf5")
     show = not args.quiet and not args.json
     bar = _Bar(sys.stderr) if not args.quiet else None
     result = run_case(case, progress=bar, model=model)
@@ -381,7 +381,7 @@ def _picture_paths(case, out: Path) -> list[Path]:
 
 
 def _pictures(result, out: Path, name: str) -> list[Path]:
-    plotting = _module("plotting")
+    plotting = _module("viz.plotting")
     files = []
     if result.modes is not None and len(result.modes.omega) and result.model.drawings:
         files.append(Path(plotting.plot_modes(result, out / f"{name}_modes.png")))
@@ -395,10 +395,10 @@ def _pictures(result, out: Path, name: str) -> list[Path]:
 
 
 def _cmd_converge(args: argparse.Namespace) -> int:
-    from substruct.case import load_case
-    from substruct.convergence import VARIANTS, parse_levels, study_variants
-    from substruct.convergence_case import spec_from_case
-    report = _module("convergence_report")
+    from substruct.case.loader import load_case
+    from substruct.studies.convergence import VARIANTS, parse_levels, study_variants
+    from substruct.studies.convergence_case import spec_from_case
+    report = _module("studies.convergence_report")
 
     variants = [v.strip() for v in args.variants.split(",") if v.strip()]
     if not variants or any(v not in VARIANTS for v in variants):
@@ -447,7 +447,7 @@ def _cmd_converge(args: argparse.Namespace) -> int:
 
 
 def _load_result(path: str) -> Any:
-    results = _module("results")
+    results = _module("io.hdf5")
     try:
         return results.load(path)
     except FileNotFoundError:
@@ -482,7 +482,7 @@ def _cmd_export(args: argparse.Namespace) -> int:
     result = _load_result(args.result)
     out = Path(args.out) if args.out else Path(args.result).resolve().parent
     _writable_dir(out, "--out")
-    export = _module("export")
+    export = _module("io.export")
     if args.modes is not None:
         try:
             export.parse_modes(args.modes)
@@ -516,7 +516,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return int(exc.code or 0)
     if getattr(args, "func", None) is None:
         return _fail("choose a command: run, converge, info or export (see substruct --help)")
-    from substruct.case import CaseError
+    from substruct.case.loader import CaseError
     restore = _terminate_on_sigterm()
     try:
         return int(args.func(args))

@@ -13,8 +13,8 @@ import pytest
 import yaml
 
 from substruct import cli
-from substruct.case import load_case
-from substruct.run import run_case
+from substruct.case.loader import load_case
+from substruct.run.runner import run_case
 from cli_helpers import run, assert_one_line_error
 
 CASES = Path(__file__).resolve().parent.parent / "cases"
@@ -48,7 +48,7 @@ def mode_table(text: str) -> list[list[float]]:
 
 @pytest.mark.parametrize("path", ALL, ids=lambda p: p.stem)
 def test_every_case_runs_and_its_result_round_trips(path, tmp_path, capsys):
-    from substruct import results
+    from substruct.io import hdf5 as results
     code, out, err = run(capsys, "run", path, "--out", tmp_path, "--json", "--quiet",
                          *NO_PICTURES)
     assert code == 0, err
@@ -98,7 +98,7 @@ def test_three_dof_prints_eq40(tmp_path, capsys):
 
 
 def test_nonhomogeneous_case_satisfies_constraint_41(tmp_path, capsys):
-    from substruct import results
+    from substruct.io import hdf5 as results
     code, _, err = run(capsys, "run", CASES / "three_dof_frf_nonhomogeneous.yaml", "--out",
                        tmp_path, "--quiet", *NO_PICTURES)
     assert code == 0, err
@@ -200,17 +200,17 @@ def test_force(tmp_path, capsys):
     code, _, err = run(capsys, *args, "--force", "--set", "parameters.k3=40")
     assert code == 0, err
     assert h5.stat().st_mtime > 0
-    from substruct import results
+    from substruct.io import hdf5 as results
     assert "parameters.k3=40" in results.load(h5).case_yaml
     assert sorted(p.name for p in tmp_path.iterdir()) == ["three_dof_frf.h5"]
 
 
 def test_internal_error_is_exit_1_with_traceback(tmp_path, capsys, monkeypatch):
-    import substruct.run
+    import substruct.run.runner
 
     def broken(*args, **kwargs):
         raise RuntimeError("a bug")
-    monkeypatch.setattr(substruct.run, "run_case", broken)
+    monkeypatch.setattr(substruct.run.runner, "run_case", broken)
     code, _, err = run(capsys, "run", CASES / "three_dof_frf.yaml", "--out", tmp_path)
     assert code == 1 and "Traceback" in err and "RuntimeError: a bug" in err
 

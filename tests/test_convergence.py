@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-import substruct.convergence as convergence
-import substruct.convergence_case as convergence_case
-import substruct.convergence_report as convergence_report
+import substruct.studies.convergence as convergence
+import substruct.studies.convergence_case as convergence_case
+import substruct.studies.convergence_report as convergence_report
 import substruct.models.enrichment as enrichment
-from substruct.convergence import (
+from substruct.studies.convergence import (
     Attachment,
     RodSystemSpec,
     StudyLevels,
@@ -22,10 +22,10 @@ from substruct.convergence import (
     paper_rod_spec,
     parse_levels,
 )
-from substruct.convergence_report import load_h5, print_table, run_convergence, save_h5
+from substruct.studies.convergence_report import load_h5, print_table, run_convergence, save_h5
 from substruct.models.enrichment import rod_assumed_modes_enriched, static_shapes
 from substruct.models.rod import paper_taper, rod_assumed_modes, rod_fe, uniform_rod_frequencies
-from substruct.modes import coupled_modes
+from substruct.analysis.dense_modes import coupled_modes
 
 L = 200.0
 EA0 = 6.0e6

@@ -5,14 +5,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from substruct.assembly import Connection, PointRef, assemble
-from substruct.craig_bampton import craig_bampton
-from substruct.interfaces import node_dofs, tie_nodes
+from substruct.assembly.stack import Connection, PointRef, assemble
+from substruct.models.craig_bampton import craig_bampton
+from substruct.assembly.interfaces import node_dofs, tie_nodes
 from substruct.models.discrete import free_free
 from substruct.models.rod import rod_fe
 from substruct.models.solid import solid_box
-from substruct.modes import coupled_modes
-from substruct.sparse_modes import null_space_modes
+from substruct.analysis.dense_modes import coupled_modes
+from substruct.analysis.sparse_modes import null_space_modes
 
 E, NU, RHO = 2.1e11, 0.3, 7850.0
 L, B, H = 1.0, 0.1, 0.1

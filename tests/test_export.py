@@ -7,8 +7,9 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from substruct import export
-from substruct.result import Drawing, ModelInfo, ModeResult, Result
+from substruct.io import export
+from substruct.builder.drawing import Drawing
+from substruct.run.result import ModelInfo, ModeResult, Result
 
 
 def make_result(n_modes: int = 3, seed: int = 0) -> Result:
@@ -89,7 +90,7 @@ def test_vtu_selected_modes_and_per_mode_files(tmp_path):
 
 
 def test_export_of_a_reloaded_result(tmp_path):
-    from substruct import results
+    from substruct.io import hdf5 as results
 
     r = make_result()
     back = results.load(results.save(r, tmp_path / "r.h5"))

@@ -1,11 +1,11 @@
-"""Safe expressions of x, L and case parameters (substruct.expressions)."""
+"""Safe expressions of x, L and case parameters (substruct.case.expressions)."""
 
 import time
 
 import numpy as np
 import pytest
 
-from substruct.expressions import ExpressionError, compile_expression, profile, scalar
+from substruct.case.expressions import ExpressionError, compile_expression, profile, scalar
 from substruct.models.rod import paper_taper
 
 X = np.linspace(0.0, 200.0, 11)
@@ -112,7 +112,7 @@ def test_no_eval_and_no_huge_integers():
 def test_source_has_no_eval_or_exec():
     import inspect
 
-    import substruct.expressions as mod
+    import substruct.case.expressions as mod
     src = inspect.getsource(mod)
     code = "\n".join(line for line in src.splitlines()
                      if not line.strip().startswith(("#", "*", "``")))

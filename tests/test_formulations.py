@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from substruct.constraints import ConstraintError, independent_rows
-from substruct.coupling import (METHODS, constrained_acceleration, receptance,
+from substruct.linalg.constraints import ConstraintError, independent_rows
+from substruct.analysis.coupling import (METHODS, constrained_acceleration, receptance,
                                 receptance_agreement)
-from substruct.modes import MODE_METHODS, coupled_modes, modes_agreement
+from substruct.analysis.dense_modes import MODE_METHODS, coupled_modes, modes_agreement
 
 
 def random_system(rng, n, n_massless=0, damped=True):

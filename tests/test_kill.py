@@ -1,7 +1,7 @@
 """A run killed mid-way leaves no result, no partial file, and an earlier result untouched.
 
 ``substruct run`` writes its result to a temporary file in the output directory and renames it
-over the target only when complete (:func:`substruct.results.atomic_path`).  Here a real process
+over the target only when complete (:func:`substruct.io.hdf5.atomic_path`).  Here a real process
 sweeps 20000 frequencies and is killed while it does so (SIGTERM, which it turns into a clean
 exit 143, and SIGKILL, which nothing can catch); the output directory must hold exactly what it
 held before.  A SIGTERM that arrives while the file is being written removes the temporary file.
@@ -98,7 +98,7 @@ def test_killed_run_leaves_no_result_and_keeps_the_earlier_one(sig, tmp_path, ca
 
 def test_sigterm_while_writing_removes_the_partial_file(tmp_path, capsys, monkeypatch):
     """SIGTERM in the middle of the HDF5 write: the ``.part`` file goes, the old result stays."""
-    from substruct import results
+    from substruct.io import hdf5 as results
 
     out = tmp_path / "out"
     before = earlier_result(out, capsys)

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from substruct.coupling import METHODS, paper_G_D, receptance, receptance_unconstrained
+from substruct.analysis.coupling import METHODS, paper_G_D, receptance, receptance_unconstrained
 
 # eq (37), as printed (4 decimals)
 H37 = np.array([

@@ -7,8 +7,9 @@ import pytest
 import scipy.sparse as sp
 from matplotlib import image as mpimg
 
-from substruct import plotting
-from substruct.result import Drawing, FrfResult, ModelInfo, ModeResult, Result
+from substruct.viz import plotting
+from substruct.builder.drawing import Drawing
+from substruct.run.result import FrfResult, ModelInfo, ModeResult, Result
 
 
 # ----------------------------------------------------------------------------- synthetic results

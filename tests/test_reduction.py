@@ -8,7 +8,7 @@ import scipy.sparse.linalg as spla
 
 from substruct.models.discrete import free_free
 from substruct.models.rod import paper_taper, rod_assumed_modes, rod_fe, uniform_rod_frequencies
-from substruct.reduction import modal_truncation, undamped_modes
+from substruct.models.reduction import modal_truncation, undamped_modes
 from substruct.substructure import Substructure, as_csr
 
 

@@ -12,8 +12,9 @@ import pytest
 import scipy.sparse as sp
 
 import substruct
-from substruct import results
-from substruct.result import Drawing, FrfResult, ModelInfo, ModeResult, Result
+from substruct.io import hdf5 as results
+from substruct.builder.drawing import Drawing
+from substruct.run.result import FrfResult, ModelInfo, ModeResult, Result
 
 CASE_YAML = "name: synthetic\n# ünïcode survives: ω, ζ\nsubstructures: {}\n"
 

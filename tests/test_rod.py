@@ -11,7 +11,7 @@ from substruct.models.rod import (
     rod_fe,
     uniform_rod_frequencies,
 )
-from substruct.reduction import modal_truncation, undamped_modes
+from substruct.models.reduction import modal_truncation, undamped_modes
 from substruct.substructure import PointError
 
 L_PAPER, EA_PAPER, M_PAPER = 200.0, 2e5 * 30, 1.0

@@ -25,7 +25,7 @@ from skfem.models.elasticity import linear_elasticity
 
 from substruct.models.solid import (_assemble, read_mesh, solid_box, solid_from_mesh,
                                     solid_rectangle)
-from substruct.sparse_modes import null_space_modes
+from substruct.analysis.sparse_modes import null_space_modes
 from substruct.substructure import PointError
 
 MESHES = Path(__file__).resolve().parents[1] / "meshes"

@@ -9,8 +9,8 @@ import meshio
 import numpy as np
 import pytest
 
-from substruct.case import parse_case
-from substruct.run import build_model, run_case
+from substruct.case.loader import parse_case
+from substruct.run.runner import build_model, run_case
 from cli_helpers import run
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -47,7 +47,7 @@ def assert_picture(path: Path) -> None:
 @pytest.mark.parametrize("path, n_modes", [(BOX_BEAM, 8), (PLATE, 6)],
                          ids=["box_beam_tmd", "plate_2d"])
 def test_solid_case_runs_writes_pictures_and_exports(path, n_modes, tmp_path, capsys):
-    from substruct import results
+    from substruct.io import hdf5 as results
     code, out, err = run(capsys, "run", path, "--out", tmp_path)
     assert code == 0, err
     name = path.stem

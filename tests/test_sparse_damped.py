@@ -16,11 +16,11 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from substruct.case import parse_case
-from substruct.modes import coupled_modes
-from substruct.run import run_case
-from substruct.sparse_damped import damped_sparse_modes
-from substruct.sparse_modes import sparse_coupled_modes
+from substruct.case.loader import parse_case
+from substruct.analysis.dense_modes import coupled_modes
+from substruct.run.runner import run_case
+from substruct.analysis.sparse_damped import damped_sparse_modes
+from substruct.analysis.sparse_modes import sparse_coupled_modes
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from test_solid_cases import small_case  # noqa: E402

@@ -13,13 +13,13 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-import substruct.sparse_modes as sm
-from substruct.assembly import Connection, LinearConstraint, PointRef, assemble
-from substruct.interfaces import InterfaceError, node_dofs, tie_nodes, tie_nonmatching
+import substruct.analysis.sparse_modes as sm
+from substruct.assembly.stack import Connection, LinearConstraint, PointRef, assemble
+from substruct.assembly.interfaces import InterfaceError, node_dofs, tie_nodes, tie_nonmatching
 from substruct.models.discrete import free_free
 from substruct.models.solid import solid_box, solid_from_mesh, solid_rectangle
-from substruct.modes import coupled_modes, modes_agreement
-from substruct.sparse_modes import (generalized_inverse_modes, master_slave, null_space_modes,
+from substruct.analysis.dense_modes import coupled_modes, modes_agreement
+from substruct.analysis.sparse_modes import (generalized_inverse_modes, master_slave, null_space_modes,
                                     sparse_coupled_modes)
 
 E, NU, RHO = 2.1e11, 0.3, 7850.0

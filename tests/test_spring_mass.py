@@ -10,8 +10,8 @@ import yaml
 from scipy.optimize import brentq
 
 from substruct import cli
-from substruct.case import CaseError, load_case, parse_case
-from substruct.run import build_model, run_case
+from substruct.case.loader import CaseError, load_case, parse_case
+from substruct.run.runner import build_model, run_case
 
 CASES = Path(__file__).resolve().parent.parent / "cases"
 CASE = CASES / "two_rods_spring.yaml"
@@ -335,7 +335,7 @@ def test_spring_with_a_free_end_warns_on_one_line_and_carries_no_force(tmp_path,
 
 
 def test_convergence_study_rejects_springs_and_masses():
-    from substruct.convergence_case import spec_from_case
+    from substruct.studies.convergence_case import spec_from_case
     case = case_of(rod_case(8, {"name": "tip", "type": "mass", "mass": 0.5}, ["rod@1", "tip"]))
     with pytest.raises(CaseError) as info:
         spec_from_case(case)

@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from substruct.assembly import Connection, LinearConstraint, PointRef, assemble
+from substruct.assembly.stack import Connection, LinearConstraint, PointRef, assemble
 from substruct.models.discrete import fixed_free, free_free
 from substruct.models.rod import paper_taper, rod_assumed_modes, rod_fe
-from substruct.modes import MODE_METHODS, coupled_modes, modes_agreement
-from substruct.reduction import modal_truncation
+from substruct.analysis.dense_modes import MODE_METHODS, coupled_modes, modes_agreement
+from substruct.models.reduction import modal_truncation
 
 L = 200.0
 POINTS = [L / 4, L / 2, 3 * L / 4, L]

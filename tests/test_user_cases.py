@@ -10,8 +10,8 @@ import pytest
 import yaml
 
 from substruct import cli
-from substruct.case import CaseError, parse_case
-from substruct.run import build_model, run_case
+from substruct.case.loader import CaseError, parse_case
+from substruct.run.runner import build_model, run_case
 
 CASES = Path(__file__).resolve().parent.parent / "cases"
 

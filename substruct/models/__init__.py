@@ -10,7 +10,12 @@ from substruct.models.rod import (
     rod_fe,
     uniform_rod_frequencies,
 )
-from substruct.models.solid import read_mesh, solid_box, solid_from_mesh, solid_rectangle
+from substruct.models.solid import (
+    read_mesh,
+    solid_box,
+    solid_from_mesh,
+    solid_rectangle,
+)
 
 __all__ = [
     "SUPPORTS",

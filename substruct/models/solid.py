@@ -46,9 +46,24 @@ import meshio
 import numpy as np
 import scipy.sparse as sp
 from scipy.spatial import cKDTree
-from skfem import (Basis, BilinearForm, ElementHex1, ElementHex2, ElementQuad1, ElementQuad2,
-                   ElementTetP1, ElementTetP2, ElementTriP1, ElementTriP2, Mesh, MeshHex,
-                   MeshQuad, MeshTet, MeshTri, asm)
+from skfem import (
+    Basis,
+    BilinearForm,
+    ElementHex1,
+    ElementHex2,
+    ElementQuad1,
+    ElementQuad2,
+    ElementTetP1,
+    ElementTetP2,
+    ElementTriP1,
+    ElementTriP2,
+    Mesh,
+    MeshHex,
+    MeshQuad,
+    MeshTet,
+    MeshTri,
+    asm,
+)
 from skfem.io.meshio import from_meshio, to_meshio
 from skfem.models.elasticity import lame_parameters, plane_stress
 
@@ -520,7 +535,7 @@ def solid_from_mesh(name: str, mesh: str | os.PathLike | meshio.Mesh | Mesh, E: 
         ``{"at": xyz, "component": c}`` / ``{"node": k, "component": c}``, and a geometry whose
         points are all DOF nodes (vertices first) with the mesh's linear cells.
         ``meta["node_sets"]`` maps each named set of the mesh to its node indices (into
-        ``geometry.points``), for :mod:`substruct.interfaces`.
+        ``geometry.points``), for :mod:`substruct.assembly.interfaces`.
 
     Raises:
         ValueError: missing or corrupt mesh file (naming the path), bad material data, a

@@ -1,0 +1,108 @@
+"""Substructures made from their case specifications: rods (assumed modes or finite
+elements, with optional modal truncation, eqs 21-22), spring-mass-damper systems (eqs 17-20),
+springs, point masses, matrices and meshed solids."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import scipy.sparse as sp
+
+from substruct.builder.solids import build_solid
+from substruct.case.loader import (
+    Case,
+    DiscreteSpec,
+    FiniteElements,
+    MatrixSpec,
+    RodSpec,
+)
+from substruct.case.solids import SolidSpec
+from substruct.case.substructures import MassSpec, SpringSpec
+from substruct.models.discrete import fixed_free, free_free, point_mass, spring
+from substruct.models.reduction import modal_truncation
+from substruct.models.rod import rod_assumed_modes, rod_fe
+from substruct.substructure import Geometry, PointError, Substructure, as_csr
+
+__all__ = ["make_substructures"]
+
+
+# ---------------------------------------------------------------------- substructures
+
+
+def _matrices_substructure(spec: MatrixSpec) -> Substructure:
+    labels = spec.dof_labels()
+    n = len(labels)
+    index = {lab: k for k, lab in enumerate(labels)}
+
+    def locate(where: Any) -> sp.csr_array:
+        if where not in index:
+            raise PointError(f"{spec.name}: no coordinate {where!r}")
+        return sp.csr_array(([1.0], ([0], [index[where]])), shape=(1, n))
+
+    K = as_csr(spec.matrix("K"))
+    return Substructure(name=spec.name, M=as_csr(spec.matrix("M")), K=K,
+                        C=as_csr(spec.matrix("C"), n), dof_labels=tuple(labels),
+                        locate=locate, kind="matrices", geometry=_chain_geometry(K, index),
+                        meta={"n_dof": n})
+
+
+def _chain_geometry(K: sp.csr_array, index: dict[str, int]) -> Geometry | None:
+    """Coordinates drawn as nodes at ``x = 0, 1, ...`` moving along ``x``, joined by a line
+    wherever ``K`` couples two of them (the springs of a lumped model)."""
+    n = K.shape[0]
+    if n > 2000 or K.nnz > 40000:
+        return None
+    coo = sp.coo_array(sp.triu(K, k=1))
+    pairs = np.column_stack([coo.row, coo.col])[coo.data != 0].astype(int)
+    linked = np.zeros(n, dtype=bool)
+    linked[pairs.ravel()] = True
+    cells = [("line", pairs)] if len(pairs) else []
+    if not linked.all():
+        cells.append(("vertex", np.flatnonzero(~linked).reshape(-1, 1)))
+    points = np.column_stack([np.arange(n, dtype=float), np.zeros(n), np.zeros(n)])
+    interp = sp.csr_array((np.ones(n), (3 * np.arange(n), np.arange(n))), shape=(3 * n, n))
+    return Geometry(points=points, cells=cells, interp=interp, glyphs=dict(index))
+
+
+def _rod(case: Case, i: int, spec: RodSpec, nodes_at: list[float]) -> Substructure:
+    disc = spec.discretization
+    try:
+        if isinstance(disc, FiniteElements):
+            sub = rod_fe(spec.name, spec.length, spec.EA_function, spec.m_function,
+                         disc.elements, order=disc.order, support=spec.support,
+                         nodes_at=nodes_at)
+        else:
+            sub = rod_assumed_modes(spec.name, spec.length, spec.EA_function, spec.m_function,
+                                    disc.n, support=spec.support, mapping=disc.mapping,
+                                    nodes_at=nodes_at)
+    except ValueError as err:
+        raise case.error(("substructures", i, "discretization"), str(err)) from None
+    if spec.reduce is not None:
+        damping = spec.reduce.damping.as_argument() if spec.reduce.damping else None
+        try:
+            sub = modal_truncation(sub, spec.reduce.modes, damping)
+        except ValueError as err:
+            raise case.error(("substructures", i, "reduce", "modes"), str(err),
+                             spec.reduce.modes) from None
+    return sub
+
+
+def make_substructures(case: Case, positions: dict[str, list[float]]) -> list[Substructure]:
+    subs = []
+    for i, spec in enumerate(case.substructures):
+        if isinstance(spec, RodSpec):
+            subs.append(_rod(case, i, spec, positions.get(spec.name, [])))
+        elif isinstance(spec, DiscreteSpec):
+            make = fixed_free if spec.type == "fixed-free" else free_free
+            subs.append(make(spec.name, spec.mass, spec.stiffness, spec.damping))
+        elif isinstance(spec, SpringSpec):
+            subs.append(spring(spec.name, spec.stiffness, spec.damping, grounded=spec.ground))
+        elif isinstance(spec, MassSpec):
+            subs.append(point_mass(spec.name, spec.mass))
+        elif isinstance(spec, SolidSpec):
+            subs.append(build_solid(case, i, spec))
+        else:
+            subs.append(_matrices_substructure(spec))
+    return subs
+

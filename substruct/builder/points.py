@@ -1,0 +1,97 @@
+"""Points of a case resolved on their substructures: ``"sub@where"`` to what the
+substructure's locator understands (a position on a rod, a coordinate label, a node of a solid)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+from substruct.builder.solids import solid_where
+from substruct.case.expressions import ExpressionError, scalar
+from substruct.case.loader import Case, DiscreteSpec, RodSpec
+from substruct.case.solids import SolidSpec
+from substruct.case.substructures import MassSpec, SpringSpec
+
+__all__ = ["PointUse", "point_uses", "rod_position", "resolve_point"]
+
+
+@dataclass
+class PointUse:
+    text: str
+    loc: tuple
+
+
+# ---------------------------------------------------------------------------- points
+
+
+def point_uses(case: Case) -> list[PointUse]:
+    """Every point of the case with the location of its field."""
+    uses = []
+    for i, chain in enumerate(case.connections):
+        uses += [PointUse(p, ("connections", i, j)) for j, p in enumerate(chain)]
+    for k, con in enumerate(case.constraints):
+        if not con.active:
+            continue
+        uses += [PointUse(p, ("constraints", k, "terms", p)) for p in con.terms]
+        uses += [PointUse(p, ("constraints", k, "rhs_force", p)) for p in con.rhs_force]
+    frf = case.analysis.frf
+    if frf is not None:
+        uses += [PointUse(p, ("analysis", "frf", "inputs", i)) for i, p in enumerate(frf.inputs)]
+        uses += [PointUse(p, ("analysis", "frf", "outputs", i))
+                 for i, p in enumerate(frf.outputs)]
+    return uses
+
+
+def rod_position(case: Case, spec: RodSpec, where: str | None, use: PointUse) -> float:
+    """``x`` of a point on a rod: a number, ``x=..`` or an expression of ``L`` and parameters."""
+    if where is None:
+        raise case.error(use.loc, f"a point on rod {spec.name!r} needs a position, as in "
+                         f"{spec.name}@{spec.length:g} or {spec.name}@L/2", use.text)
+    text = where[2:] if where.startswith("x=") else where
+    try:
+        x = float(text)
+    except ValueError:
+        try:
+            x = scalar(text, {**case.parameters, "L": float(spec.length)})
+        except ExpressionError as err:
+            raise case.error(use.loc, f"not a position on rod {spec.name!r}: {err}",
+                             use.text) from None
+    L = float(spec.length)
+    if not math.isfinite(x) or x < -1e-9 * L or x > L * (1 + 1e-9):
+        raise case.error(use.loc, f"point is not on rod {spec.name!r} [0, {L:g}]", use.text)
+    return min(max(x, 0.0), L)
+
+
+def resolve_point(case: Case, spec: Any, where: str | None, use: PointUse) -> Any:
+    """What the substructure's locator understands for ``where``."""
+    if isinstance(spec, RodSpec):
+        return rod_position(case, spec, where, use)
+    if isinstance(spec, DiscreteSpec):
+        return "boundary" if where is None else where
+    if isinstance(spec, MassSpec):
+        return "mass" if where is None else where
+    if isinstance(spec, SpringSpec):
+        if where is None and not spec.ground:
+            raise case.error(use.loc, f"spring {spec.name!r} has two ends: write "
+                             f"{spec.name}@i or {spec.name}@j", use.text)
+        return "i" if where is None else where
+    if isinstance(spec, SolidSpec):
+        return solid_where(case, spec, where, use)
+    # matrices: a label, or a 1-based index
+    if where is None:
+        raise case.error(use.loc, f"a point on {spec.name!r} needs a coordinate, as in "
+                         f"{spec.name}@{spec.dof_labels()[0]} or {spec.name}@1", use.text)
+    labels = spec.dof_labels()
+    if where in labels:
+        return where
+    try:
+        k = float(where)
+    except ValueError:
+        k = math.nan
+    if math.isfinite(k) and k == int(k) and 1 <= int(k) <= len(labels):
+        return labels[int(k) - 1]
+    shown = ", ".join(labels[:8]) + (" ..." if len(labels) > 8 else "")
+    raise case.error(use.loc, f"{spec.name!r} has no coordinate {where!r} (labels: {shown}; "
+                     f"or a 1-based index up to {len(labels)})", use.text)
+

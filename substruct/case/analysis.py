@@ -1,0 +1,168 @@
+"""Case-file constraints and analyses: user constraints, modes, variants and receptances.
+
+A user constraint is ``sum_k c_k u(p_k) = rhs + sum_j d_j F(p_j)`` (eqs 41, 52); the analyses
+are the coupled modes (eqs 28-34) and the receptances at a frequency grid (eqs 11-15), each by
+one formulation and checked by others (:mod:`substruct.analysis.coupling`).
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal
+
+import numpy as np
+from pydantic import Field, model_validator
+
+from substruct.case.errors import FieldError
+from substruct.case.fields import (
+    MAX_FREQUENCIES,
+    MEMORY_LIMIT,
+    Count,
+    Name,
+    NonNegative,
+    Number,
+    Point,
+    Positive,
+    StrictModel,
+    gigabytes,
+)
+
+__all__ = ["METHODS", "Method", "ConstraintSpec", "Variant", "ModesAnalysis", "Omega",
+           "FrfAnalysis", "Analysis", "Output"]
+
+#: Formulations that an analysis may name (see :mod:`substruct.analysis.coupling`).
+METHODS = ("generalized-inverse", "null-space", "kkt")
+
+class ConstraintSpec(StrictModel):
+    """``sum_k c_k u(p_k) = rhs + sum_j d_j F(p_j)`` (eqs 41, 52)."""
+
+    name: Name | None = None
+    terms: dict[Point, Number]
+    rhs: Number = 0.0
+    rhs_force: dict[Point, Number] = Field(default_factory=dict)
+    active: bool = True
+
+    @model_validator(mode="after")
+    def _not_empty(self) -> "ConstraintSpec":
+        if not self.terms or all(c == 0 for c in self.terms.values()):
+            raise FieldError("terms", "a constraint needs at least one term with a nonzero "
+                             "coefficient", self.terms)
+        return self
+
+
+class Variant(StrictModel):
+    """The same model with some constraints left out (e.g. Table 1 without eq 52)."""
+
+    name: Name
+    drop: Annotated[list[Name], Field(min_length=1)]
+
+
+Method = Literal["generalized-inverse", "null-space", "kkt"]
+
+
+class ModesAnalysis(StrictModel):
+    """Coupled modes (eqs 28-34) by ``method``, checked by the ``check`` formulations."""
+
+    count: Count = 6
+    method: Method = "generalized-inverse"
+    check: list[Method] = Field(default_factory=list)
+    variants: list[Variant] = Field(default_factory=list)
+    #: dense (eqs 28-34, all roots), sparse (shift-invert, the lowest count roots) or auto
+    #: (sparse above SPARSE_ABOVE coordinates); see substruct.builder.solids.modes_solver
+    solver: Literal["auto", "dense", "sparse"] = "auto"
+
+
+class Omega(StrictModel):
+    """A frequency grid: ``values`` or ``start``/``stop``/``num``/``spacing`` (rad/s)."""
+
+    values: Annotated[list[NonNegative], Field(min_length=1)] | None = None
+    start: NonNegative | None = None
+    stop: Positive | None = None
+    num: Count | None = None
+    spacing: Literal["linear", "log"] = "linear"
+
+    @model_validator(mode="before")
+    @classmethod
+    def _list(cls, value: Any) -> Any:
+        if isinstance(value, list):
+            return {"values": value}
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            return {"values": [value]}
+        if not isinstance(value, dict):
+            raise ValueError("omega is a list of frequencies (rad/s) or "
+                             "{start: .., stop: .., num: .., spacing: linear|log}")
+        if "values" in value:
+            raise FieldError("values", "unknown key: give omega as a list instead", value)
+        return value
+
+    @model_validator(mode="after")
+    def _grid(self) -> "Omega":
+        if self.values is not None:
+            if len(self.values) > MAX_FREQUENCIES:
+                raise FieldError((), f"at most {MAX_FREQUENCIES} frequencies",
+                                 len(self.values))
+            return self
+        for key in ("start", "stop", "num"):
+            if getattr(self, key) is None:
+                raise FieldError(key, "a frequency grid needs start, stop and num")
+        if self.stop <= self.start:
+            raise FieldError("stop", f"must be > start ({self.start:g})", self.stop)
+        if self.spacing == "log" and self.start <= 0:
+            raise FieldError("start", "must be > 0 for a log grid", self.start)
+        if self.num > MAX_FREQUENCIES:
+            raise FieldError("num", f"at most {MAX_FREQUENCIES} frequencies", self.num)
+        return self
+
+    def grid(self) -> np.ndarray:
+        """The circular frequencies (rad/s)."""
+        if self.values is not None:
+            return np.asarray(self.values, dtype=float)
+        if self.spacing == "log":
+            return np.geomspace(self.start, self.stop, self.num)
+        return np.linspace(self.start, self.stop, self.num)
+
+
+class FrfAnalysis(StrictModel):
+    """Receptances ``H[k, i, j]`` (eqs 11-15) at ``omega`` for forces at ``inputs``."""
+
+    omega: Omega
+    inputs: Annotated[list[Point], Field(min_length=1)]
+    outputs: Annotated[list[Point], Field(min_length=1)]
+    method: Method = "generalized-inverse"
+    check: list[Method] = Field(default_factory=list)
+
+    @model_validator(mode="after")
+    def _positive(self) -> "FrfAnalysis":
+        w = self.omega.grid()
+        if "generalized-inverse" in (self.method, *self.check) and np.any(w <= 0):
+            raise FieldError("omega", "the generalized-inverse receptance (eq 15) is singular "
+                             "at omega = 0: use frequencies > 0 (or method kkt for statics)",
+                             float(w[w <= 0][0]))
+        sizes = {"frequencies": len(w), "outputs": len(self.outputs), "inputs": len(self.inputs)}
+        methods = 1 + len(set(self.check) - {self.method})
+        need = 16.0 * methods * len(w) * len(self.outputs) * len(self.inputs)
+        if need > MEMORY_LIMIT:
+            raise FieldError((), f"the receptances would need about {gigabytes(need)} of memory "
+                             f"({len(w)} frequencies x {len(self.outputs)} outputs x "
+                             f"{len(self.inputs)} inputs, complex, for {methods} "
+                             f"formulation(s)), more than the {gigabytes(MEMORY_LIMIT)} allowed",
+                             sizes)
+        return self
+
+
+class Analysis(StrictModel):
+    """What to compute: coupled ``modes`` and/or receptances ``frf``."""
+
+    modes: ModesAnalysis | None = None
+    frf: FrfAnalysis | None = None
+
+    @model_validator(mode="after")
+    def _something(self) -> "Analysis":
+        if self.modes is None and self.frf is None:
+            raise ValueError("nothing to compute: give modes and/or frf")
+        return self
+
+
+class Output(StrictModel):
+    """What ``substruct run`` writes besides the results file."""
+
+    pictures: bool = True

@@ -1,0 +1,274 @@
+"""Case-file errors as one line: ``<file>: <field.path>: <problem>, got <value>``.
+
+:class:`CaseError` is what every layer reports bad input with (the command line prints it and
+exits with code 2).  Validators raise :class:`FieldError` (a problem at a location relative to
+the object being validated); :func:`translate` turns the first error of a pydantic
+:class:`~pydantic.ValidationError` into a :class:`CaseError`, with the location written the way
+a reader of the file finds it (:func:`field_path`), the value shown on one line
+(:func:`show_value`) and, for a misspelt key, the closest allowed one ("did you mean").
+"""
+
+from __future__ import annotations
+
+import difflib
+import json
+import re
+import types
+from typing import (
+    Annotated,
+    Any,
+    Literal,
+    Mapping,
+    Sequence,
+    Union,
+    get_args,
+    get_origin,
+)
+
+import numpy as np
+from pydantic import BaseModel, ValidationError
+
+from substruct.case.fields import NAME_PATTERN
+
+__all__ = ["CaseError", "FieldError", "MISSING", "show_value", "field_path", "translate"]
+
+#: Marks "no value" (a missing field), as opposed to a value ``None`` (YAML ``null``).
+MISSING: Any = object()
+
+
+def show_value(value: Any) -> str:
+    """A value in an error message: one line, at most about 80 characters."""
+    if isinstance(value, np.generic):
+        value = value.item()
+    if isinstance(value, bool):
+        text = "true" if value else "false"
+    elif value is None:
+        text = "null"
+    elif isinstance(value, (float, str)):
+        text = repr(value)
+    elif isinstance(value, (list, tuple, dict)):
+        try:
+            text = json.dumps(value, default=str)
+        except (TypeError, ValueError):
+            text = repr(value)
+    elif isinstance(value, np.ndarray):
+        text = f"array of shape {value.shape}"
+    else:
+        text = repr(value)
+    text = text.replace("\n", "\\n")
+    return text if len(text) <= 80 else text[:77] + "..."
+
+
+class CaseError(ValueError):
+    """A problem with a case file, as one line ``<file>: <field.path>: <problem>, got <value>``.
+
+    Attributes:
+        source: the case file (or ``"<string>"``).
+        path: the field path, e.g. ``substructures.rod.length`` (empty for the whole file).
+        problem: what is wrong.
+        value: the offending value (``None`` when there is none, e.g. a missing field).
+    """
+
+    def __init__(self, source: str, path: str, problem: str, value: Any = MISSING):
+        self.source, self.path, self.problem = str(source), path, problem
+        self.value = None if value is MISSING else value
+        message = ": ".join([self.source] + ([path] if path else []) + [problem])
+        if value is not MISSING:
+            message += f", got {show_value(value)}"
+        super().__init__(" ".join(message.splitlines()))
+
+
+class FieldError(ValueError):
+    """Raised inside validators: a problem at ``loc`` relative to the validated object."""
+
+    def __init__(self, loc: str | int | Sequence[str | int], problem: str,
+                 value: Any = MISSING):
+        self.loc = (loc,) if isinstance(loc, (str, int)) else tuple(loc)
+        self.problem, self.value = problem, value
+        super().__init__(problem)
+
+
+# ------------------------------------------------------------------------ field paths
+
+#: Keys whose value selects a member of a tagged union in the case schema.
+_DISCRIMINATORS = ("type", "method")
+
+
+def field_path(loc: Sequence[str | int], raw: Any) -> str:
+    """``substructures.rod.length`` / ``connections[2]`` from a location in the raw data.
+
+    List items are named by their ``name`` when it is unique in the list, otherwise by their
+    0-based index; union members and discriminator tags that pydantic puts into locations are
+    left out.
+    """
+    out = ""
+    node = raw
+    for i, el in enumerate(loc):
+        last = i == len(loc) - 1
+        if isinstance(node, dict) and not last and isinstance(el, str) and \
+                any(node.get(key) == el for key in _DISCRIMINATORS):
+            continue  # a union tag pydantic put into the location (``type: mass``)
+        if isinstance(node, dict) and isinstance(el, str) and el in node:
+            out += ("." if out else "") + el
+            node = node[el]
+        elif isinstance(node, list) and isinstance(el, int) and 0 <= el < len(node):
+            item = node[el]
+            name = item.get("name") if isinstance(item, dict) else None
+            names = [x.get("name") for x in node if isinstance(x, dict)]
+            if isinstance(name, str) and names.count(name) == 1 and \
+                    re.match(NAME_PATTERN, name):
+                out += "." + name
+            else:
+                out += f"[{el}]"
+            node = item
+        elif isinstance(el, int):
+            out += f"[{el}]"
+            node = None
+        elif last and el != "[key]" and (isinstance(node, dict) or node is None):
+            out += ("." if out else "") + el
+            node = None
+    return out
+
+
+# ------------------------------------------------------------- "unknown key" suggestions
+
+
+def _unwrap(tp: Any) -> Any:
+    while get_origin(tp) is Annotated:
+        tp = get_args(tp)[0]
+    return tp
+
+
+def _members(tp: Any) -> list[Any]:
+    tp = _unwrap(tp)
+    if get_origin(tp) in (Union, types.UnionType):
+        return [_unwrap(a) for a in get_args(tp) if a is not type(None)]
+    return [tp]
+
+
+def _is_model(tp: Any) -> bool:
+    return isinstance(tp, type) and issubclass(tp, BaseModel)
+
+
+def _selected_by_tag(models: list[type[BaseModel]], tag: str) -> type[BaseModel] | None:
+    """The member of a discriminated union whose ``Literal`` field admits ``tag``."""
+    for m in models:
+        for f in m.model_fields.values():
+            tp = _unwrap(f.annotation)
+            if get_origin(tp) is Literal and tag in get_args(tp):
+                return m
+    return None
+
+
+def _allowed_keys(root: type[BaseModel], loc: Sequence[str | int]) -> list[str] | None:
+    """Field names of the model at ``loc`` below ``root`` (for "unknown key" messages)."""
+    tp: Any = root
+    for el in loc:
+        members = _members(tp)
+        models = [m for m in members if _is_model(m)]
+        nxt = None
+        for m in models:
+            if isinstance(el, str) and el in m.model_fields:
+                nxt = m.model_fields[el].annotation
+                break
+        if nxt is None and isinstance(el, str):
+            nxt = _selected_by_tag(models, el)
+        if nxt is None:
+            for m in members:
+                origin = get_origin(m)
+                if origin is list and isinstance(el, int):
+                    nxt = get_args(m)[0]
+                elif origin is dict:
+                    nxt = get_args(m)[1]
+        if nxt is None:
+            return None
+        tp = nxt
+    models = [m for m in _members(tp) if _is_model(m)]
+    return list(models[0].model_fields) if len(models) == 1 else None
+
+
+# ------------------------------------------------------------------ pydantic -> one line
+
+_SIMPLE = {
+    "finite_number": "must be a finite number",
+    "float_parsing": "must be a number", "float_type": "must be a number",
+    "int_parsing": "must be an integer", "int_type": "must be an integer",
+    "int_from_float": "must be an integer",
+    "bool_parsing": "must be true or false", "bool_type": "must be true or false",
+    "string_type": "must be a string",
+    "string_pattern_mismatch": "must be a name of letters, digits, '_', '.' and '-'",
+    "string_too_short": "must not be empty",
+    "list_type": "must be a list",
+    "dict_type": "must be a mapping (key: value)",
+    "model_type": "must be a mapping (key: value)",
+    "model_attributes_type": "must be a mapping (key: value)",
+    "tuple_type": "must be a list",
+}
+_TAGS = {"type": "rod, fixed-free, free-free, matrices, spring, mass, solid",
+         "method": "assumed-modes, fe"}
+
+
+def _problem(err: Mapping[str, Any], loc: tuple, root: type[BaseModel]
+             ) -> tuple[str, tuple, Any]:
+    """``(problem, loc, value)`` for one pydantic error."""
+    typ, msg, ctx = err["type"], err["msg"], err.get("ctx") or {}
+    value = err.get("input", MISSING)
+    exc = ctx.get("error")
+    if isinstance(exc, FieldError):
+        return exc.problem, loc + exc.loc, exc.value
+    if typ == "missing":
+        return "required field is missing", loc, MISSING
+    if typ == "extra_forbidden":
+        allowed = [k for k in _allowed_keys(root, loc[:-1]) or [] if k != "values"]
+        extra = f" (allowed: {', '.join(allowed)})" if allowed else ""
+        close = difflib.get_close_matches(str(loc[-1]), allowed, n=1) if loc else []
+        hint = f"; did you mean {close[0]!r}?" if close else ""
+        return f"unknown key{hint}{extra}", loc, value
+    if typ in ("union_tag_invalid", "union_tag_not_found"):
+        disc = str(ctx.get("discriminator", "")).strip("'")
+        tags = _TAGS.get(disc, ctx.get("expected_tags", ""))
+        if typ == "union_tag_not_found" and isinstance(value, dict):
+            return f"needs {disc}: one of {tags}", loc + (disc,), MISSING
+        if typ == "union_tag_not_found":
+            return "must be a mapping (key: value)", loc, value
+        return f"unknown {disc} (expected one of {tags})", loc + (disc,), ctx.get("tag")
+    bounds = {
+        "greater_than": f"must be > {ctx.get('gt')}",
+        "greater_than_equal": f"must be >= {ctx.get('ge')}",
+        "less_than_equal": f"must be <= {ctx.get('le')}",
+        "too_short": f"must have at least {ctx.get('min_length')} item(s)",
+        "too_long": f"must have at most {ctx.get('max_length')} item(s)",
+        "literal_error": f"must be one of {ctx.get('expected')}",
+    }
+    if typ in _SIMPLE or typ in bounds:
+        return _SIMPLE.get(typ) or bounds[typ], loc, value
+    if typ == "value_error":
+        return msg.removeprefix("Value error, "), loc, value
+    return msg.replace("Input should be", "must be"), loc, value
+
+
+def translate(exc: ValidationError, raw: Any, source: str, root: type[BaseModel],
+              set_paths: Sequence[str] = ()) -> CaseError:
+    """The first problem of a validation of ``raw`` against ``root``, as a :class:`CaseError`.
+
+    Args:
+        exc: the pydantic error.
+        raw: the data validated (to name list items and find keys).
+        source: the case file, for the message.
+        root: the model validated (to list the allowed keys of an unknown one).
+        set_paths: paths set by ``--set`` (a problem there says so).
+    """
+    errors = exc.errors(include_url=False)
+    if not errors:
+        return CaseError(source, "", " ".join(str(exc).split()))
+    err = errors[0]  # in field order: the first problem a reader meets in the file
+    if err["type"] == "missing":  # a misspelt key shows as missing + unknown: name the latter
+        parent = tuple(err["loc"][:-1])
+        err = next((e for e in errors if e["type"] == "extra_forbidden"
+                    and tuple(e["loc"][:-1]) == parent), err)
+    problem, loc, value = _problem(err, tuple(err["loc"]), root)
+    path = field_path(loc, raw)
+    if any(path == p or path.startswith(p + ".") or path.startswith(p + "[")
+           for p in set_paths):
+        problem += " (set on the command line)"
+    return CaseError(source, path, problem, value)

@@ -1,0 +1,106 @@
+"""Building blocks of the case-file schema: checked field types, points and size limits.
+
+Every model of the schema (:mod:`substruct.case.loader`, :mod:`substruct.case.matrices`) derives from
+:class:`StrictModel` (unknown keys are errors, ``nan``/``inf`` are refused) and types its fields
+with the annotated types here, so that a number is never a boolean, a count is an integer
+``>= 1`` and a name is usable in a file name and in a point ``"sub@where"``.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import Annotated, Any
+
+from pydantic import (
+    AfterValidator,
+    BaseModel,
+    BeforeValidator,
+    ConfigDict,
+    Field,
+    StringConstraints,
+)
+
+__all__ = [
+    "MEMORY_LIMIT", "MAX_ASSUMED_MODES", "MAX_ELEMENTS", "MAX_FREQUENCIES", "MAX_MATRIX_SIZE",
+    "DENSE_CHECK", "NAME_PATTERN", "Number", "Positive", "NonNegative", "Count", "Name",
+    "Point", "Distribution", "StrictModel", "parse_point", "gigabytes",
+]
+
+#: Estimated memory above which an input is refused up front (bytes).
+MEMORY_LIMIT = 4e9
+#: Hard limits on sizes, whatever the memory.
+MAX_ASSUMED_MODES = 20_000
+MAX_ELEMENTS = 2_000_000
+MAX_FREQUENCIES = 100_000
+MAX_MATRIX_SIZE = 5_000_000
+#: Largest matrix whose eigenvalues are checked densely (mass matrices of matrix substructures).
+DENSE_CHECK = 2000
+
+#: Names of cases, substructures, constraints and variants.
+NAME_PATTERN = r"^[A-Za-z0-9_.-]+$"
+
+
+def _finite(value: float) -> float:
+    if not math.isfinite(value):
+        raise ValueError("must be a finite number")
+    return value
+
+
+def _no_bool(value: Any) -> Any:
+    if isinstance(value, bool):
+        raise ValueError("must be a number, not true/false")
+    return value
+
+
+Number = Annotated[float, BeforeValidator(_no_bool), AfterValidator(_finite)]
+Positive = Annotated[Number, Field(gt=0)]
+NonNegative = Annotated[Number, Field(ge=0)]
+Count = Annotated[int, BeforeValidator(_no_bool), Field(ge=1)]
+Name = Annotated[str, StringConstraints(pattern=NAME_PATTERN)]
+
+
+def parse_point(text: str) -> tuple[str, str | None]:
+    """``"sub@where"`` -> ``("sub", "where")``; ``"sub"`` -> ``("sub", None)``."""
+    sub, at, where = text.strip().partition("@")
+    return sub.strip(), (where.strip() if at else None)
+
+
+def _point(value: Any) -> str:
+    if not isinstance(value, str):
+        raise ValueError("a point is written 'substructure@where' or 'substructure'")
+    sub, where = parse_point(value)
+    if not re.match(NAME_PATTERN, sub) or where == "":
+        raise ValueError("a point is written 'substructure@where' (e.g. rod@50, P@q1) or "
+                         "'substructure' for the boundary of a discrete attachment")
+    return value.strip()
+
+
+#: ``"sub@where"`` or ``"sub"``, checked for syntax only (resolved when the model is built).
+Point = Annotated[str, BeforeValidator(_point)]
+
+
+def _spec(value: Any) -> Any:
+    """A distribution: a number, an expression string or ``{poly: [...]}`` (checked later)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, str, dict)):
+        raise ValueError("must be a number, an expression of x and L, or {poly: [c0, c1, ...]}")
+    if isinstance(value, float) and not math.isfinite(value):
+        raise ValueError("must be a finite number")
+    return value
+
+
+#: A distribution along a rod; evaluated by :func:`substruct.case.expressions.profile`.
+Distribution = Annotated[Any, AfterValidator(_spec)]
+
+
+def gigabytes(nbytes: float) -> str:
+    """``"6 GB"`` / ``"250 MB"`` / ``"3.2e+03 TB"``: a memory estimate for a message."""
+    if nbytes >= 1e12:
+        return f"{nbytes / 1e12:.3g} TB"
+    return f"{nbytes / 1e9:.3g} GB" if nbytes >= 1e8 else f"{nbytes / 1e6:.3g} MB"
+
+
+class StrictModel(BaseModel):
+    """Base of every schema model: unknown keys and non-finite numbers are errors."""
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, validate_default=False)

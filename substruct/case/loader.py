@@ -1,0 +1,286 @@
+"""Case files: the validated schema of a whole case, and reading one.
+
+A case file names the substructures, how they are connected (compatibility, eq 24), the user
+constraints (eqs 41, 52) and the analyses to run; ``docs/case-files.md`` documents every key.
+:func:`load_case` reads one, applies command-line overrides ``key.path=value`` and validates it
+with pydantic (unknown keys are errors everywhere).  Every problem is reported as one
+:class:`CaseError` line::
+
+    cases/rod.yaml: substructures.rod.length: must be > 0, got -200
+
+List items are named in paths by their ``name`` when they have a unique one
+(``substructures.rod``), otherwise by their 0-based index (``connections[2]``).  Points
+(``"sub@where"``) are checked for syntax here and resolved when the model is built
+(:mod:`substruct.run.runner`), which reports a point that is off its substructure the same way.
+
+The schema is split by subject, and every public name is importable from here:
+
+* :mod:`substruct.case.fields`: checked field types, points, size limits;
+* :mod:`substruct.case.substructures`: rods (assumed modes, finite elements, reduction) and
+  spring-mass-damper attachments;
+* :mod:`substruct.case.matrices`: substructures given by their matrices (inline or files);
+* :mod:`substruct.case.analysis`: user constraints, modes, variants, receptances;
+* :mod:`substruct.case.errors`: :class:`CaseError` and pydantic errors as one line;
+* :mod:`substruct.case.yaml_io`: the strict YAML loader and ``--set`` overrides.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Annotated, Any, Sequence, Union
+
+import yaml
+from pydantic import (
+    AfterValidator,
+    Field,
+    PrivateAttr,
+    ValidationError,
+    model_validator,
+)
+
+from substruct.case.analysis import (
+    METHODS,
+    Analysis,
+    ConstraintSpec,
+    FrfAnalysis,
+    ModesAnalysis,
+    Omega,
+    Output,
+    Variant,
+)
+from substruct.case.errors import MISSING, CaseError, FieldError, field_path, translate
+from substruct.case.expressions import CONSTANTS, FUNCTIONS
+from substruct.case.fields import (
+    DENSE_CHECK,
+    MAX_ASSUMED_MODES,
+    MAX_ELEMENTS,
+    MAX_FREQUENCIES,
+    MAX_MATRIX_SIZE,
+    MEMORY_LIMIT,
+    Name,
+    Number,
+    Point,
+    StrictModel,
+    parse_point,
+)
+from substruct.case.matrices import MatrixSpec
+from substruct.case.solids import InterfaceSpec, SolidSpec
+from substruct.case.substructures import (
+    AssumedModes,
+    DiscreteSpec,
+    FiniteElements,
+    MassSpec,
+    ModalDamping,
+    Reduce,
+    RodSpec,
+    SpringSpec,
+)
+from substruct.case.yaml_io import apply_overrides, load_yaml
+
+__all__ = [
+    "CaseError",
+    "Case",
+    "load_case",
+    "parse_case",
+    "parse_point",
+    "apply_overrides",
+    "METHODS",
+    "MEMORY_LIMIT",
+    "MAX_ASSUMED_MODES",
+    "MAX_ELEMENTS",
+    "MAX_FREQUENCIES",
+    "MAX_MATRIX_SIZE",
+    "DENSE_CHECK",
+    "SubstructureSpec",
+    "RodSpec",
+    "AssumedModes",
+    "FiniteElements",
+    "ModalDamping",
+    "Reduce",
+    "DiscreteSpec",
+    "MatrixSpec",
+    "ConstraintSpec",
+    "Variant",
+    "ModesAnalysis",
+    "Omega",
+    "FrfAnalysis",
+    "Analysis",
+    "Output",
+]
+
+#: Largest case file read (matrices belong in ``.npz``/``.mtx`` files).
+MAX_CASE_FILE = 20_000_000
+
+SubstructureSpec = Annotated[Union[RodSpec, DiscreteSpec, SpringSpec, MassSpec, MatrixSpec,
+                                   SolidSpec],
+                             Field(discriminator="type")]
+
+
+def _parameter_names(value: dict[str, float]) -> dict[str, float]:
+    reserved = {"x", "L", *CONSTANTS, *FUNCTIONS}
+    for key in value:
+        if not key.isidentifier() or key in reserved or key.startswith("_"):
+            raise FieldError(key, f"a parameter name must be an identifier that does not "
+                             f"start with '_', other than {', '.join(sorted(reserved))}", key)
+    return value
+
+
+class Case(StrictModel):
+    """A validated case file; see ``docs/case-files.md``."""
+
+    name: Name
+    description: str = ""
+    units: str = ""
+    parameters: Annotated[dict[str, Number], AfterValidator(_parameter_names)] = \
+        Field(default_factory=dict)
+    substructures: Annotated[list[SubstructureSpec], Field(min_length=1)]
+    connections: list[Annotated[list[Point], Field(min_length=2)]] = Field(default_factory=list)
+    constraints: list[ConstraintSpec] = Field(default_factory=list)
+    interfaces: list[InterfaceSpec] = Field(default_factory=list)
+    analysis: Analysis
+    output: Output = Field(default_factory=Output)
+
+    _source: str = PrivateAttr(default="<string>")
+    _text: str = PrivateAttr(default="")
+    _raw: dict = PrivateAttr(default_factory=dict)
+    _base_dir: Path = PrivateAttr(default=Path("."))
+    _overrides: tuple[str, ...] = PrivateAttr(default=())
+
+    @model_validator(mode="after")
+    def _cross_checks(self) -> "Case":
+        self._unique("substructures", [s.name for s in self.substructures], "substructure")
+        for k, c in enumerate(self.constraints):
+            if c.name is None:
+                c.name = f"constraint{k + 1}"
+        self._unique("constraints", [c.name for c in self.constraints], "constraint")
+        modes = self.analysis.modes
+        if modes is not None:
+            self._unique(("analysis", "modes", "variants"), [v.name for v in modes.variants],
+                         "variant")
+            active = [c.name for c in self.constraints if c.active]
+            for i, variant in enumerate(modes.variants):
+                for j, name in enumerate(variant.drop):
+                    if name not in active:
+                        known = ", ".join(active) or "none"
+                        raise FieldError(("analysis", "modes", "variants", i, "drop", j),
+                                         f"no active constraint of that name (active: "
+                                         f"{known})", name)
+            sizes = [s.n_dof() for s in self.substructures]
+            if None not in sizes and modes.count > sum(sizes):
+                raise FieldError(("analysis", "modes", "count"), f"more modes than the "
+                                 f"{sum(sizes)} coordinates of the model", modes.count)
+        return self
+
+    @staticmethod
+    def _unique(where: str | tuple, names: list[str], what: str) -> None:
+        seen: set[str] = set()
+        for k, name in enumerate(names):
+            if name in seen:
+                loc = (where,) if isinstance(where, str) else where
+                raise FieldError((*loc, k, "name"), f"duplicate {what} name", name)
+            seen.add(name)
+
+    # ------------------------------------------------------------------- conveniences
+
+    @property
+    def source(self) -> str:
+        """The case file the case was read from (``"<string>"`` otherwise)."""
+        return self._source
+
+    @property
+    def base_dir(self) -> Path:
+        """Directory that relative file names are relative to."""
+        return self._base_dir
+
+    @property
+    def overrides(self) -> tuple[str, ...]:
+        """The ``key.path=value`` overrides applied."""
+        return self._overrides
+
+    @property
+    def text(self) -> str:
+        """The case as YAML text: the file verbatim, or the effective data after overrides."""
+        if not self._overrides:
+            return self._text
+        head = "".join(f"# --set {' '.join(o.split())}\n" for o in self._overrides)
+        return (f"# {self._source} with command-line overrides:\n{head}"
+                + yaml.safe_dump(self._raw, sort_keys=False, default_flow_style=None))
+
+    def substructure(self, name: str) -> RodSpec | DiscreteSpec | MatrixSpec | None:
+        """The substructure called ``name`` (or ``None``)."""
+        return next((s for s in self.substructures if s.name == name), None)
+
+    def error(self, loc: Sequence[str | int], problem: str, value: Any = MISSING
+              ) -> CaseError:
+        """A :class:`CaseError` for the field at ``loc`` (keys and 0-based list indices)."""
+        return CaseError(self._source, field_path(tuple(loc), self._raw), problem, value)
+
+
+# ---------------------------------------------------------------------------- loading
+
+
+def _parameters(raw: Any) -> dict[str, float]:
+    """The parameters that are plain finite numbers (others are reported by validation)."""
+    out: dict[str, float] = {}
+    if isinstance(raw, dict):
+        for k, v in raw.items():
+            if isinstance(v, bool) or not isinstance(v, (int, float, str)):
+                continue
+            try:
+                f = float(v)
+            except ValueError:
+                continue
+            if isinstance(k, str) and math.isfinite(f):
+                out[k] = f
+    return out
+
+
+def parse_case(text: str, source: str = "<string>", base_dir: str | Path = ".",
+               overrides: Sequence[str] = ()) -> Case:
+    """Validate case-file text (see :func:`load_case`)."""
+    data = load_yaml(text, source)
+    if not isinstance(data, dict):
+        problem = "a case file is a mapping of keys (name, substructures, analysis, ...)"
+        if data is None:
+            raise CaseError(source, "", f"{problem}, got empty file")
+        raise CaseError(source, "", f"{problem}, not a {type(data).__name__}", data)
+    set_paths = apply_overrides(data, overrides, source)
+    context = {"parameters": _parameters(data.get("parameters")), "base_dir": Path(base_dir)}
+    try:
+        case = Case.model_validate(data, context=context)
+    except ValidationError as exc:
+        raise translate(exc, data, source, Case, set_paths) from None
+    case._source, case._text, case._raw = source, text, data
+    case._base_dir, case._overrides = Path(base_dir), tuple(overrides)
+    return case
+
+
+def load_case(path: str | Path, overrides: Sequence[str] = ()) -> Case:
+    """Read, override and validate a case file.
+
+    Args:
+        path: the YAML file; matrix files named in it are relative to its directory.
+        overrides: ``key.path=value`` strings (``substruct run --set``), applied before
+            validation.
+
+    Raises:
+        CaseError: one line, ``<file>: <field.path>: <what is wrong>, got <value>``.
+    """
+    p = Path(path)
+    source = str(path)
+    try:
+        if p.stat().st_size > MAX_CASE_FILE:
+            raise CaseError(source, "", "case file larger than 20 MB (put matrices in "
+                            ".npz/.mtx files)")
+        text = p.read_text(encoding="utf-8")
+    except CaseError:
+        raise
+    except FileNotFoundError:
+        raise CaseError(source, "", "no such case file") from None
+    except IsADirectoryError:
+        raise CaseError(source, "", "is a directory, not a case file") from None
+    except (OSError, UnicodeDecodeError) as err:
+        raise CaseError(source, "", f"cannot read case file ({type(err).__name__}: "
+                        f"{' '.join(str(err).split())})") from None
+    return parse_case(text, source, p.parent, overrides)

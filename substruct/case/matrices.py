@@ -1,0 +1,294 @@
+"""Substructures given by their matrices: inline rows or ``.npz``/``.npy``/``.mtx`` files.
+
+:class:`MatrixSpec` loads ``M``, ``K`` and ``C`` while the case is validated and checks what
+the coupler relies on: square, of one size, finite, ``M`` and ``K`` symmetric and positive
+semidefinite.  A file's header is read before its data, so that a matrix too large for
+the memory (or a header that lies about its size) is refused up front with an estimate instead
+of being allocated.
+"""
+
+from __future__ import annotations
+
+import zipfile
+from pathlib import Path
+from typing import Annotated, Any, Literal, Mapping
+
+import numpy as np
+import scipy.sparse as sp
+from pydantic import (
+    AfterValidator,
+    PrivateAttr,
+    StringConstraints,
+    ValidationInfo,
+    model_validator,
+)
+
+from substruct.case.errors import FieldError
+from substruct.case.expressions import ExpressionError, scalar
+from substruct.case.fields import (
+    DENSE_CHECK,
+    MAX_MATRIX_SIZE,
+    MEMORY_LIMIT,
+    Name,
+    StrictModel,
+    gigabytes,
+)
+
+__all__ = ["MatrixSpec", "MatrixSource", "load_matrix"]
+
+_FORMS = "a matrix is a list of rows, or {file: name.npz, key: K} or {file: name.mtx}"
+#: Bytes per stored entry of a sparse matrix while it is read and converted (indices, copies).
+_SPARSE_ENTRY = 40
+#: Bytes per entry of a dense matrix while it is read and converted to float64 (two copies).
+_DENSE_ENTRY = 16
+
+
+def _matrix_source(value: Any) -> Any:
+    if value is None or isinstance(value, list):
+        return value
+    if isinstance(value, dict):
+        extra = sorted(set(map(str, value)) - {"file", "key"})
+        if not extra and "file" in value and isinstance(value["file"], str):
+            return value
+    raise ValueError(_FORMS)
+
+
+#: What ``M``, ``K`` and ``C`` may be: rows, or a file (and a key in an ``.npz``).
+MatrixSource = Annotated[Any, AfterValidator(_matrix_source)]
+
+
+def _entries(field: str, rows: list, parameters: Mapping[str, float]) -> list:
+    """Inline rows with expression entries (of the case parameters) evaluated."""
+    out = []
+    for i, row in enumerate(rows):
+        if not isinstance(row, list):
+            raise FieldError((field, i), "must be a row (a list of numbers)", row)
+        new = []
+        for j, v in enumerate(row):
+            if isinstance(v, str):
+                try:
+                    v = scalar(v, parameters)
+                except ExpressionError as err:
+                    raise FieldError((field, i, j), str(err), v) from None
+            elif isinstance(v, bool) or not isinstance(v, (int, float)):
+                raise FieldError((field, i, j), "must be a number or an expression of the "
+                                 "parameters", v)
+            new.append(v)
+        out.append(new)
+    return out
+
+
+# ----------------------------------------------------------------------- file headers
+
+
+def _npy_header(fp) -> tuple[tuple[int, ...], np.dtype]:
+    version = np.lib.format.read_magic(fp)
+    if version == (1, 0):
+        shape, _, dtype = np.lib.format.read_array_header_1_0(fp)
+    else:
+        shape, _, dtype = np.lib.format.read_array_header_2_0(fp)
+    return tuple(shape), dtype
+
+
+def _size_check(field: str, file: str, shape: tuple[int, ...], entries: int,
+                per_entry: int) -> None:
+    """Refuse a matrix whose header promises more than :data:`MEMORY_LIMIT` or
+    :data:`MAX_MATRIX_SIZE` coordinates, before reading its data."""
+    need = float(entries) * per_entry
+    dims = " x ".join(str(d) for d in shape)
+    if need > MEMORY_LIMIT:
+        raise FieldError((field, "file"), f"a {dims} matrix with {entries} stored entries "
+                         f"would need about {gigabytes(need)} of memory, more than the "
+                         f"{gigabytes(MEMORY_LIMIT)} allowed", file)
+    if len(shape) == 2 and max(shape) > MAX_MATRIX_SIZE:
+        raise FieldError((field, "file"), f"a {dims} matrix is more than the "
+                         f"{MAX_MATRIX_SIZE} coordinates accepted", file)
+
+
+def _check_header(field: str, file: str, path: Path, suffix: str, key: str | None) -> None:
+    """Read the header of a matrix file (shape, type) and refuse what cannot be loaded."""
+    if suffix == ".mtx":
+        import scipy.io
+        rows, cols, entries, form, kind, symmetry = scipy.io.mminfo(str(path))
+        if kind == "complex":
+            raise FieldError((field, "file"), "must be a real matrix, the file holds a "
+                             "complex one", file)
+        if symmetry != "general" and form == "coordinate":
+            entries *= 2
+        per = _SPARSE_ENTRY if form == "coordinate" else _DENSE_ENTRY
+        _size_check(field, file, (rows, cols), entries, per)
+        return
+    if suffix == ".npy":
+        with open(path, "rb") as fp:
+            shape, dtype = _npy_header(fp)
+    else:
+        with zipfile.ZipFile(path) as archive:
+            member = f"{key}.npy"
+            if member not in archive.namelist():
+                return  # reported with the list of keys by np.load below
+            with archive.open(member) as fp:
+                shape, dtype = _npy_header(fp)
+    if dtype.kind not in "biuf":
+        what = "complex numbers" if dtype.kind == "c" else f"{dtype} entries"
+        raise FieldError((field, "file"), f"must hold a real matrix, holds {what}", file)
+    entries = int(np.prod(shape, dtype=float)) if shape else 1
+    _size_check(field, file, shape, entries, _DENSE_ENTRY)
+
+
+def load_matrix(field: str, value: Any, base: Path, parameters: Mapping[str, float]
+                ) -> sp.csr_array | np.ndarray:
+    """A 2-D float array (inline lists, ``.npy``/``.npz``) or a sparse matrix (``.mtx``).
+
+    Raises:
+        FieldError: at ``field`` (inline rows) or ``field.file``/``field.key`` (files).
+    """
+    if isinstance(value, list):
+        rows = _entries(field, value, parameters)
+        try:
+            arr = np.array(rows, dtype=float)
+        except (TypeError, ValueError):
+            raise FieldError(field, "must be a list of rows of numbers, all of equal length",
+                             value) from None
+        if arr.ndim != 2:
+            raise FieldError(field, "must be a list of rows (a 2-D matrix)", value)
+        return arr
+    file = value["file"]
+    path = Path(file)
+    path = path if path.is_absolute() else base / path
+    key = value.get("key")
+    suffix = path.suffix.lower()
+    if suffix not in (".npz", ".npy", ".mtx"):
+        raise FieldError((field, "file"), "matrix files are .npz, .npy or .mtx", file)
+    if not path.is_file():
+        raise FieldError((field, "file"), f"no such file ({path})", file)
+    if suffix in (".mtx", ".npy") and key is not None:
+        raise FieldError((field, "key"), f"a {suffix} file holds one matrix: no key", key)
+    try:
+        _check_header(field, file, path, suffix, field if key is None else key)
+        if suffix == ".mtx":
+            import scipy.io
+            mat = scipy.io.mmread(str(path))
+            return sp.csr_array(mat, dtype=float) if sp.issparse(mat) else \
+                np.asarray(mat, dtype=float)
+        if suffix == ".npy":
+            arr = np.asarray(np.load(path, allow_pickle=False), dtype=float)
+        else:
+            with np.load(path, allow_pickle=False) as data:
+                key = field if key is None else key
+                if key not in data.files:
+                    raise FieldError((field, "key"), f"no array {key!r} in {path.name} "
+                                     f"(it has {', '.join(data.files) or 'none'})", key)
+                arr = np.asarray(data[key], dtype=float)
+    except FieldError:
+        raise
+    except Exception as err:  # unreadable file: a bad input, reported in one line
+        raise FieldError((field, "file"), f"cannot read matrix ({type(err).__name__}: "
+                         f"{' '.join(str(err).split())[:200]})", file) from None
+    if arr.ndim != 2:
+        raise FieldError((field, "file"), f"holds a {arr.ndim}-D array, not a matrix", file)
+    return arr
+
+
+# -------------------------------------------------------------------------- the spec
+
+
+class MatrixSpec(StrictModel):
+    """A substructure given by its matrices (inline or from ``.npz``/``.npy``/``.mtx`` files)."""
+
+    name: Name
+    type: Literal["matrices"]
+    M: MatrixSource
+    K: MatrixSource
+    C: MatrixSource = None
+    labels: list[Annotated[str, StringConstraints(min_length=1)]] | None = None
+    _matrices: dict[str, Any] = PrivateAttr(default_factory=dict)
+
+    def _shown(self, field: str) -> Any:
+        """The value of ``field`` as the file has it (the rows, or the file name)."""
+        value = getattr(self, field)
+        return value if isinstance(value, list) else value.get("file")
+
+    @model_validator(mode="after")
+    def _load(self, info: ValidationInfo) -> "MatrixSpec":
+        base = Path((info.context or {}).get("base_dir", "."))
+        params = dict((info.context or {}).get("parameters", {}))
+        mats: dict[str, Any] = {}
+        for field in ("M", "K", "C"):
+            value = getattr(self, field)
+            if value is None:
+                continue
+            mat = load_matrix(field, value, base, params)
+            shown = self._shown(field)
+            r, c = mat.shape
+            if r != c:
+                raise FieldError(field, f"must be square, is {r} x {c}", shown)
+            if field != "M" and r != mats["M"].shape[0]:
+                n = mats["M"].shape[0]
+                raise FieldError(field, f"must be {n} x {n} like M, is {r} x {c}", shown)
+            if r > MAX_MATRIX_SIZE:
+                raise FieldError(field, f"{r} x {r} is more than the {MAX_MATRIX_SIZE} "
+                                 f"coordinates accepted", shown)
+            if r == 0:
+                raise FieldError(field, "must have at least one row", shown)
+            data = mat.data if sp.issparse(mat) else mat
+            if not np.all(np.isfinite(data)):
+                raise FieldError(field, "has entries that are not finite numbers", shown)
+            if field in ("M", "K"):
+                scale = max(float(abs(mat).max()), 1e-300)
+                asym = float(abs(mat - mat.T).max())
+                if asym > 1e-10 * scale:
+                    raise FieldError(field, f"must be symmetric: max |{field} - {field}^T| = "
+                                     f"{asym:.3g}", shown)
+            mats[field] = mat
+        self._check_semidefinite("M", mats["M"], 1e-12)
+        self._check_semidefinite("K", mats["K"], 1e-12)
+        n = mats["M"].shape[0]
+        if self.labels is not None:
+            if len(self.labels) != n:
+                raise FieldError("labels", f"{len(self.labels)} labels for {n} coordinates",
+                                 self.labels)
+            dupes = sorted({lab for lab in self.labels if self.labels.count(lab) > 1})
+            if dupes:
+                raise FieldError("labels", f"duplicate label {dupes[0]!r}", self.labels)
+        self._matrices = mats
+        return self
+
+    def _check_semidefinite(self, field: str, X: Any, rtol: float) -> None:
+        """``M`` or ``K`` positive semidefinite: its diagonal always, its eigenvalues up to
+        :data:`~substruct.case.fields.DENSE_CHECK` coordinates (smallest below ``-rtol``
+        times the largest in magnitude refused).
+
+        An indefinite ``K`` is a statically unstable structure: ``lambda^2 M + K`` has a real
+        root pair ``+-lambda`` (divergence), which eqs (30)-(34) report as two "modes" of
+        damping ratio ``+-1``.  A rigid-body motion written with a few digits
+        (``[[0.33333333, -0.33333334], ...]``) is such a pair near zero, and it takes the
+        place of an elastic mode in the ``count`` lowest: it is refused too, with a hint.
+        """
+        diag = X.diagonal()
+        if np.any(diag < 0):
+            raise FieldError(field, f"must be positive semidefinite: diagonal entry "
+                             f"{float(diag.min()):g}", self._shown(field))
+        if X.shape[0] <= DENSE_CHECK:
+            dense = X.toarray() if sp.issparse(X) else X
+            eig = np.linalg.eigvalsh((dense + dense.T) / 2)
+            top = max(abs(eig).max(), 1e-300) if eig.size else 1.0
+            if eig.size and eig[0] < -rtol * top:
+                hint = ""
+                if field == "K" and eig[0] > -1e-6 * top:
+                    hint = (f" ({-eig[0] / top:.1e} of the largest: a rigid-body motion "
+                            f"needs K u = 0 to rounding; write K with all its digits)")
+                raise FieldError(field, f"must be positive semidefinite: smallest eigenvalue "
+                                 f"{eig[0]:.6g}{hint}", self._shown(field))
+
+    def matrix(self, name: str) -> Any:
+        """The loaded ``M``, ``K`` or ``C`` (``None`` for an absent ``C``)."""
+        return self._matrices.get(name)
+
+    def dof_labels(self) -> list[str]:
+        """Labels of the coordinates (``q1 .. qn`` unless given)."""
+        n = self._matrices["M"].shape[0]
+        return list(self.labels) if self.labels else [f"q{i}" for i in range(1, n + 1)]
+
+    def n_dof(self) -> int:
+        """Number of coordinates."""
+        return self._matrices["M"].shape[0]

@@ -1,0 +1,146 @@
+r"""Craig-Bampton reduction: fixed-interface normal modes plus static constraint modes.
+
+Partition the coordinates of a substructure into interior ``i`` and boundary ``b`` (those that
+other substructures or constraints attach to).  With the boundary held fixed, the interior has
+the normal modes
+
+.. math::  K_{ii} \Phi_i = M_{ii} \Phi_i \Omega^2, \qquad \Phi_i^T M_{ii} \Phi_i = I,
+
+and a unit displacement of each boundary coordinate, interior at static equilibrium, gives the
+constraint modes :math:`\Psi = -K_{ii}^{-1} K_{ib}`.  The reduction keeps the ``n_modes``
+lowest fixed-interface modes and all constraint modes,
+
+.. math::
+
+    \begin{bmatrix} q_i \\ q_b \end{bmatrix} =
+    \underbrace{\begin{bmatrix} \Phi_i & \Psi \\ 0 & I \end{bmatrix}}_{T}
+    \begin{bmatrix} \eta \\ q_b \end{bmatrix}, \qquad
+    \tilde M = T^T M T, \quad \tilde K = T^T K T = \begin{bmatrix} \Omega^2 & 0 \\ 0 &
+    K_{bb} + K_{bi} \Psi \end{bmatrix}, \quad \tilde C = T^T C T .
+
+The boundary coordinates stay physical, so interface ties and point attachments at boundary
+nodes keep their meaning (``row_new(x) = row(x) @ T``); the reduced model is exact for static
+loads on the boundary and converges to the full one as ``n_modes`` grows.  One sparse
+factorization of :math:`K_{ii}` serves the constraint modes and the shift-invert Lanczos
+solve of the fixed-interface modes.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from substruct.analysis.sparse_modes import Factorize, factorizer
+from substruct.substructure import Substructure, as_csr
+
+__all__ = ["craig_bampton"]
+
+
+def _boundary(sub: Substructure, boundary_dofs: Any) -> np.ndarray:
+    n = sub.n_dof
+    b = np.asarray(boundary_dofs)
+    if b.dtype == bool:
+        if b.shape != (n,):
+            raise ValueError(f"{sub.name}: boundary mask of shape {b.shape}, expected ({n},)")
+        b = np.flatnonzero(b)
+    b = np.unique(b.astype(np.int64).ravel())
+    if b.size == 0:
+        raise ValueError(f"{sub.name}: Craig-Bampton needs at least one boundary coordinate")
+    if b[0] < 0 or b[-1] >= n:
+        raise ValueError(f"{sub.name}: boundary coordinates must lie in 0..{n - 1}")
+    if b.size >= n:
+        raise ValueError(f"{sub.name}: every coordinate is on the boundary; nothing to reduce")
+    return b
+
+
+def craig_bampton(sub: Substructure, boundary_dofs: Sequence[int] | np.ndarray, n_modes: int,
+                  *, factorization: str | Factorize = "auto", dense_limit: int = 1500,
+                  ncv: int | None = None) -> Substructure:
+    r"""Reduce ``sub`` to ``n_modes`` fixed-interface modes plus its boundary coordinates.
+
+    .. math::  q = T \begin{bmatrix} \eta \\ q_b \end{bmatrix}, \quad
+               T = \begin{bmatrix} \Phi_i & -K_{ii}^{-1} K_{ib} \\ 0 & I \end{bmatrix}
+
+    Args:
+        sub: the substructure (``K_ii`` must be nonsingular: the boundary and the supports
+            together hold the interior; ``M_ii`` positive definite).
+        boundary_dofs: indices (or a boolean mask) of the boundary coordinates, e.g.
+            :func:`substruct.assembly.interfaces.node_dofs` of an interface.
+        n_modes: number of fixed-interface normal modes kept (``0 <= n_modes < n_i``).
+        factorization: of ``K_ii`` (:func:`substruct.analysis.sparse_modes.factorizer`; SPD; ``"auto"``:
+            CHOLMOD if scikit-sparse is installed, else SuperLU).
+        dense_limit: interiors up to this size are solved densely.
+        ncv: Lanczos basis size for the sparse eigensolve.
+
+    Returns:
+        The reduced :class:`Substructure`: coordinates ``eta1 .. eta<g>`` then the boundary
+        coordinates with their original labels; kind ``"craig-bampton"``;
+        ``meta["omega_fixed_interface"]`` (rad/s), ``meta["n_modes"]``,
+        ``meta["n_boundary"]``, ``meta["reduced_from"]``.  Damping is projected,
+        :math:`T^T C T`.
+
+    Raises:
+        ValueError: bad boundary set or ``n_modes``, singular ``K_ii`` (the interior is not
+            held), massless interior coordinates.
+    """
+    n = sub.n_dof
+    b = _boundary(sub, boundary_dofs)
+    interior = np.setdiff1d(np.arange(n), b)
+    ni = interior.size
+    g = int(n_modes)
+    if g != n_modes or not 0 <= g < ni:
+        raise ValueError(f"{sub.name}: n_modes = {n_modes!r}, but the interior has {ni} "
+                         f"coordinates (need 0 <= n_modes < {ni})")
+    K, M = as_csr(sub.K), as_csr(sub.M)
+    Kii = sp.csc_array(K[interior][:, interior])
+    Mii = sp.csc_array(M[interior][:, interior])
+    Kib = K[interior][:, b].toarray()
+    if np.any(np.asarray(abs(Mii).sum(axis=1)).ravel() == 0):
+        raise ValueError(f"{sub.name}: Craig-Bampton needs mass on every interior coordinate; "
+                         "put massless coordinates on the boundary")
+    if ni <= dense_limit:
+        Kd, Md = Kii.toarray(), Mii.toarray()
+        try:
+            cho = sla.cho_factor(Kd)
+        except np.linalg.LinAlgError:
+            raise ValueError(f"{sub.name}: K_ii is singular: the boundary coordinates and the "
+                             "supports do not hold the interior") from None
+        Psi = -sla.cho_solve(cho, Kib)
+        lam, Phi = (sla.eigh(Kd, Md, subset_by_index=[0, g - 1]) if g else
+                    (np.zeros(0), np.zeros((ni, 0))))
+    else:
+        try:
+            solve = factorizer(factorization, spd=True)(Kii)
+        except Exception as exc:
+            raise ValueError(f"{sub.name}: K_ii cannot be factorized ({exc}): the boundary "
+                             "coordinates and the supports do not hold the interior") from None
+        Psi = -np.asarray(solve(Kib)).reshape(ni, b.size)
+        if g:
+            op = spla.LinearOperator((ni, ni), matvec=solve, dtype=float)
+            v0 = np.random.default_rng(0).standard_normal(ni)
+            _, vecs = spla.eigsh(Kii, k=g, M=Mii, sigma=0.0, which="LM", OPinv=op, v0=v0,
+                                 ncv=ncv)
+            kr, mr = vecs.T @ (Kii @ vecs), vecs.T @ (Mii @ vecs)
+            lam, rot = sla.eigh((kr + kr.T) / 2, (mr + mr.T) / 2)
+            Phi = vecs @ rot
+        else:
+            lam, Phi = np.zeros(0), np.zeros((ni, 0))
+    if g and lam[0] <= 1e-10 * max(abs(lam).max(), 1e-300):
+        raise ValueError(f"{sub.name}: a fixed-interface mode has zero frequency: the boundary "
+                         "and the supports do not hold the interior")
+    if g:
+        Phi = Phi / np.sqrt(np.einsum("ij,ij->j", Phi, Mii @ Phi))
+        big = np.argmax(np.abs(Phi), axis=0)
+        Phi = Phi * np.sign(Phi[big, np.arange(g)])
+    T = np.zeros((n, g + b.size))
+    T[interior, :g] = Phi
+    T[interior, g:] = Psi
+    T[b, g + np.arange(b.size)] = 1.0
+    labels = tuple(f"eta{j}" for j in range(1, g + 1)) + tuple(sub.dof_labels[i] for i in b)
+    return sub.transformed(sp.csr_array(T), labels, kind="craig-bampton",
+                           omega_fixed_interface=np.sqrt(np.maximum(lam, 0.0)), n_modes=g,
+                           n_boundary=int(b.size), reduced_from=n, reduced_kind=sub.kind)

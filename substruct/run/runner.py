@@ -1,0 +1,77 @@
+r"""From a validated case to a :class:`~substruct.run.result.Result`: build, couple, analyse.
+
+Data flows one way (``docs/architecture.md``): :func:`build_model` checks the sizes the
+analyses can take and assembles the case (:func:`substruct.builder.model.assemble_case`);
+:func:`run_case` computes the coupled modes, the variants (the same assembly with some
+constraint rows dropped) and the receptances (:mod:`substruct.run.analyses`).
+"""
+
+from __future__ import annotations
+
+from datetime import datetime, timezone
+
+import scipy.sparse as sp
+
+from substruct.builder.model import Model, assemble_case
+from substruct.case.loader import Case
+from substruct.run.analyses import (
+    Progress,
+    check_dense_modes,
+    check_dense_sizes,
+    frf_result,
+    min_size,
+    model_info,
+    modes_result,
+)
+from substruct.run.result import Result
+
+__all__ = ["Model", "build_model", "run_case", "Progress"]
+
+
+def build_model(case: Case) -> Model:
+    """Refuse a model too large for the dense analyses it asks for, then assemble it
+    (:func:`substruct.builder.model.assemble_case`)."""
+    check_dense_sizes(case, min_size(case))
+    return assemble_case(case)
+
+
+def run_case(case: Case, progress: Progress | None = None, model: Model | None = None
+             ) -> Result:
+    """Run the analyses of a case.
+
+    Args:
+        case: a validated case (:func:`substruct.load_case`).
+        progress: called as ``progress(done, total, label)`` during frequency sweeps.
+        model: the case's model if already built (:func:`build_model`).
+
+    Returns:
+        The :class:`~substruct.run.result.Result`: modes (physical modes ascending, spurious roots
+        set aside, agreement with the check formulations), variants, receptances, model data.
+
+    Raises:
+        CaseError: input that cannot be analysed (see :func:`build_model`; inconsistent
+            constraints; a model too large for the dense eigenproblem).
+    """
+    from substruct import __version__
+
+    model = build_model(case) if model is None else model
+    asm = model.assembly
+    check_dense_modes(case, asm)
+    attrs = {"substruct_version": __version__,
+             "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+             "units": case.units, "description": case.description.strip(),
+             "case_file": case.source, "overrides": "\n".join(case.overrides)}
+    result = Result(case_name=case.name, case_yaml=case.text, model=model_info(model),
+                    attrs={k: v for k, v in attrs.items() if v})
+    spec = case.analysis.modes
+    if spec is not None:
+        result.modes = modes_result(case, asm, asm.A, ("analysis", "modes"))
+        labels = list(asm.constraint_labels)
+        for i, variant in enumerate(spec.variants):
+            keep = [r for r, lab in enumerate(labels) if lab not in variant.drop]
+            A = sp.csr_array(asm.A[keep]) if keep else sp.csr_array((0, asm.n_dof))
+            result.variants[variant.name] = modes_result(case, asm, A,
+                                                   ("analysis", "modes", "variants", i))
+    if case.analysis.frf is not None:
+        result.frf = frf_result(case, model, progress)
+    return result
