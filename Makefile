@@ -18,7 +18,10 @@ run: $(STAMP)
 	$(BIN)/substruct run cases/tapered_rod_table1.yaml --out results --force
 	$(BIN)/substruct run cases/three_dof_frf.yaml --out results --force
 
+# The house rules first (import layers, types), then the tests.
 test: $(STAMP)
+	$(BIN)/lint-imports
+	$(BIN)/mypy substruct
 	OMP_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python -m pytest -q
 
 bench: $(STAMP)
