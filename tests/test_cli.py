@@ -13,6 +13,7 @@ import pytest
 import yaml
 
 from substruct import cli
+from substruct.cli.progress import ProgressBar
 from substruct.case.loader import load_case
 from substruct.run.runner import run_case
 from cli_helpers import run, assert_one_line_error
@@ -241,7 +242,7 @@ def test_progress_bar_on_a_terminal():
         def flush(self):
             pass
     stream = Tty()
-    bar = cli._Bar(stream)
+    bar = ProgressBar(stream)
     for done in range(10, 201, 10):
         bar(done, 200, "kkt")
     assert stream.text.count("\r") == 20 and stream.text.endswith("200/200\n")

@@ -10,6 +10,7 @@ import pytest
 import yaml
 
 from substruct import cli
+from substruct.cli.summary import complex_text, needs_scientific
 from substruct.case.loader import CaseError, parse_case
 from substruct.run.runner import build_model, run_case
 
@@ -75,10 +76,10 @@ def test_small_receptances_are_printed_with_their_digits(tmp_path, capsys):
 
 
 def test_order_one_receptances_keep_fixed_decimals():
-    assert cli._complex(0.0246 - 0.0295j) == "0.0246-0.0295i"
-    assert not cli._scientific(np.array([[0.3361 - 0.0033j, 0.0082]]))
-    assert cli._scientific(np.array([[1.0e-9, 3.5e-10]]))
-    assert cli._complex(1.0e-9 - 3.512e-10j, scientific=True) == "1.000e-09-3.512e-10i"
+    assert complex_text(0.0246 - 0.0295j) == "0.0246-0.0295i"
+    assert not needs_scientific(np.array([[0.3361 - 0.0033j, 0.0082]]))
+    assert needs_scientific(np.array([[1.0e-9, 3.5e-10]]))
+    assert complex_text(1.0e-9 - 3.512e-10j, scientific=True) == "1.000e-09-3.512e-10i"
 
 
 # ----------------------------------------------------------- connections that join nothing

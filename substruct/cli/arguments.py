@@ -1,0 +1,92 @@
+"""The command line's arguments: one parser for ``run``, ``converge``, ``info`` and ``export``,
+whose errors are :class:`InputError` (one line, exit code 2) instead of argparse's exit."""
+
+from __future__ import annotations
+
+import argparse
+from typing import NoReturn
+
+__all__ = ["COMMANDS", "InputError", "build_parser"]
+
+#: The commands, in the order ``--help`` lists them.
+COMMANDS = ("run", "converge", "info", "export")
+
+
+class InputError(Exception):
+    """Bad input found by the command line itself (exit code 2)."""
+
+
+class ArgumentParser(argparse.ArgumentParser):
+    """An argument parser whose errors are one line and exit code 2 (through
+    :func:`substruct.cli.main.main`)."""
+
+    def error(self, message: str) -> NoReturn:
+        """Raise :class:`InputError` instead of printing the usage and exiting."""
+        raise InputError(message)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The parser of the ``substruct`` command; ``args.command`` names the command chosen."""
+    from substruct import __version__
+
+    parser = ArgumentParser(prog="substruct", description="Finite-element substructuring for "
+                            "structural dynamics: coupled modes and receptances of constrained "
+                            "substructures, from a case file.")
+    parser.add_argument("--version", action="version", version=f"substruct {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="{" + ",".join(COMMANDS) + "}",
+                                parser_class=ArgumentParser)
+
+    run = sub.add_parser("run", help="run the analyses of a case file",
+                         description="Run a case: write DIR/<name>.h5 and pictures beside it, "
+                         "print the modes and an FRF summary.")
+    run.add_argument("case", metavar="CASE.yaml", help="the case file")
+    run.add_argument("--out", default="results", metavar="DIR",
+                     help="output directory (default: results)")
+    run.add_argument("--set", action="append", default=[], metavar="KEY.PATH=VALUE",
+                     help="override a case value, e.g. substructures.c.stiffness=8000 "
+                     "(repeatable; list items by name or 0-based index)")
+    run.add_argument("--force", action="store_true", help="overwrite an existing result")
+    run.add_argument("--quiet", action="store_true",
+                     help="no progress bar and no table (errors are still reported)")
+    run.add_argument("--json", action="store_true",
+                     help="print a machine-readable summary instead of the table")
+
+    conv = sub.add_parser("converge", help="convergence study of a rod case",
+                          description="Refine the case's rod by assumed modes, an enriched Ritz "
+                          "basis and P1/P2 finite elements, with its attachments and "
+                          "constraints; write DIR/<name>_convergence.h5 and .png, print "
+                          "errors, fitted orders and costs.")
+    conv.add_argument("case", metavar="CASE.yaml", help="the case file (one rod)")
+    conv.add_argument("--levels", default=None, metavar="SPEC",
+                      help="quick, default or fine, or items such as "
+                      "'assumed=4:256; enriched=1,2,4; p1=8:1024; p2=4:512; g=4' "
+                      "(default: default, g from the rod's reduce.modes)")
+    conv.add_argument("--variants", default="constrained,unconstrained,bare", metavar="LIST",
+                      help="comma list of constrained, unconstrained, bare "
+                      "(default: all three)")
+    conv.add_argument("--out", default="results", metavar="DIR",
+                      help="output directory (default: results)")
+    conv.add_argument("--set", action="append", default=[], metavar="KEY.PATH=VALUE",
+                      help="override a case value (repeatable), as for run")
+    conv.add_argument("--tol", type=float, default=1e-6,
+                      help="tolerance of the 'DOFs to reach' summary (default: 1e-6)")
+    conv.add_argument("--reference", choices=("richardson", "finest"), default="richardson",
+                      help="limit the errors are measured against (default: richardson)")
+    conv.add_argument("--force", action="store_true", help="overwrite existing outputs")
+    conv.add_argument("--quiet", action="store_true", help="no progress bar and no table")
+    conv.add_argument("--json", action="store_true",
+                      help="print a machine-readable summary instead of the table")
+
+    info = sub.add_parser("info", help="print what a result file holds")
+    info.add_argument("result", metavar="RESULT.h5")
+    info.add_argument("--json", action="store_true", help="machine-readable summary")
+
+    export = sub.add_parser("export", help="write mode shapes for ParaView (VTU or XDMF)")
+    export.add_argument("result", metavar="RESULT.h5")
+    export.add_argument("--format", required=True, choices=("vtu", "xdmf"))
+    export.add_argument("--modes", default=None, metavar="SPEC",
+                        help="mode numbers, e.g. 1-6 or 1,3,5 (default: all)")
+    export.add_argument("--variant", default=None, help="export the modes of this variant")
+    export.add_argument("--out", default=None, metavar="DIR",
+                        help="output directory (default: beside the result)")
+    return parser

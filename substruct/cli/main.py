@@ -1,0 +1,97 @@
+"""The entry point of the ``substruct`` command and the one place where a failure becomes an
+exit code and a message.
+
+=====  ======================================================================================
+code   meaning
+=====  ======================================================================================
+0      success
+2      bad input: a case file, an argument, an output path (:class:`~substruct.case.errors.
+       CaseError`, :class:`~substruct.cli.arguments.InputError`); one line
+       ``substruct: error: <message>``, no traceback, nothing written
+1      the result failed its cross-checks (:class:`~substruct.analysis.errors.CheckError`):
+       one line ``substruct: error: <message>``, nothing written
+1      an internal error (any other exception): its traceback, then one closing line
+       ``substruct: internal error: <type>: <message> (...)``
+130    interrupted (Ctrl-C); partly written files removed
+143    terminated (SIGTERM); partly written files removed
+=====  ======================================================================================
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import traceback
+from typing import Callable, Sequence
+
+from substruct.cli.arguments import COMMANDS, InputError, build_parser
+from substruct.cli.converge_command import converge_command
+from substruct.cli.result_commands import export_command, info_command
+from substruct.cli.run_command import run_command
+from substruct.cli.signals import Terminated, silence_stdout, terminate_on_sigterm
+
+__all__ = ["main", "BAD_INPUT", "FAILED"]
+
+#: Exit code of bad input.
+BAD_INPUT = 2
+#: Exit code of a failed cross-check or an internal error.
+FAILED = 1
+
+_RUN: dict[str, Callable[[argparse.Namespace], int]] = {
+    "run": run_command, "converge": converge_command, "info": info_command,
+    "export": export_command}
+
+
+def _one_line(text: object) -> str:
+    return " ".join(str(text).split())
+
+
+def _error(message: object, code: int) -> int:
+    sys.stderr.write(f"substruct: error: {_one_line(message)}\n")
+    return code
+
+
+def _internal(err: BaseException) -> int:
+    traceback.print_exc()
+    text = _one_line(err)
+    what = f"{type(err).__name__}: {text}" if text else type(err).__name__
+    sys.stderr.write(f"substruct: internal error: {what} (a bug in substruct, not in the "
+                     f"input; the traceback above says where)\n")
+    return FAILED
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the ``substruct`` command line; return the exit code (see the module docstring)."""
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except InputError as err:
+        return _error(err, BAD_INPUT)
+    except SystemExit as exc:  # --help, --version
+        return int(exc.code or 0)
+    if args.command not in _RUN:
+        return _error(f"choose a command: {', '.join(COMMANDS[:-1])} or {COMMANDS[-1]} "
+                      "(see substruct --help)", BAD_INPUT)
+    from substruct.analysis.errors import CheckError
+    from substruct.case.errors import CaseError
+
+    restore = terminate_on_sigterm()
+    try:
+        return int(_RUN[args.command](args))
+    except (InputError, CaseError) as err:
+        return _error(err, BAD_INPUT)
+    except CheckError as err:  # computed, but not to be trusted: nothing was written
+        return _error(err, FAILED)
+    except KeyboardInterrupt:
+        sys.stderr.write("substruct: interrupted\n")
+        return 130
+    except Terminated:  # temporary files were removed on the way out
+        sys.stderr.write("substruct: terminated\n")
+        return 143
+    except BrokenPipeError:  # the reader went away (substruct info ... | head)
+        silence_stdout()
+        return 0
+    except Exception as err:  # an internal error: show everything, then say so in one line
+        return _internal(err)
+    finally:
+        restore()
