@@ -8,6 +8,8 @@ import scipy.sparse as sp
 from matplotlib import image as mpimg
 
 from substruct.viz import plotting
+from substruct.viz.frf_picture import frf_figure
+from substruct.viz.layout import MIN_SPRING, aligned, deformed, layout
 from substruct.builder.drawing import Drawing
 from substruct.run.result import FrfResult, ModelInfo, ModeResult, Result
 
@@ -139,11 +141,11 @@ def test_rod_modes_png_shows_every_mode(tmp_path):
 
 
 def test_rod_is_drawn_in_the_axial_view():
-    lay = plotting._layout(rod_result().model.drawings)
+    lay = layout(rod_result().model.drawings)
     assert lay.axial == 0 and lay.transverse == 1
     # the short attachment springs are stretched to a readable length (schematic)
-    assert np.ptp(lay.points[:, 1]) >= plotting.MIN_SPRING * lay.size * 0.999
-    pos, mag = plotting._deformed(lay, rod_result().modes.shapes[:, 0])
+    assert np.ptp(lay.points[:, 1]) >= MIN_SPRING * lay.size * 0.999
+    pos, mag = deformed(lay, rod_result().modes.shapes[:, 0])
     assert np.isclose(abs(pos[:, 1] - lay.points[:, 1]).max(),
                       plotting.SCALE_FRACTION * lay.size)
     assert np.isclose(mag.max(), 1.0) and np.allclose(pos[:, [0, 2]], lay.points[:, [0, 2]])
@@ -153,12 +155,12 @@ def test_phase_alignment_recovers_a_real_shape():
     u = np.array([[1.0, 0, 0], [-2.0, 0, 0], [0.5, 0, 0]])
     rotated = u * np.exp(2.1j)
     # rotated back to real, with the largest entry (-2) made positive
-    np.testing.assert_allclose(plotting._aligned(rotated), -u, atol=1e-12)
+    np.testing.assert_allclose(aligned(rotated), -u, atol=1e-12)
 
 
 def test_solid_modes_png(tmp_path):
     result = solid_result()
-    lay = plotting._layout(result.model.drawings)
+    lay = layout(result.model.drawings)
     assert lay.axial is None  # solids are warped by the displacement vector
     path = plotting.plot_modes(result, tmp_path / "box.png", n_modes=4)
     img = _image(path)
@@ -199,8 +201,19 @@ def test_frf_png(tmp_path):
 
 
 def test_frf_many_pairs_are_limited(tmp_path):
-    path = plotting.plot_frf(frf_result(n_omega=50, n_out=4, n_in=4), tmp_path / "frf.png",
-                             max_curves=9)
+    result = frf_result(n_omega=50, n_out=4, n_in=4)  # 16 pairs
+    fig = frf_figure(result, max_curves=9)
+    ax_mag, ax_phase = fig.axes[:2]
+    curves = [line for line in ax_mag.get_lines() if "\u2190" in line.get_label()]
+    # the first nine pairs, outputs varying slowest: out0 <- rod@0 .. rod@3, out1 <- ..., out2
+    assert [line.get_label() for line in curves] == \
+        [f"out{i} \u2190 rod@{j}" for i in range(4) for j in range(4)][:9]
+    marks = len(ax_mag.get_lines()) - len(curves)  # natural frequencies inside the range
+    assert marks == 3
+    assert len(ax_phase.get_lines()) == 9 + marks
+    assert ax_mag.get_legend().get_title().get_text() == "output \u2190 input (+7 pairs not shown)"
+    np.testing.assert_array_equal(curves[5].get_ydata(), abs(result.frf.H[:, 1, 1]))
+    path = plotting.plot_frf(result, tmp_path / "frf.png", max_curves=9)
     assert _image(path).std() > 0.05
 
 

@@ -1,0 +1,143 @@
+"""The receptance picture (matplotlib): magnitude (log) and phase against ``omega``, one curve
+per output/input pair, natural frequencies marked; a single frequency is drawn as matrices of
+``|H|`` and phase with the values written in."""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from substruct.io.hdf5 import atomic_path
+from substruct.run.result import Result
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+__all__ = ["plot_frf", "frf_figure", "MAX_CURVES"]
+
+#: Output/input pairs drawn by default (the first ones, outputs varying slowest).
+MAX_CURVES = 9
+
+
+def frf_figure(result: Result, *, max_curves: int = MAX_CURVES) -> Figure:
+    """The receptance figure of ``result``, not yet written (see :func:`plot_frf`).
+
+    Raises:
+        ValueError: the result holds no FRF, or its array does not match its frequencies.
+    """
+    from matplotlib.figure import Figure
+
+    frf = result.frf
+    if frf is None:
+        raise ValueError(f"result {result.case_name!r} holds no FRF to plot")
+    H = np.asarray(frf.H)
+    omega = np.asarray(frf.omega, dtype=float)
+    if H.ndim != 3 or H.shape[0] != omega.size or omega.size == 0:
+        raise ValueError(f"FRF array has shape {H.shape}, expected ({omega.size}, n_out, n_in)")
+    fig = Figure(figsize=(11, 7.5), dpi=110, layout="constrained")
+    title = f"{result.case_name}: receptance H ({frf.method})"
+    notes = [f"{m}: {v:.1e}" for m, v in frf.agreement.items()]
+    sub = ("agreement " + ", ".join(notes) + "; " if notes else "") + \
+        f"constraint residual {frf.constraint_residual:.1e}"
+    if omega.size == 1:
+        _frf_matrix(fig, frf, H[0], float(omega[0]))
+    else:
+        _frf_curves(fig, result, frf, H, omega, max_curves)
+    fig.suptitle(f"{title}\n{sub}", fontsize=12)
+    return fig
+
+
+def plot_frf(result: Result, png_path: str | os.PathLike, *,
+             max_curves: int = MAX_CURVES) -> Path:
+    """Receptance magnitude (log) and phase against ``omega``, one curve per output/input pair.
+
+    At most ``max_curves`` pairs are drawn (the first ones, outputs varying slowest; the legend
+    says how many are left out); natural frequencies of ``result.modes`` inside the range are
+    marked.  A single-frequency grid is drawn as matrices of ``|H|`` and phase with the values
+    written in.  The PNG is written atomically; return its path.
+
+    Raises:
+        ValueError: the result holds no FRF.
+    """
+    fig = frf_figure(result, max_curves=max_curves)
+    path = Path(png_path)
+    with atomic_path(path, suffix=".png.part") as tmp:
+        fig.savefig(tmp, format="png")
+    return path
+
+
+def _frf_curves(fig: Figure, result: Result, frf: Any, H: np.ndarray, omega: np.ndarray,
+                max_curves: int) -> None:
+    pairs = [(i, j) for i in range(H.shape[1]) for j in range(H.shape[2])]
+    shown = pairs[:max(1, int(max_curves))]
+    ax_mag, ax_ph = fig.subplots(2, 1, sharex=True, height_ratios=[2, 1])
+    colors = [f"C{c}" for c in range(10)]
+    for c, (i, j) in enumerate(shown):
+        h = H[:, i, j]
+        mag = np.where(abs(h) > 0, abs(h), np.nan)
+        label = f"{frf.outputs[i]} \u2190 {frf.inputs[j]}"
+        ax_mag.plot(omega, mag, color=colors[c % 10], lw=1.4, label=label)
+        phase = np.degrees(np.angle(h))
+        phase[phase < -179.9999] = 180.0  # one side for real negative values (+-0 imaginary)
+        ax_ph.plot(omega, phase, color=colors[c % 10], lw=1.2)
+    if np.any(abs(H[:, [i for i, _ in shown], [j for _, j in shown]]) > 0):
+        ax_mag.set_yscale("log")
+    if omega.min() > 0 and omega.max() / omega.min() > 100:
+        ax_mag.set_xscale("log")
+    ax_mag.set_ylabel("|H|  (displacement / force)")
+    ax_ph.set_ylabel("phase (deg)")
+    ax_ph.set_xlabel("\u03c9 (rad/s)")
+    ax_ph.set_ylim(-185, 185)
+    ax_ph.set_yticks([-180, -90, 0, 90, 180])
+    for ax in (ax_mag, ax_ph):
+        ax.grid(True, which="major", alpha=0.35)
+        ax.grid(True, which="minor", alpha=0.12)
+        ax.set_xlim(omega.min(), omega.max())
+    if result.modes is not None:
+        w = np.asarray(result.modes.omega, dtype=float)
+        inside = w[(w >= omega.min()) & (w <= omega.max())]
+        for c, wn in enumerate(inside):
+            for ax in (ax_mag, ax_ph):
+                ax.axvline(wn, color="0.55", lw=0.8, ls=":",
+                           label="natural frequencies" if (c == 0 and ax is ax_mag) else None)
+    secondary = ax_mag.secondary_xaxis("top", functions=(lambda w: w / (2 * np.pi),
+                                                         lambda f: f * 2 * np.pi))
+    secondary.set_xlabel("frequency (Hz)")
+    more = len(pairs) - len(shown)
+    ax_mag.legend(fontsize=8.5, loc="best", ncols=1 if len(shown) < 5 else 2,
+                  title=f"output \u2190 input (+{more} pairs not shown)" if more else
+                  "output \u2190 input", title_fontsize=8.5)
+
+
+def _frf_matrix(fig: Figure, frf: Any, H: np.ndarray, w: float) -> None:
+    from matplotlib.colors import LogNorm
+
+    ax_mag, ax_ph = fig.subplots(1, 2)
+    mag = abs(H)
+    positive = mag[mag > 0]
+    norm = LogNorm(positive.min(), positive.max()) if positive.size and \
+        positive.max() > positive.min() else None
+    im = ax_mag.imshow(np.where(mag > 0, mag, np.nan), cmap="viridis", norm=norm,
+                       aspect="auto")
+    fig.colorbar(im, ax=ax_mag, shrink=0.8, label="|H|")
+    ph = ax_ph.imshow(np.degrees(np.angle(H)), cmap="twilight_shifted", vmin=-180, vmax=180,
+                      aspect="auto")
+    fig.colorbar(ph, ax=ax_ph, shrink=0.8, label="phase (deg)", ticks=[-180, -90, 0, 90, 180])
+    big = H.size <= 64
+    phase = np.degrees(np.angle(H)) + 0.0  # + 0.0: no "-0.0"
+    phase[abs(phase) < 0.05] = 0.0
+    for ax, values, fmt in ((ax_mag, mag, "{:.4g}"), (ax_ph, phase, "{:.1f}\u00b0")):
+        ax.set_xticks(range(H.shape[1]), frf.inputs, rotation=30, ha="right")
+        ax.set_yticks(range(H.shape[0]), frf.outputs)
+        ax.set_xlabel("input (unit force at)")
+        ax.set_ylabel("output (displacement at)")
+        if big:
+            for (i, j), v in np.ndenumerate(values):
+                ax.text(j, i, fmt.format(v), ha="center", va="center", fontsize=9,
+                        color="white", fontweight="bold",
+                        bbox=dict(boxstyle="round,pad=0.2", fc="black", alpha=0.35, lw=0))
+    ax_mag.set_title(f"|H| at \u03c9 = {w:.5g} rad/s ({w / (2 * np.pi):.4g} Hz)")
+    ax_ph.set_title("phase")
