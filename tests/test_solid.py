@@ -23,8 +23,9 @@ from skfem.helpers import dot
 from skfem.io.meshio import to_meshio
 from skfem.models.elasticity import linear_elasticity
 
-from substruct.models.solid import (_assemble, read_mesh, solid_box, solid_from_mesh,
-                                    solid_rectangle)
+from substruct.models.elasticity import elasticity_matrices
+from substruct.models.mesh_io import read_mesh
+from substruct.models.solid import solid_box, solid_from_mesh, solid_rectangle
 from substruct.analysis.sparse_modes import null_space_modes
 from substruct.substructure import PointError
 
@@ -62,7 +63,7 @@ def first_frequency(sub) -> float:
 def test_matrices_equal_skfem_linear_elasticity(mesh, elem, order):
     """The scalar-basis assembly equals skfem's ``linear_elasticity`` on ``ElementVector``."""
     lam, mu, rho = 1.3, 0.7, 2.0
-    _, K, M = _assemble(mesh, order, lam, mu, rho, 1.0)
+    _, K, M = elasticity_matrices(mesh, order, lam, mu, rho, 1.0)
     vb = Basis(mesh, ElementVector(elem()), intorder=2 * order)
     K_ref = asm(linear_elasticity(lam, mu), vb)
     M_ref = asm(BilinearForm(lambda u, v, w: rho * dot(u, v)), vb)

@@ -19,6 +19,8 @@ midside nodes of P2 elements included), so the ties also work after a reduction 
 interface DOFs (Craig-Bampton).  The interface is chosen by a box selector
 ``{"box": [[xmin, ymin, zmin], [xmax, ymax, zmax]]}`` (a flat box for a plane surface), a named
 node set of the mesh ``{"set": name}``, or ``None`` (every node of ``a`` that has a partner).
+Boxes, components and the matching tolerance are those of :mod:`substruct.models.selection`
+(:data:`~substruct.models.selection.NODE_TOL` times the model size).
 """
 
 from __future__ import annotations
@@ -29,41 +31,44 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from substruct.assembly.stack import Connection, PointRef
-from substruct.substructure import PointError, Substructure
+from substruct.models.selection import (
+    COMPONENTS,
+    component_indices,
+    node_tolerance,
+    nodes_in_box,
+    parse_box,
+)
+from substruct.substructure import Geometry, PointError, Substructure
 
 __all__ = ["InterfaceError", "interface_nodes", "node_dofs", "tie_nodes", "tie_nonmatching"]
-
-_AXES = ("x", "y", "z")
 
 
 class InterfaceError(ValueError):
     """Interface nodes that do not match."""
 
 
-def _points(sub: Substructure) -> np.ndarray:
+def _geometry(sub: Substructure) -> Geometry:
     if sub.geometry is None:
         raise ValueError(f"{sub.name}: a substructure without a mesh has no interface nodes")
-    return np.asarray(sub.geometry.points, dtype=float)
+    return sub.geometry
+
+
+def _points(sub: Substructure) -> np.ndarray:
+    return np.asarray(_geometry(sub).points, dtype=float)
 
 
 def _dim(sub: Substructure) -> int:
     return int(sub.meta.get("dim", 3))
 
 
-def _tolerance(points: np.ndarray, tol: float | None) -> float:
-    if tol is not None:
-        return float(tol)
-    span = float(np.ptp(points, axis=0).max()) if len(points) else 1.0
-    return 1e-8 * max(span, 1e-300)
-
-
 def interface_nodes(sub: Substructure, selector: Mapping[str, Any] | str | None = None,
                     tol: float | None = None) -> np.ndarray:
     """Indices of ``sub.geometry.points`` selected by a box, a named node set, or all (``None``).
 
-    A box ``{"box": [[x0, y0, z0], [x1, y1, z1]]}`` is widened by ``tol`` (default ``1e-8``
-    times the mesh size) so that a flat box ``x0 = x1`` picks a plane of nodes.  A named set
-    ``{"set": name}`` (or ``name``) is one of ``sub.meta["node_sets"]`` (solids from meshes).
+    A box ``{"box": [[x0, y0, z0], [x1, y1, z1]]}`` is widened by ``tol`` (default
+    :data:`~substruct.models.selection.NODE_TOL` times the mesh size) so that a flat box
+    ``x0 = x1`` picks a plane of nodes.  A named set ``{"set": name}`` (or ``name``) is one of
+    ``sub.meta["node_sets"]`` (solids from meshes).
     """
     pts = _points(sub)
     if selector is None:
@@ -79,17 +84,9 @@ def interface_nodes(sub: Substructure, selector: Mapping[str, Any] | str | None 
             raise ValueError(f"{sub.name}: no node set {selector['set']!r}; it has "
                              f"{sorted(sets) or 'none'}")
         return np.asarray(sets[selector["set"]], dtype=np.int64)
-    try:
-        lo, hi = (np.asarray(c, dtype=float).ravel() for c in selector["box"])
-    except (TypeError, ValueError):
-        raise ValueError(f"{sub.name}: bad box {selector['box']!r}") from None
-    if lo.size != hi.size or lo.size not in (2, 3) or np.any(lo > hi):
-        raise ValueError(f"{sub.name}: a box is [[xmin, ymin, zmin], [xmax, ymax, zmax]] with "
-                         f"min <= max, got {selector['box']!r}")
-    lo, hi = np.pad(lo, (0, 3 - lo.size)), np.pad(hi, (0, 3 - hi.size))
-    t = _tolerance(pts, tol)
-    inside = np.all((pts >= lo - t) & (pts <= hi + t), axis=1)
-    return np.flatnonzero(inside)
+    dim = _dim(sub)
+    lo, hi = parse_box(selector["box"], dim, sub.name)
+    return nodes_in_box(pts[:, :dim], lo, hi, node_tolerance(pts, tol))
 
 
 def node_dofs(sub: Substructure, selector: Mapping[str, Any] | str | None = None,
@@ -101,8 +98,8 @@ def node_dofs(sub: Substructure, selector: Mapping[str, Any] | str | None = None
     The boundary set of a Craig-Bampton reduction, for example.
     """
     nodes = interface_nodes(sub, selector, tol)
-    comps = _components(sub, components)
-    interp = sub.geometry.interp.tocsr()
+    comps = component_indices(components, _dim(sub), sub.name)
+    interp = _geometry(sub).interp.tocsr()
     rows = (3 * nodes[:, None] + np.asarray(comps)[None, :]).ravel()
     out = []
     for r in rows:
@@ -112,22 +109,8 @@ def node_dofs(sub: Substructure, selector: Mapping[str, Any] | str | None = None
     return np.unique(np.asarray(out, dtype=np.int64))
 
 
-def _components(sub: Substructure, components: Sequence[Any] | None) -> list[int]:
-    dim = _dim(sub)
-    if components is None:
-        return list(range(dim))
-    out = []
-    for c in components:
-        key = c.strip().lower().removeprefix("u") if isinstance(c, str) else c
-        c_int = _AXES.index(key) if key in _AXES else key
-        if not isinstance(c_int, (int, np.integer)) or not 0 <= c_int < dim:
-            raise ValueError(f"{sub.name}: no component {c!r} in a {dim}D substructure")
-        out.append(int(c_int))
-    return out
-
-
 def _point(xyz: np.ndarray, c: int) -> dict[str, Any]:
-    return {"at": [float(v) for v in xyz], "component": _AXES[c]}
+    return {"at": [float(v) for v in xyz], "component": COMPONENTS[c]}
 
 
 def _moves(sub: Substructure, where: dict[str, Any]) -> bool:
@@ -147,7 +130,8 @@ def tie_nodes(a: Substructure, b: Substructure,
         selector: the interface, applied to both (box, named set, or ``None``: every node of
             ``a`` with a node of ``b`` within ``tol``).  A named set is looked up in each.
         components: displacement components to tie (default all of the solid's).
-        tol: largest distance of matching nodes (default ``1e-8`` times the larger mesh size).
+        tol: largest distance of matching nodes (default
+            :data:`~substruct.models.selection.NODE_TOL` times the larger mesh size).
         name: prefix of the connection names (default ``"<a>-<b>"``).
 
     Returns:
@@ -160,7 +144,7 @@ def tie_nodes(a: Substructure, b: Substructure,
             message gives how many and the worst distance), or nothing is selected.
     """
     pa, pb = _points(a), _points(b)
-    t = tol if tol is not None else max(_tolerance(pa, None), _tolerance(pb, None))
+    t = tol if tol is not None else max(node_tolerance(pa), node_tolerance(pb))
     ia = interface_nodes(a, selector, t)
     ib = interface_nodes(b, selector, t)
     if selector is None:  # the common nodes
@@ -187,7 +171,7 @@ def tie_nodes(a: Substructure, b: Substructure,
         raise InterfaceError(f"interface {a.name}-{b.name}: several nodes of {a.name} match "
                              f"one node of {b.name} (tolerance {t:.3g} too large?)")
     prefix = name or f"{a.name}-{b.name}"
-    comps = _components(a, components)
+    comps = component_indices(components, _dim(a), a.name)
     out = []
     for k, jb in zip(ia, ib[j]):
         for c in comps:
@@ -195,7 +179,7 @@ def tie_nodes(a: Substructure, b: Substructure,
             if not (_moves(a, wa) or _moves(b, wb)):
                 continue
             out.append(Connection(PointRef(a.name, wa), PointRef(b.name, wb),
-                                  name=f"{prefix} node {pa[k].tolist()} u{_AXES[c]}"))
+                                  name=f"{prefix} node {pa[k].tolist()} u{COMPONENTS[c]}"))
     return out
 
 
@@ -212,9 +196,10 @@ def tie_nonmatching(master: Substructure, slave: Substructure,
     node-to-surface coupling).  Make the *finer* mesh the slave: where its interface trace
     space holds the master's, the ties make the two traces equal everywhere (a conforming,
     upper-bound model); the other way round the finer side is free between the coarse nodes
-    and the joint comes out too soft.  A
-    slave node that falls outside the master's mesh by less than ``tol`` (default ``1e-6`` times
-    the mesh size) is moved onto the master's nearest node direction until found.
+    and the joint comes out too soft.  A slave node that falls outside the master's mesh by
+    less than ``tol`` (default 100 times :data:`~substruct.models.selection.NODE_TOL` times the
+    mesh size: the two meshes were written apart, each with its own round-off) is moved
+    towards the master's nearest node until it is inside.
 
     Returns:
         One :class:`Connection` per slave node and component:
@@ -224,14 +209,14 @@ def tie_nonmatching(master: Substructure, slave: Substructure,
         InterfaceError: no slave node selected, or a slave node off the master's mesh.
     """
     ps, pm = _points(slave), _points(master)
-    t = _tolerance(np.vstack([ps, pm]), None) * 100 if tol is None else float(tol)
+    t = 100 * node_tolerance(np.vstack([ps, pm])) if tol is None else float(tol)
     idx = interface_nodes(slave, selector, t)
     if idx.size == 0:
         raise InterfaceError(f"interface {master.name}-{slave.name}: no slave node selected "
                              f"by {selector!r}")
     tree = cKDTree(pm)
     prefix = name or f"{master.name}-{slave.name}"
-    comps = _components(slave, components)
+    comps = component_indices(components, _dim(slave), slave.name)
     out = []
     for k in idx:
         x = ps[k]
@@ -241,7 +226,7 @@ def tie_nonmatching(master: Substructure, slave: Substructure,
             if not (_moves(slave, ws) or _moves(master, wm)):
                 continue
             out.append(Connection(PointRef(slave.name, ws), PointRef(master.name, wm),
-                                  name=f"{prefix} node {x.tolist()} u{_AXES[c]}"))
+                                  name=f"{prefix} node {x.tolist()} u{COMPONENTS[c]}"))
     return out
 
 

@@ -11,6 +11,7 @@ import scipy.sparse as sp
 
 from substruct.assembly.stack import Assembly, PointRef
 from substruct.builder.drawing import Drawing
+from substruct.models.selection import component_index
 from substruct.substructure import Geometry, Substructure
 
 __all__ = ["layout_drawings"]
@@ -182,8 +183,7 @@ def _component_axis(where: Any) -> int | None:
     """The axis (0, 1, 2) of a point ``{"component": "z", ...}`` on a solid, else ``None``."""
     if not isinstance(where, dict) or "component" not in where:
         return None
-    c = where["component"]
-    return int(c) if isinstance(c, (int, np.integer)) else "xyz".index(str(c).lower())
+    return component_index(where["component"], 3, "a point")
 
 
 def _hang_along(points: np.ndarray, axis: int) -> np.ndarray:

@@ -9,17 +9,14 @@ Called by :func:`substruct.run.runner.build_model` and :func:`substruct.run.runn
    estimate, as rods are), checks the support selectors against it and makes the solid
    (:func:`substruct.models.solid.solid_from_mesh`).
 3. :func:`tie_and_reduce` ties the solids of each ``interfaces:`` item
-   (:func:`substruct.assembly.interfaces.tie_nodes` or :func:`~substruct.assembly.interfaces.tie_nonmatching`),
-   then reduces the solids that ask for it: modal truncation, or Craig-Bampton with the
-   boundary made of every coordinate that a tie, a connection, a constraint or an FRF point
-   uses (so those rows stay exact) and the nodes of ``reduce.interface``.
-4. :func:`modes_solver` chooses the coupled eigensolver: dense
-   (:func:`substruct.analysis.dense_modes.coupled_modes`) up to :data:`SPARSE_ABOVE` coordinates, sparse
-   shift-invert above it (or when asked), undamped (Lanczos) or damped (Arnoldi on a
-   first-order pencil; :func:`substruct.analysis.sparse_modes.sparse_coupled_modes`);
-   :func:`sparse_mode_result` runs it with the main formulation and the checks.
+   (:func:`substruct.assembly.interfaces.tie_nodes` or
+   :func:`~substruct.assembly.interfaces.tie_nonmatching`), then reduces the solids that ask
+   for it: modal truncation, or Craig-Bampton with the boundary made of every coordinate that
+   a tie, a connection, a constraint or an FRF point uses (so those rows stay exact) and the
+   nodes of ``reduce.interface``.
 
-Every problem is a :class:`~substruct.case.loader.CaseError` naming the field of the case file.
+Nodes, boxes and components are selected as everywhere else
+(:mod:`substruct.models.selection`).  Every problem is a :class:`~substruct.case.loader.CaseError` naming the field of the case file.
 """
 
 from __future__ import annotations
@@ -35,12 +32,15 @@ from substruct.case.errors import MISSING
 from substruct.case.expressions import ExpressionError, scalar
 from substruct.case.fields import MAX_ELEMENTS, MEMORY_LIMIT, gigabytes
 from substruct.case.solids import InterfaceSpec, SolidSpec, solid_memory
+from substruct.models.selection import (
+    COMPONENTS,
+    component_index,
+    node_tolerance,
+    nodes_in_box,
+)
 from substruct.substructure import PointError, Substructure
 
-__all__ = ["solid_where", "mesh_of", "build_solid", "tie_and_reduce",
-           "modes_solver", "sparse_mode_result"]
-
-_AXES = ("x", "y", "z")
+__all__ = ["solid_where", "mesh_of", "build_solid", "tie_and_reduce"]
 
 # ---------------------------------------------------------------------------- points
 
@@ -61,10 +61,12 @@ def solid_where(case: Any, spec: SolidSpec, where: str | None, use: Any) -> dict
     comp = comp.strip().lower()
     mesh_of(case, spec)  # the dimension of a mesh file is known once read
     dim = spec.dim()
-    allowed = _AXES[:dim] if dim else _AXES
-    if comp not in allowed:
+    try:
+        comp = COMPONENTS[component_index(comp, dim or 3, spec.name)]
+    except PointError:
         raise case.error(use.loc, f"no displacement component {comp!r} on solid "
-                         f"{spec.name!r} (one of {', '.join(allowed)})", use.text)
+                         f"{spec.name!r} (one of {', '.join(COMPONENTS[:dim or 3])})",
+                         use.text) from None
     place = place.strip()
     if len(place) > 1 and place[0] == "n" and place[1:].isdigit():
         return {"node": int(place[1:]), "component": comp}
@@ -95,19 +97,15 @@ def solid_where(case: Any, spec: SolidSpec, where: str | None, use: Any) -> dict
 
 def _read_file(case: Any, i: int, spec: SolidSpec) -> tuple[Any, Any, dict]:
     """``(meshio mesh, skfem mesh, named vertex sets)`` of a mesh file."""
-    import meshio
-
+    from substruct.case.mesh_files import MeshFileError, read_mesh_file
     from substruct.models.solid import read_mesh
 
     loc = ("substructures", i, "mesh")
     path = case.base_dir / spec.mesh
     try:
-        fmt = "gmsh" if path.suffix.lower() == ".msh" else None
-        raw = meshio.read(path, file_format=fmt)
-    except Exception as exc:  # meshio raises many kinds for a corrupt file
-        detail = " ".join(str(exc).split()) or type(exc).__name__
-        raise case.error(loc, f"cannot read mesh file {path} ({type(exc).__name__}: "
-                         f"{detail[:200]})", spec.mesh) from None
+        raw = read_mesh_file(path)
+    except MeshFileError as err:  # checked before, during and after meshio reads it
+        raise case.error(loc, str(err), spec.mesh) from None
     try:
         mesh, sets = read_mesh(raw)
     except ValueError as err:
@@ -127,12 +125,12 @@ def _generated(spec: SolidSpec) -> Any:
             for o, L, d in zip(shape.origin, shape.lengths, shape.divisions)]
     kind = {"hex": MeshHex, "tet": MeshTet, "quad": MeshQuad, "tri": MeshTri}[shape.cell]
     mesh = kind.init_tensor(*axes)
-    tol = 1e-9 * max(shape.lengths)
+    tol = node_tolerance(np.asarray(mesh.p).T)
     faces = {}
     for c in range(dim):
         lo, hi = axes[c][0], axes[c][-1]
-        faces[f"{_AXES[c]}min"] = (lambda x, c=c, v=lo: np.abs(x[c] - v) <= tol)
-        faces[f"{_AXES[c]}max"] = (lambda x, c=c, v=hi: np.abs(x[c] - v) <= tol)
+        faces[f"{COMPONENTS[c]}min"] = (lambda x, c=c, v=lo: np.abs(x[c] - v) <= tol)
+        faces[f"{COMPONENTS[c]}max"] = (lambda x, c=c, v=hi: np.abs(x[c] - v) <= tol)
     return mesh.with_boundaries(faces)
 
 
@@ -147,7 +145,7 @@ def _check_fixed(case: Any, i: int, spec: SolidSpec, mesh: Any, sets: dict) -> N
     that hold at least one vertex."""
     dim = mesh.dim()
     p = np.asarray(mesh.p, dtype=float)
-    tol = 1e-9 * float(np.ptp(p, axis=1).max())
+    tol = node_tolerance(p.T)
     for k, sel in enumerate(spec.fixed):
         loc = ("substructures", i, "fixed", k)
         if sel.set is not None and sel.set not in sets:
@@ -155,9 +153,11 @@ def _check_fixed(case: Any, i: int, spec: SolidSpec, mesh: Any, sets: dict) -> N
             raise case.error(loc, f"no named set {sel.set!r} in the mesh of {spec.name!r} "
                              f"(it has: {known})", sel.set)
         for j, c in enumerate(sel.components or []):
-            if _AXES.index(c) >= dim:
-                raise case.error((*loc, "components", j), f"no component {c!r} in the 2D "
-                                 f"solid {spec.name!r}", c)
+            try:
+                component_index(c, dim, spec.name)
+            except PointError:
+                raise case.error((*loc, "components", j), f"no component {c!r} in the "
+                                 f"{dim}D solid {spec.name!r}", c) from None
         if sel.box is not None:
             lo, hi = (np.asarray(b, dtype=float) for b in sel.box)
             if lo.size == 2 and dim == 3:
@@ -166,8 +166,7 @@ def _check_fixed(case: Any, i: int, spec: SolidSpec, mesh: Any, sets: dict) -> N
             if lo.size == 3 and dim == 2 and not lo[2] <= 0.0 <= hi[2]:
                 raise case.error((*loc, "box"), f"the box misses the plane z = 0 of the 2D "
                                  f"solid {spec.name!r}", [list(b) for b in sel.box])
-            inside = np.all((p >= lo[:dim, None] - tol) & (p <= hi[:dim, None] + tol), axis=0)
-            if not inside.any():
+            if not nodes_in_box(p.T, lo[:dim], hi[:dim], tol).size:
                 raise case.error((*loc, "box"), f"the box holds no node of {spec.name!r} "
                                  f"(the mesh spans {p.min(axis=1).tolist()} to "
                                  f"{p.max(axis=1).tolist()})", [list(b) for b in sel.box])

@@ -10,12 +10,8 @@ from substruct.models.rod import (
     rod_fe,
     uniform_rod_frequencies,
 )
-from substruct.models.solid import (
-    read_mesh,
-    solid_box,
-    solid_from_mesh,
-    solid_rectangle,
-)
+from substruct.models.mesh_io import read_mesh
+from substruct.models.solid import solid_box, solid_from_mesh, solid_rectangle
 
 __all__ = [
     "SUPPORTS",
