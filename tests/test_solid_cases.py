@@ -19,6 +19,18 @@ MESHES = ROOT / "meshes"
 BOX_BEAM = CASES / "box_beam_tmd.yaml"
 PLATE = CASES / "plate_2d.yaml"
 
+#: Regression values, not an independent reference: the two lowest y-bending frequencies
+#: (rad/s) of the box beam of cases/box_beam_tmd.yaml (meshes/box_beam_left.msh and
+#: box_beam_right.msh tied, each reduced by Craig-Bampton), as substruct computed them when the
+#: solid cases were added.  The absorbers act in z, so these modes are those of the bare beam.
+#: A change beyond rtol 2e-4 means the meshes, the elements or the reduction changed.
+REGRESSION_Y_BENDING = (611.50, 3547.2)
+
+#: Regression values as above: the three lowest frequencies (rad/s) of the box beam with its
+#: absorbers, unreduced and undamped, on the matching meshes; tied to a finer right half by
+#: interpolation (non-matching) it must stay within 1e-3 of them.
+REGRESSION_MATCHING = (530.554, 611.503, 654.919)
+
 #: the box beam unreduced and undamped: 4900 coordinates, solved by the sparse path
 FULL_UNDAMPED = ["substructures.left.reduce=null", "substructures.right.reduce=null",
                  "substructures.tmd1.damping=0", "substructures.tmd2.damping=0",
@@ -44,6 +56,7 @@ def assert_picture(path: Path) -> None:
 # ------------------------------------------------------------------- the two cases
 
 
+@pytest.mark.slow  # the two longest runs of the suite (15 s and 7 s on one core)
 @pytest.mark.parametrize("path, n_modes", [(BOX_BEAM, 8), (PLATE, 6)],
                          ids=["box_beam_tmd", "plate_2d"])
 def test_solid_case_runs_writes_pictures_and_exports(path, n_modes, tmp_path, capsys):
@@ -82,8 +95,9 @@ def assert_tuned(w, zeta):
     """The y-bending modes of the box beam (the absorbers move in z) are those of the bare
     beam, undamped; each z-bending mode is split in two by its absorber, about the y one."""
     undamped = w[zeta < 1e-9]
-    np.testing.assert_allclose(undamped[:2], [611.50, 3547.2], rtol=2e-4)
-    assert w[0] < 611.5 < w[2] and w[3] < 3547.3 < w[5]
+    np.testing.assert_allclose(undamped[:2], REGRESSION_Y_BENDING, rtol=2e-4)
+    # each z-bending mode is split in two by its absorber, about the y one
+    assert w[0] < undamped[0] < w[2] and w[3] < undamped[1] < w[5]
     assert np.all(zeta[[0, 2, 3, 5]] > 0.04)
 
 
@@ -297,4 +311,4 @@ def test_non_matching_interface_runs_with_matching_false(capsys, tmp_path):
     w = np.array(s["modes"]["omega"])
     assert len(s["model"]["constraints"]) == 3 + 288
     assert max(s["modes"]["residual"]) < 1e-10
-    np.testing.assert_allclose(w[:3], [530.554, 611.503, 654.919], rtol=1e-3)
+    np.testing.assert_allclose(w[:3], REGRESSION_MATCHING, rtol=1e-3)

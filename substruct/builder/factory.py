@@ -89,6 +89,17 @@ def _rod(case: Case, i: int, spec: RodSpec, nodes_at: list[float]) -> Substructu
 
 
 def make_substructures(case: Case, positions: dict[str, list[float]]) -> list[Substructure]:
+    """The substructures of a case, in case order, as specified (solids unreduced: they are
+    tied and reduced by :func:`substruct.builder.solids.tie_and_reduce`).
+
+    Args:
+        case: the validated case.
+        positions: for each rod, the places its points use, which finite-element meshes put
+            nodes at.
+
+    Raises:
+        CaseError: a substructure that cannot be made (naming its field).
+    """
     subs = []
     for i, spec in enumerate(case.substructures):
         if isinstance(spec, RodSpec):

@@ -18,6 +18,9 @@ __all__ = ["PointUse", "point_uses", "rod_position", "resolve_point"]
 
 @dataclass
 class PointUse:
+    """One place where a case names a point: the text (``"rod@200"``, ``"box@n12:z"``) and
+    the location of its field (``("connections", 0, 1)``), for one-line errors."""
+
     text: str
     loc: tuple
 
