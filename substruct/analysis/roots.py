@@ -1,0 +1,290 @@
+r"""Which roots of a constrained pencil are modes: counts, rigid-body motions, classification.
+
+The paper's state-space form (eqs 32-34) has, besides the roots of the constrained problem,
+``2 rank(A)`` zero roots whose vectors violate ``A u = 0`` (``M^* K`` of eq 30 has rank
+``n - rank(A)``), and every formulation has infinite roots (massless coordinates, Lagrange
+multipliers).  They are artifacts, not modes; a physical mode satisfies ``A u = 0``, and a
+genuine rigid-body mode (a zero root *with* ``A u = 0``) is kept.
+
+Roots are sorted out by counts that the matrices fix (:func:`root_structure`: rank of ``A``,
+rigid-body motions, massless directions), not by thresholds on root magnitudes, which fail for
+badly scaled models (a stiffness of ``1e12`` beside one of ``1``); :func:`classify_roots`
+applies the counts and checks every kept root against ``A u = 0``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+
+from substruct.analysis.pencil import Refine
+from substruct.analysis.results import Modes
+from substruct.linalg.constraints import independent_rows
+from substruct.linalg.nullspace import null_space_basis
+from substruct.linalg.scaling import mass_column_scale
+
+__all__ = [
+    "RESIDUAL_TOL",
+    "REAL_TOL",
+    "RIGID_TOL",
+    "RIGID_ENERGY_TOL",
+    "RIGID_DAMPING_TOL",
+    "DAMPING_RANK_TOL",
+    "SPURIOUS_ZERO",
+    "INFINITE_ROOT",
+    "RootStructure",
+    "root_scale",
+    "rigid_basis",
+    "root_structure",
+    "classify_roots",
+    "normalize_shapes",
+]
+
+#: A finite nonzero root whose vector has ``|A u| / (|A| |u|)`` above this is set aside.  Roots
+#: are classified by counts (:func:`classify_roots`); this is the check that would catch a
+#: miscount: a spurious root's vector has a residual of order one, while a physical root's
+#: computed vector has one of order ``eps`` times its condition number (``1e-6`` for a slow root
+#: next to the spurious zeros of eqs 30/34, which must not be dropped for it).
+RESIDUAL_TOL = 1e-3
+#: A root with ``|Im lambda| <= REAL_TOL |lambda|`` is real (over- or critically damped).  Near
+#: critical damping the double root splits by about ``sqrt(eps)``; this tolerance lies above that
+#: noise so the three formulations report the same number of roots.
+REAL_TOL = 1e-6
+#: Singular-value threshold for rigid-body motions: ``[D K D; A D]`` (``D = diag(K)^{-1/2}``,
+#: rows of ``A D`` of unit norm) has singular values below this on ``null(K) & null(A)``.
+RIGID_TOL = 1e-9
+#: ... and its strain energy ``u^T K u`` is below this fraction of ``|u|^T |K| |u|`` (rounding is
+#: a few ``eps`` of it; a ``1e12`` spring in series with a ``1`` leaves ``2.5e-13``).
+RIGID_ENERGY_TOL = 3e-14
+#: A rigid-body mode counts as undamped (a double zero root) when ``u^T C u / u^T M u`` is
+#: below this fraction of the root scale ``max(sqrt(K_ii / M_jj), C_ii / M_jj)``.
+RIGID_DAMPING_TOL = 1e-8
+#: Relative eigenvalue threshold for the rank of the damping on the massless directions.
+DAMPING_RANK_TOL = 1e-10
+
+#: Reason given for the ``2 rank(A)`` spurious zero roots of eqs (30)/(34).
+SPURIOUS_ZERO = ("zero root of the projected operator M*K: its vector violates A u = 0 "
+                 "(artifact of eqs 30/34, one pair per independent constraint)")
+#: Reason given for an infinite root.
+INFINITE_ROOT = ("infinite root: a massless coordinate or a Lagrange multiplier with no mass "
+                 "attached")
+
+
+def root_scale(M: np.ndarray, C: np.ndarray, K: np.ndarray) -> float:
+    r"""A root magnitude no physical root much exceeds, from the diagonals (rad/s):
+
+    .. math::  \max\big(\sqrt{\max_i K_{ii} / \min_j M_{jj}},\ \max_i C_{ii} / \min_j M_{jj}\big)
+
+    (``min`` over the coordinates that have mass)."""
+    dm, dk, dc = np.abs(np.diag(M)), np.abs(np.diag(K)), np.abs(np.diag(C))
+    mpos = dm[dm > 0]
+    mmin = mpos.min() if mpos.size else 1.0
+    return float(max(np.sqrt(dk.max(initial=0.0) / mmin), dc.max(initial=0.0) / mmin, 1e-300))
+
+
+@dataclass(frozen=True)
+class RootStructure:
+    """What the matrices say about the roots, before any eigenvalue is computed.
+
+    Attributes:
+        rank: ``rank(A)`` (independent constraints).
+        rigid: ``n x k`` basis of the rigid-body motions ``null(K) & null(A)``, ``M``-orthonormal.
+        n_zero: zero roots of the constrained problem, with multiplicity: two for an undamped
+            rigid-body mode (``C u = 0``), one for a damped one (its partner is ``-c/m``).
+        n_finite: finite roots of the constrained problem, with multiplicity (zeros included):
+            ``2 rank(M_r) + rank(C_0)``, ``M_r`` the mass on ``null(A)`` and ``C_0`` the damping
+            on its massless directions (each massless dashpot gives one real root ``-k/c``).
+    """
+
+    rank: int
+    rigid: np.ndarray
+    n_zero: int
+    n_finite: int
+
+
+def rigid_basis(K: np.ndarray, A: np.ndarray) -> np.ndarray:
+    r"""Orthonormal basis of ``null(K) & null(A)``, decided on the equilibrated matrices.
+
+    .. math::  D = \operatorname{diag}(K_{ii})^{-1/2}, \qquad
+               \operatorname{null} \begin{bmatrix} D K D \\ \operatorname{rows}(A D) \end{bmatrix}
+
+    ``D K D`` has a unit diagonal and entries at most one (``K`` positive semidefinite), so the
+    rank decision does not depend on units nor on a stiff spring next to a soft one (``K_ii``
+    of ``1e12`` beside ``1`` would otherwise look like a rank-deficient ``K``).  Each motion is
+    then confirmed by its strain energy, componentwise (:data:`RIGID_ENERGY_TOL`).
+    """
+    n = K.shape[0]
+    d = np.abs(np.diag(K)).astype(float)
+    pos = d > 0
+    fill = 1.0 / np.sqrt(d[pos].max()) if pos.any() else 1.0
+    D = np.where(pos, 1.0 / np.sqrt(np.where(pos, d, 1.0)), fill)
+    blocks = [D[:, None] * K * D[None, :]]
+    if A.size:
+        AD = A * D[None, :]
+        nrm = np.linalg.norm(AD, axis=1)
+        blocks.append(AD[nrm > 0] / nrm[nrm > 0, None])
+    _, sv, Vh = sla.svd(np.vstack(blocks))
+    sv = np.concatenate([sv, np.zeros(n - sv.size)])
+    null = Vh.conj().T[:, sv <= RIGID_TOL * max(sv[0], 1.0)]
+    if not null.shape[1]:
+        return null
+    Q, _ = np.linalg.qr(D[:, None] * null)
+    # confirm by energy, componentwise: u^T K u against the rounding level |u|^T |K| |u|.  A
+    # stiff spring in series with a soft one (1e12 and 1) passes the test above but stores
+    # k_soft / k_stiff = 1e-12 of that level in the soft mode, far above rounding (~1e-16)
+    energy = Q.T @ K @ Q
+    level = np.sqrt(np.maximum(np.einsum("ij,ik,kj->j", np.abs(Q), np.abs(K), np.abs(Q)),
+                               1e-300))
+    w, W = np.linalg.eigh(energy / np.outer(level, level))
+    return Q @ W[:, np.abs(w) <= RIGID_ENERGY_TOL]
+
+
+def root_structure(M: np.ndarray, C: np.ndarray, K: np.ndarray,
+                   A: np.ndarray) -> RootStructure:
+    """Counts of zero and finite roots (see :class:`RootStructure`); ``M``, ``C``, ``K``
+    symmetric, ``M`` positive definite on the coordinates that have mass, ``C``, ``K``
+    semidefinite.
+
+    Raises:
+        ValueError: a motion with no mass, no stiffness and no constraint (singular pencil).
+    """
+    n = K.shape[0]
+    rank = independent_rows(A, col_scale=mass_column_scale(M)).rank if A.size else 0
+    rigid = rigid_basis(K, A)
+    n_zero = 0
+    if rigid.shape[1]:
+        Mr = rigid.T @ M @ rigid
+        w, V = np.linalg.eigh((Mr + Mr.T) / 2)
+        if w.min() <= 1e-12 * max(np.abs(M).max(), 1e-300):
+            raise ValueError("singular model: a motion with no mass, no stiffness and no "
+                             "constraint (a massless coordinate attached to nothing)")
+        rigid = rigid @ (V / np.sqrt(w))  # M-orthonormal
+        Cr = rigid.T @ C @ rigid
+        rates = np.abs(np.linalg.eigvalsh((Cr + Cr.T) / 2))
+        n_undamped = int(np.sum(rates <= RIGID_DAMPING_TOL * root_scale(M, C, K)))
+        n_zero = rigid.shape[1] + n_undamped
+    massless = np.flatnonzero(np.abs(M).sum(axis=1) == 0)
+    if massless.size:
+        As = A[:, massless] if A.size else np.zeros((0, massless.size))
+        S = null_space_basis(As) if As.size and np.any(As) else np.eye(massless.size)
+        S0 = np.zeros((n, S.shape[1]))
+        S0[massless] = S
+    else:
+        S0 = np.zeros((n, 0))
+    n_first = 0
+    if S0.shape[1] and np.any(C):
+        C0 = S0.T @ C @ S0
+        ev = np.abs(np.linalg.eigvalsh((C0 + C0.T) / 2))
+        n_first = int(np.sum(ev > DAMPING_RANK_TOL * np.abs(C).max()))
+    n_finite = 2 * (n - rank - S0.shape[1]) + n_first
+    return RootStructure(rank=rank, rigid=rigid, n_zero=n_zero, n_finite=n_finite)
+
+
+def classify_roots(lam: np.ndarray, U: np.ndarray, A: np.ndarray, M: np.ndarray,
+                   C: np.ndarray, K: np.ndarray, method: str,
+                   refine: Refine | None = None) -> Modes:
+    """Split roots into physical modes and roots set aside (see the module docstring).
+
+    The split is by counts that the matrices fix (:func:`root_structure`), not by thresholds
+    on root magnitudes:
+
+    * the largest ``2n - n_finite`` roots (``n_finite`` plus ``2 rank(A)`` for eqs 30/34) are
+      infinite roots: massless coordinates, Lagrange multipliers (higher-index infinite roots
+      come out as large finite numbers, near ``eps^{-1/2}`` or ``eps^{-1/3}`` times the scale);
+    * of the finite roots the smallest ``n_zero`` (plus ``2 rank(A)`` for eqs 30/34) are zero
+      roots; the ``2 rank(A)`` of eqs (30)/(34) are artifacts whose vectors violate
+      ``A u = 0``; rigid-body modes (``K u = 0``, ``A u = 0``) are reported as physical zeros
+      with their vectors taken from ``null(K) & null(A)``, because a zero root shared with
+      spurious ones has no meaningful vector;
+    * the other finite roots must satisfy ``A u = 0`` (checked against :data:`RESIDUAL_TOL`; a
+      root that does not is set aside with its residual as the reason); ``refine(j,
+      lambda_j)``, given by each formulation, polishes them
+      (:func:`substruct.analysis.pencil.rayleigh_root`) and may return a better vector.
+
+    Reporting is that of :class:`~substruct.analysis.results.Modes`: one root of each complex
+    conjugate pair (``Im > 0``); a real root (``|Im| <= REAL_TOL |lambda|``) is a mode of its
+    own with ``Im`` set to zero; an undamped rigid-body mode (a double zero) is one entry.
+
+    Args:
+        lam: all roots of the formulation's pencil (``inf`` for infinite ones).
+        U: ``n x len(lam)`` displacement parts of their vectors.
+        A, M, C, K: the dense matrices of the constrained problem.
+        method: ``"generalized-inverse"`` (eqs 30/34, with the ``2 rank(A)`` artifacts),
+            ``"null-space"`` or ``"kkt"``.
+        refine: the formulation's refinement, or ``None``.
+    """
+    n = U.shape[0]
+    An = np.linalg.norm(A, 2) if A.size else 1.0
+    st = root_structure(M, C, K, A)
+    extra = 2 * st.rank if method == "generalized-inverse" else 0
+    mag = np.where(np.isfinite(lam), np.abs(lam), np.inf)
+    order = np.argsort(mag, kind="stable")
+    n_fin = min(st.n_finite + extra, lam.size)
+    n_zero = min(st.n_zero + extra, n_fin)
+    zero_idx, rest_idx, inf_idx = order[:n_zero], order[n_zero:n_fin], order[n_fin:]
+
+    def residual(u: np.ndarray) -> float:
+        if not A.size:
+            return 0.0
+        return float(np.linalg.norm(A @ u) / (An * max(float(np.linalg.norm(u)), 1e-300)))
+
+    spurious: list[complex] = []
+    reasons: list[str] = []
+    # the 2 rank(A) artifacts of eqs 30/34 among the zero roots: those that violate A u = 0 most
+    zres = np.array([residual(U[:, j]) for j in zero_idx])
+    for j in zero_idx[np.argsort(-zres, kind="stable")][:extra]:
+        spurious.append(complex(lam[j]))
+        reasons.append(SPURIOUS_ZERO)
+    phys_lam: list[complex] = [0j] * st.rigid.shape[1]
+    phys_u: list[np.ndarray] = [st.rigid[:, j].astype(complex) for j in range(st.rigid.shape[1])]
+    for j in rest_idx:
+        lj, u = complex(lam[j]), U[:, j]
+        r = residual(u)
+        if r > RESIDUAL_TOL:
+            spurious.append(lj)
+            reasons.append(f"violates the constraints: |A u|/(|A||u|) = {r:.2e}")
+            continue
+        real = abs(lj.imag) <= REAL_TOL * abs(lj)
+        if not real and lj.imag < 0:
+            continue  # the conjugate of a kept root
+        if refine is not None:
+            lj, better = refine(int(j), lj)
+            u = u if better is None else better
+        if real:
+            lj = complex(lj.real, 0.0)  # real: each root is its own mode
+        phys_lam.append(lj)
+        phys_u.append(u)
+    for j in inf_idx:
+        spurious.append(complex(lam[j]) if np.isfinite(lam[j]) else complex(np.inf))
+        reasons.append(INFINITE_ROOT)
+
+    lam_p = np.array(phys_lam, dtype=complex)
+    Up = np.array(phys_u, dtype=complex).T.reshape(n, -1)
+    order = np.lexsort((lam_p.real, np.abs(lam_p)))
+    lam_p, Up = lam_p[order], Up[:, order]
+    Up = normalize_shapes(Up, M)
+    omega = np.abs(lam_p)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        zeta = np.where(omega > 0, -lam_p.real / np.where(omega > 0, omega, 1), 0.0)
+    res = np.array([residual(Up[:, j]) for j in range(Up.shape[1])])
+    return Modes(method=method, eigenvalues=lam_p, omega=omega, damping_ratio=zeta, shapes=Up,
+                 residual=res, spurious=np.array(spurious, dtype=complex),
+                 spurious_reason=reasons)
+
+
+def normalize_shapes(U: np.ndarray, M: np.ndarray) -> np.ndarray:
+    """Each column: phase so its largest entry is real positive; scaled to ``u^H M u = 1`` if
+    that is positive, else to unit norm.  ``M`` dense or sparse."""
+    if not U.shape[1]:
+        return U
+    k = np.argmax(np.abs(U), axis=0)
+    top = U[k, np.arange(U.shape[1])]
+    U = U * np.where(np.abs(top) > 0, np.abs(top) / np.where(top == 0, 1, top), 1.0)
+    MU = M @ U.real + 1j * (M @ U.imag)
+    mass = np.real(np.sum(np.conj(U) * MU, axis=0))
+    norm = np.linalg.norm(U, axis=0)
+    mmax = float(abs(M).max()) if np.size(M) else 0.0
+    scale = np.where(mass > 1e-14 * norm**2 * max(mmax, 1e-300), np.sqrt(np.abs(mass)), norm)
+    return U / np.where(scale > 0, scale, 1.0)
