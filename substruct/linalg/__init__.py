@@ -1,4 +1,60 @@
-"""Linear algebra shared by every layer: row equilibration, rank and consistency of
-constraints, null-space bases and the factorizations."""
+"""Linear algebra shared by every layer, one idea a module; it imports nothing else of substruct.
 
-__all__: list[str] = []
+* :mod:`~substruct.linalg.dense`: dense copies of matrices known to be small;
+* :mod:`~substruct.linalg.scaling`: row equilibration of constraints (safe for tiny rows),
+  the mass scale of coordinates, massless coordinates, the spectral norm;
+* :mod:`~substruct.linalg.constraints`: rank, independent rows, consistency, particular
+  solutions and the pseudo-inverse of ``A M^-1 A^T``, decided on equilibrated rows;
+* :mod:`~substruct.linalg.nullspace`: bases of ``null(A)``, dense (SVD) and sparse
+  (master-slave elimination);
+* :mod:`~substruct.linalg.factorize`: the one registry of sparse factorizations (SuperLU,
+  CHOLMOD, saddle points, complex LU).
+"""
+
+from substruct.linalg.constraints import (
+    ConstraintError,
+    IndependentRows,
+    check_consistent,
+    independent_rows,
+    particular_solution,
+    pinv_sym,
+)
+from substruct.linalg.dense import dense
+from substruct.linalg.factorize import FACTORIZATIONS, Factorize, Solve, factorizer, has_cholmod
+from substruct.linalg.nullspace import Elimination, master_slave, null_space_basis
+from substruct.linalg.scaling import (
+    Equilibrated,
+    RowScale,
+    ZeroRowError,
+    equilibrate,
+    mass_column_scale,
+    massless_coordinates,
+    row_scale,
+    spectral_norm,
+)
+
+__all__ = [
+    "FACTORIZATIONS",
+    "ConstraintError",
+    "Elimination",
+    "Equilibrated",
+    "Factorize",
+    "IndependentRows",
+    "RowScale",
+    "Solve",
+    "ZeroRowError",
+    "check_consistent",
+    "dense",
+    "equilibrate",
+    "factorizer",
+    "has_cholmod",
+    "independent_rows",
+    "mass_column_scale",
+    "massless_coordinates",
+    "master_slave",
+    "null_space_basis",
+    "particular_solution",
+    "pinv_sym",
+    "row_scale",
+    "spectral_norm",
+]

@@ -1,0 +1,185 @@
+"""substruct.linalg: equilibration, rank and consistency, null-space bases, factorizations.
+
+Every decision on a constraint row must be the same whatever the row's scale (``c a_i`` for
+``c = 1e-300 .. 1e300``), answers are checked against closed forms, and every factorization of
+the registry solves its kind of system to rounding.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+import substruct.linalg as la
+from substruct.linalg import factorize as fz
+
+TINY, HUGE = 1e-300, 1e300
+
+
+def test_the_plain_two_norm_of_a_tiny_row_underflows():
+    """The trap the equilibration avoids: ``sqrt(sum a^2)`` of ``1e-300`` is 0."""
+    assert np.linalg.norm([TINY, 0.0]) == 0.0
+
+
+@pytest.mark.parametrize("sparse", [False, True])
+def test_rows_are_scaled_to_unit_norm_by_powers_of_two(sparse):
+    A = np.array([[TINY, 0, 0], [0, 3.0, -4.0], [HUGE, HUGE, 0], [1.0, -1.0, 0]])
+    b = np.array([2 * TINY, 5.0, HUGE, 0.0])
+    eq = la.equilibrate(sp.csr_array(A) if sparse else A, b)
+    As = eq.A.toarray() if sparse else eq.A
+    norms = np.linalg.norm(As, axis=1)
+    assert np.all((norms >= 2**-0.5) & (norms <= 2**0.5))
+    # powers of two: the scaled entries carry the bits of the originals (1 - 1 stays exact)
+    d = np.ldexp(1.0, -eq.scale.exponent)
+    assert np.array_equal(As, A * d[:, None]) and np.array_equal(eq.b, b * d)
+    assert As[3, 0] == -As[3, 1]
+    np.testing.assert_allclose(eq.scale.norms, [TINY, 5.0, np.sqrt(2) * HUGE, np.sqrt(2)])
+    # the same solutions: row i of A x = b holds exactly when it holds for D A x = D b (here
+    # x = (2, 1, -1/2) satisfies the first two rows and not the others)
+    x = np.array([2.0, 1.0, -0.5])
+    hit = np.isclose(A @ x, b, rtol=1e-15, atol=0)
+    assert hit.tolist() == [True, True, False, False]
+    assert np.isclose(As @ x, eq.b, rtol=1e-15, atol=0).tolist() == hit.tolist()
+
+
+def test_a_zero_row_is_refused_with_its_name():
+    A = sp.csr_array(np.array([[1.0, 2.0], [0.0, 0.0], [0.0, 0.0]]))
+    with pytest.raises(la.ZeroRowError, match="'tie' .* 1 more") as info:
+        la.equilibrate(A, labels=["a", "tie", "b"])
+    assert info.value.rows == [1, 2]
+    kept = la.row_scale(A, keep_zero=True)
+    assert kept.exponent.tolist()[1:] == [0, 0] and kept.norms[1] == 0.0
+
+
+@pytest.mark.parametrize("scale", [1.0, 1e-8, TINY, HUGE])
+def test_rank_and_redundancy_do_not_depend_on_the_scale_of_a_row(scale):
+    """Rows: q1 - q2, q2 - q3, scale (q1 - q3) (redundant: the sum of the first two), q4."""
+    A = np.array([[1.0, -1, 0, 0], [0, 1, -1, 0], [scale, 0, -scale, 0], [0, 0, 0, 2.0]])
+    rows = la.independent_rows(A)
+    assert rows.rank == 3 and rows.dropped.size == 1
+    np.testing.assert_allclose(rows.combination @ A[rows.keep], A[rows.dropped],
+                               atol=1e-15 * abs(A[rows.dropped]).max())
+    # consistent right-hand sides (those of x = (3, 2, 0, 1)) pass; a change of 1e-6 relative
+    # on any of the three dependent rows is caught, on the tiny row as on the others; the
+    # independent row q4 may have any right-hand side
+    x = np.array([3.0, 2.0, 0.0, 1.0])
+    b = A @ x
+    la.check_consistent(A, b, rows)
+    odd = b.copy()
+    odd[3] += 1.0
+    la.check_consistent(A, odd, rows)
+    for i in range(3):
+        bad = b.copy()
+        bad[i] += 1e-6 * abs(A[i]).max() * 3
+        with pytest.raises(la.ConstraintError, match="inconsistent"):
+            la.check_consistent(A, bad, rows, labels=["r0", "r1", "r2", "r3"])
+
+
+def test_mass_scaled_columns():
+    M = sp.diags_array([1.0, 4.0, 0.0, 1.0])
+    c = la.mass_column_scale(M)
+    mean = 2.0  # of the coordinates with mass
+    np.testing.assert_allclose(c, np.sqrt(mean / np.array([1.0, 4.0, mean, 1.0])))
+    np.testing.assert_array_equal(la.mass_column_scale(np.eye(3) * 7.0), np.ones(3))
+    np.testing.assert_array_equal(la.massless_coordinates(M), [False, False, True, False])
+    # a row that is dependent in the mass metric only to 1e-12 is still independent
+    A = np.array([[1.0, 0, 0, 0], [1.0, 1e-13, 0, 0]])
+    assert la.independent_rows(A).rank == 1
+    assert la.independent_rows(A, col_scale=np.array([1.0, 1e4, 1, 1])).rank == 2
+
+
+def test_particular_solution_is_the_minimum_norm_one():
+    A = np.array([[TINY, TINY, 0.0], [0.0, 0.0, 2.0], [0.0, 0.0, 4.0]])
+    rhs = np.array([2 * TINY, 6.0, 12.0])
+    x = la.particular_solution(A, rhs).ravel()
+    np.testing.assert_allclose(x, [1.0, 1.0, 3.0], rtol=1e-15)
+
+
+@pytest.mark.parametrize("scale", [1.0, TINY])
+def test_dense_null_space_basis(scale):
+    A = np.array([[scale, 0, 0, 0], [0, 1.0, -1.0, 0], [0, 2.0, -2.0, 0]])
+    N = la.null_space_basis(A)
+    assert N.shape == (4, 2)
+    np.testing.assert_allclose(N.T @ N, np.eye(2), atol=1e-15)
+    assert abs(A @ N).max() <= 1e-15 * scale
+    # null(A) = span{(0, 1, 1, 0), (0, 0, 0, 1)}
+    P = N @ N.T
+    ref = np.array([[0, 1, 1, 0], [0, 0, 0, np.sqrt(2)]]).T / np.sqrt(2)
+    np.testing.assert_allclose(P, ref @ ref.T, atol=1e-15)
+
+
+@pytest.mark.parametrize("scale", [1.0, 1e-8, TINY])
+def test_master_slave_eliminates_a_tiny_row_like_a_unit_one(scale):
+    A = sp.csr_array(np.array([[scale, 0, 0, 0, 0], [0, 1.0, -1.0, 0, 0],
+                               [0, 0, 0, 0, 0], [0, 2.0, -2.0, 0, 0]]))
+    el = la.master_slave(A)
+    assert el.rank == 2 and el.slaves[0] == 0
+    assert el.dropped_rows.tolist() == [2, 3]  # the empty row and the redundant one
+    assert abs(A @ el.T).max() == 0.0
+
+
+def test_master_slave_with_column_scale_keeps_unit_masters():
+    rng = np.random.default_rng(3)
+    A = sp.random_array((4, 12), density=0.4, random_state=rng, format="csr")
+    c = np.exp(rng.normal(size=12))
+    el = la.master_slave(A, col_scale=c)
+    assert el.rank == 4
+    np.testing.assert_allclose(abs(A @ el.T).max(), 0.0, atol=1e-14)
+    np.testing.assert_array_equal(el.T[el.masters].toarray(), np.eye(8))
+
+
+def test_pinv_sym_with_a_rank():
+    S = np.diag([1.0, 1e-12, 0.0])
+    # by a relative cut the 1e-12 is taken for zero; by the rank decided elsewhere it is not
+    np.testing.assert_allclose(la.pinv_sym(S), np.diag([1.0, 0, 0]))
+    np.testing.assert_allclose(la.pinv_sym(S, rank=2), np.diag([1.0, 1e12, 0]), rtol=1e-12)
+    # a rank above what S holds does not invert its rounding
+    np.testing.assert_allclose(la.pinv_sym(S, rank=3), np.diag([1.0, 1e12, 0]), rtol=1e-12)
+
+
+def test_spectral_norm_closed_forms():
+    assert la.spectral_norm(np.diag([3.0, -4.0])) == pytest.approx(4.0, rel=1e-15)
+    big = sp.diags_array(np.linspace(1.0, 7.0, 500)).tocsr()  # > 400 rows: Lanczos
+    assert la.spectral_norm(big) == pytest.approx(7.0, rel=1e-6)
+    assert la.spectral_norm(sp.csr_array((0, 5))) == 1.0
+
+
+def laplacian(n: int) -> sp.csc_array:
+    return sp.csc_array(sp.diags_array([-np.ones(n - 1), 2 * np.ones(n), -np.ones(n - 1)],
+                                       offsets=[-1, 0, 1]))
+
+
+@pytest.mark.parametrize("kind", ["superlu", "auto"])
+def test_spd_factorizations_solve(kind):
+    K = laplacian(50)
+    x = np.linspace(0.0, 1.0, 50)
+    solve = la.factorizer(kind)(K)
+    np.testing.assert_allclose(solve(K @ x), x, atol=1e-12)
+    # complex right-hand side on real factors
+    np.testing.assert_allclose(solve(K @ (x + 2j * x)), x + 2j * x, atol=1e-12)
+
+
+def test_saddle_and_complex_factorizations_solve():
+    n = 30
+    K = laplacian(n)
+    A = sp.csr_array(([1.0, -1.0], ([0, 0], [3, 17])), shape=(1, n))
+    big = sp.block_array([[K, A.T], [A, None]], format="csc")
+    x = np.r_[np.sin(np.arange(n)), 0.5]
+    np.testing.assert_allclose(la.factorizer("saddle")(big)(big @ x), x, atol=1e-12)
+    Z = sp.csc_array(K - 0.3 * sp.eye_array(n) + 0.1j * sp.eye_array(n))
+    z = np.exp(1j * np.arange(n))
+    np.testing.assert_allclose(la.factorizer("complex-lu")(Z)(Z @ z), z, atol=1e-12)
+    np.testing.assert_allclose(la.factorizer("superlu", spd=False)(Z)(Z @ z), z, atol=1e-12)
+
+
+def test_factorizer_names(monkeypatch):
+    mine = fz.superlu
+    assert la.factorizer(mine) is mine
+    assert la.factorizer("superlu") is fz.superlu_spd
+    monkeypatch.setattr(fz, "has_cholmod", lambda: False)
+    assert la.factorizer("auto") is fz.superlu_spd
+    with pytest.raises(ValueError, match="unknown factorization 'mumps'"):
+        la.factorizer("mumps")
+    with pytest.raises(ValueError, match="needs scikit-sparse"):
+        la.factorizer("cholmod")
