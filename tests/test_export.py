@@ -9,7 +9,8 @@ import scipy.sparse as sp
 
 from substruct.io import export
 from substruct.builder.drawing import Drawing
-from substruct.run.result import ModelInfo, ModeResult, Result
+from substruct.analysis.results import Modes
+from substruct.run.result import ModelInfo, Result
 
 
 def make_result(n_modes: int = 3, seed: int = 0) -> Result:
@@ -33,7 +34,7 @@ def make_result(n_modes: int = 3, seed: int = 0) -> Result:
     )
     shapes = rng.standard_normal((n, n_modes)) + 1j * rng.standard_normal((n, n_modes))
     omega = np.arange(1, n_modes + 1) * 10.0
-    modes = ModeResult(method="generalized-inverse", eigenvalues=1j * omega, omega=omega,
+    modes = Modes(method="generalized-inverse", eigenvalues=1j * omega, omega=omega,
                        damping_ratio=np.full(n_modes, 0.01), shapes=shapes,
                        residual=np.zeros(n_modes), spurious=np.zeros(0, complex),
                        spurious_reason=[])
@@ -41,7 +42,7 @@ def make_result(n_modes: int = 3, seed: int = 0) -> Result:
                       substructure_kinds=["rod/fe-P1", "solid/tet4"],
                       offsets=np.array([0, n_rod, n]), A=sp.csr_array((0, n)), b=np.zeros(0),
                       R=sp.csr_array((0, n)), constraint_labels=[], drawings=[rod, solid])
-    variant = ModeResult(**{**modes.__dict__, "shapes": shapes[:, :1] * 2, "omega": omega[:1],
+    variant = Modes(**{**modes.__dict__, "shapes": shapes[:, :1] * 2, "omega": omega[:1],
                             "eigenvalues": 1j * omega[:1], "damping_ratio": np.zeros(1),
                             "residual": np.zeros(1)})
     return Result(case_name="demo case", case_yaml="", model=model, modes=modes,

@@ -7,7 +7,8 @@ import scipy.sparse as sp
 from substruct.linalg.constraints import ConstraintError, independent_rows
 from substruct.analysis.coupling import (METHODS, constrained_acceleration, receptance,
                                 receptance_agreement)
-from substruct.analysis.dense_modes import MODE_METHODS, coupled_modes, modes_agreement
+from substruct.analysis.checks import modes_agreement
+from substruct.analysis.dense_modes import MODE_METHODS, coupled_modes
 
 
 def random_system(rng, n, n_massless=0, damped=True):

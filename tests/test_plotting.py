@@ -11,16 +11,17 @@ from substruct.viz import plotting
 from substruct.viz.frf_picture import frf_figure
 from substruct.viz.layout import MIN_SPRING, aligned, deformed, layout
 from substruct.builder.drawing import Drawing
-from substruct.run.result import FrfResult, ModelInfo, ModeResult, Result
+from substruct.analysis.results import Modes, Receptance
+from substruct.run.result import ModelInfo, Result
 
 
 # ----------------------------------------------------------------------------- synthetic results
 
 
-def _modes(shapes: np.ndarray, omega: np.ndarray, zeta: float = 0.0) -> ModeResult:
+def _modes(shapes: np.ndarray, omega: np.ndarray, zeta: float = 0.0) -> Modes:
     k = shapes.shape[1]
     lam = omega * (-zeta + 1j * np.sqrt(1 - zeta**2))
-    return ModeResult(method="generalized-inverse", eigenvalues=lam, omega=omega,
+    return Modes(method="generalized-inverse", eigenvalues=lam, omega=omega,
                       damping_ratio=np.full(k, zeta), shapes=shapes, residual=np.zeros(k),
                       spurious=np.zeros(0, complex), spurious_reason=[])
 
@@ -100,7 +101,7 @@ def frf_result(n_omega: int = 200, n_out: int = 2, n_in: int = 2) -> Result:
     for i in range(n_out):
         for j in range(n_in):
             H[:, i, j] = sum((1 + i + j) / (w**2 - omega**2 + 2j * 0.02 * w * omega) for w in wn)
-    r.frf = FrfResult(method="generalized-inverse", omega=omega, H=H,
+    r.frf = Receptance(method="generalized-inverse", omega=omega, H=H,
                       inputs=[f"rod@{x}" for x in range(n_in)],
                       outputs=[f"out{i}" for i in range(n_out)],
                       agreement={"kkt": 1e-14}, constraint_residual=2e-16)

@@ -6,7 +6,8 @@ import pytest
 from substruct.assembly.stack import Connection, LinearConstraint, PointRef, assemble
 from substruct.models.discrete import fixed_free, free_free
 from substruct.models.rod import paper_taper, rod_assumed_modes, rod_fe
-from substruct.analysis.dense_modes import MODE_METHODS, coupled_modes, modes_agreement
+from substruct.analysis.checks import modes_agreement
+from substruct.analysis.dense_modes import MODE_METHODS, coupled_modes
 from substruct.models.reduction import modal_truncation
 
 L = 200.0

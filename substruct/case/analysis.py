@@ -26,11 +26,15 @@ from substruct.case.fields import (
     gigabytes,
 )
 
-__all__ = ["METHODS", "Method", "ConstraintSpec", "Variant", "ModesAnalysis", "Omega",
-           "FrfAnalysis", "Analysis", "Output"]
+__all__ = ["METHODS", "TOLERANCE", "Method", "ConstraintSpec", "Variant", "ModesAnalysis",
+           "Omega", "FrfAnalysis", "Analysis", "Output"]
 
 #: Formulations that an analysis may name (see :mod:`substruct.analysis.coupling`).
 METHODS = ("generalized-inverse", "null-space", "kkt")
+#: Default ``tolerance`` of the cross-checks (relative), as
+#: ``substruct.analysis.results.DEFAULT_TOLERANCE``.
+TOLERANCE = 1e-6
+
 
 class ConstraintSpec(StrictModel):
     """``sum_k c_k u(p_k) = rhs + sum_j d_j F(p_j)`` (eqs 41, 52)."""
@@ -67,8 +71,11 @@ class ModesAnalysis(StrictModel):
     check: list[Method] = Field(default_factory=list)
     variants: list[Variant] = Field(default_factory=list)
     #: dense (eqs 28-34, all roots), sparse (shift-invert, the lowest count roots) or auto
-    #: (sparse above SPARSE_ABOVE coordinates); see substruct.builder.solids.modes_solver
+    #: (sparse above SPARSE_ABOVE coordinates); see substruct.analysis.api.choose_solver
     solver: Literal["auto", "dense", "sparse"] = "auto"
+    #: largest relative eigenvalue difference a check may have from the main formulation; a
+    #: larger one fails the run (substruct.analysis.checks.require_agreement)
+    tolerance: Positive = TOLERANCE
 
 
 class Omega(StrictModel):
@@ -129,6 +136,8 @@ class FrfAnalysis(StrictModel):
     outputs: Annotated[list[Point], Field(min_length=1)]
     method: Method = "generalized-inverse"
     check: list[Method] = Field(default_factory=list)
+    #: largest max |H_check - H| / max |H| a check may have; a larger one fails the run
+    tolerance: Positive = TOLERANCE
 
     @model_validator(mode="after")
     def _positive(self) -> "FrfAnalysis":

@@ -30,9 +30,10 @@ from typing import Iterable, Sequence
 import numpy as np
 import scipy.sparse as sp
 
+from substruct.analysis.results import Modes
 from substruct.builder.drawing import Drawing
 from substruct.io.hdf5 import atomic_path
-from substruct.run.result import ModelInfo, ModeResult, Result
+from substruct.run.result import ModelInfo, Result
 
 __all__ = ["CombinedMesh", "combined_mesh", "select_modes", "parse_modes", "export_modes",
            "EXPORT_FORMATS"]
@@ -105,7 +106,7 @@ def parse_modes(text: str) -> list[int]:
     return numbers
 
 
-def select_modes(modes: ModeResult, numbers: Iterable[int] | str | None) -> list[int]:
+def select_modes(modes: Modes, numbers: Iterable[int] | str | None) -> list[int]:
     """Validated 1-based mode numbers (all modes for ``None``), duplicates dropped.
 
     Raises:
@@ -130,7 +131,7 @@ def select_modes(modes: ModeResult, numbers: Iterable[int] | str | None) -> list
     return chosen
 
 
-def _mode_result(result: Result, variant: str | None) -> ModeResult:
+def _mode_result(result: Result, variant: str | None) -> Modes:
     if variant is not None:
         if variant not in result.variants:
             known = ", ".join(repr(v) for v in result.variants) or "none"
@@ -192,7 +193,7 @@ def _cell_data(mesh: CombinedMesh) -> dict[str, list[np.ndarray]]:
                         for (_, conn), i in zip(mesh.cells, mesh.cell_drawing)]}
 
 
-def _field_data(mr: ModeResult, numbers: list[int]) -> dict[str, np.ndarray]:
+def _field_data(mr: Modes, numbers: list[int]) -> dict[str, np.ndarray]:
     idx = np.asarray(numbers) - 1
     omega = np.asarray(mr.omega, dtype=float)[idx]
     return {"mode_numbers": np.asarray(numbers, dtype=np.int64), "omega": omega,
@@ -200,7 +201,7 @@ def _field_data(mr: ModeResult, numbers: list[int]) -> dict[str, np.ndarray]:
             "damping_ratio": np.asarray(mr.damping_ratio, dtype=float)[idx]}
 
 
-def _write_vtu(path: Path, mesh: CombinedMesh, mr: ModeResult, numbers: list[int],
+def _write_vtu(path: Path, mesh: CombinedMesh, mr: Modes, numbers: list[int],
                disp: dict[int, np.ndarray], per_mode: bool) -> list[Path]:
     import meshio
 

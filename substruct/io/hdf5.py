@@ -5,10 +5,11 @@ The layout is documented in ``docs/results.md``; in short::
     /                      attrs: format, format_version, substruct_version, case_name,
                                   case_yaml, created, units (+ scalar entries of Result.attrs)
     /modes/                omega, eigenvalues, damping_ratio, shapes, constraint_residual,
-                           spurious_eigenvalues, spurious_reason; attrs method, agreement_<m>
+                           spurious_eigenvalues, spurious_reason; attrs method, agreement_<m>,
+                           solver, tolerance
     /variants/<name>/      same as /modes (attr ``name`` holds the name verbatim)
     /frf/                  omega, H, inputs, outputs; attrs method, agreement_<m>,
-                           constraint_residual
+                           constraint_residual, tolerance
     /model/                dof_labels, substructure_names, substructure_kinds, offsets,
                            A (CSR group), b, R (CSR group), constraint_labels
     /model/drawings/<i>/   points, interp (CSR group), cells/<k> (attr cell_type),
@@ -34,7 +35,8 @@ import scipy.sparse as sp
 
 from substruct import __version__
 from substruct.builder.drawing import Drawing
-from substruct.run.result import FrfResult, ModelInfo, ModeResult, Result
+from substruct.analysis.results import DEFAULT_TOLERANCE, Modes, Receptance
+from substruct.run.result import ModelInfo, Result
 
 __all__ = ["save", "load", "atomic_path", "FORMAT", "FORMAT_VERSION"]
 
@@ -171,8 +173,10 @@ def _write_agreement(group: h5py.Group, agreement: dict[str, float]) -> None:
         group.attrs[f"agreement_{method}"] = float(value)
 
 
-def _write_modes(g: h5py.Group, modes: ModeResult) -> None:
+def _write_modes(g: h5py.Group, modes: Modes) -> None:
     g.attrs["method"] = str(modes.method)
+    g.attrs["solver"] = str(modes.solver)
+    g.attrs["tolerance"] = float(modes.tolerance)
     _write_agreement(g, modes.agreement)
     _array(g, "omega", np.asarray(modes.omega, dtype=float), "rad/s")
     _array(g, "eigenvalues", np.asarray(modes.eigenvalues, dtype=complex), "rad/s")
@@ -183,9 +187,10 @@ def _write_modes(g: h5py.Group, modes: ModeResult) -> None:
     _strings(g, "spurious_reason", list(modes.spurious_reason))
 
 
-def _write_frf(g: h5py.Group, frf: FrfResult) -> None:
+def _write_frf(g: h5py.Group, frf: Receptance) -> None:
     g.attrs["method"] = str(frf.method)
     g.attrs["constraint_residual"] = float(frf.constraint_residual)
+    g.attrs["tolerance"] = float(frf.tolerance)
     _write_agreement(g, frf.agreement)
     _array(g, "omega", np.asarray(frf.omega, dtype=float), "rad/s")
     _array(g, "H", np.asarray(frf.H))
@@ -299,8 +304,8 @@ def _read_agreement(g: h5py.Group) -> dict[str, float]:
     return {k[len(prefix):]: float(v) for k, v in g.attrs.items() if k.startswith(prefix)}
 
 
-def _read_modes(g: h5py.Group) -> ModeResult:
-    return ModeResult(
+def _read_modes(g: h5py.Group) -> Modes:
+    return Modes(
         method=str(g.attrs["method"]),
         eigenvalues=g["eigenvalues"][()],
         omega=g["omega"][()],
@@ -310,11 +315,13 @@ def _read_modes(g: h5py.Group) -> ModeResult:
         spurious=g["spurious_eigenvalues"][()],
         spurious_reason=_read_strings(g, "spurious_reason"),
         agreement=_read_agreement(g),
+        solver=str(g.attrs.get("solver", "")),
+        tolerance=float(g.attrs.get("tolerance", DEFAULT_TOLERANCE)),
     )
 
 
-def _read_frf(g: h5py.Group) -> FrfResult:
-    return FrfResult(
+def _read_frf(g: h5py.Group) -> Receptance:
+    return Receptance(
         method=str(g.attrs["method"]),
         omega=g["omega"][()],
         H=g["H"][()],
@@ -322,6 +329,7 @@ def _read_frf(g: h5py.Group) -> FrfResult:
         outputs=_read_strings(g, "outputs"),
         agreement=_read_agreement(g),
         constraint_residual=float(g.attrs["constraint_residual"]),
+        tolerance=float(g.attrs.get("tolerance", DEFAULT_TOLERANCE)),
     )
 
 

@@ -1,7 +1,9 @@
 """What an analysis produces: plain arrays, independent of how the model was built.
 
-A :class:`Result` is what ``substruct run`` writes to HDF5 (``results.py``), what the reader
-returns, and what the pictures and exports are drawn from.  It holds no callables, so a result
+A :class:`Result` is what ``substruct run`` writes to HDF5 (:mod:`substruct.io.hdf5`), what the
+reader returns, and what the pictures and exports are drawn from.  Its modes and receptances are
+the analysis layer's own types, :class:`~substruct.analysis.results.Modes` and
+:class:`~substruct.analysis.results.Receptance`.  It holds no callables, so a result
 read back from a file is the same object as the one computed.
 """
 
@@ -13,9 +15,10 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
+from substruct.analysis.results import Modes, Receptance
 from substruct.builder.drawing import Drawing
 
-__all__ = ["ModelInfo", "ModeResult", "FrfResult", "Result"]
+__all__ = ["ModelInfo", "Result"]
 
 
 @dataclass
@@ -34,45 +37,9 @@ class ModelInfo:
 
 
 @dataclass
-class ModeResult:
-    """Physical modes (ascending) and the roots set aside, with the cross-check figures.
-
-    ``agreement`` maps a check formulation to the largest relative eigenvalue difference from
-    the main formulation (:func:`substruct.analysis.dense_modes.modes_agreement`).
-    """
-
-    method: str
-    eigenvalues: np.ndarray
-    omega: np.ndarray
-    damping_ratio: np.ndarray
-    shapes: np.ndarray
-    residual: np.ndarray
-    spurious: np.ndarray
-    spurious_reason: list[str]
-    agreement: dict[str, float] = field(default_factory=dict)
-
-    @property
-    def freq_hz(self) -> np.ndarray:
-        """Natural frequencies in Hz."""
-        return self.omega / (2 * np.pi)
-
-
-@dataclass
-class FrfResult:
-    """Receptances ``H[k, i, j]``: output ``i`` per unit force at input ``j``, at ``omega[k]``."""
-
-    method: str
-    omega: np.ndarray
-    H: np.ndarray
-    inputs: list[str]
-    outputs: list[str]
-    agreement: dict[str, float] = field(default_factory=dict)
-    constraint_residual: float = 0.0
-
-
-@dataclass
 class Result:
-    """Everything one run of a case produced.
+    """Everything one run of a case produced: the model as data, the coupled modes, the
+    receptances.
 
     ``variants`` holds modes of the same model with some constraints left out (for instance the
     paper's Table 1 "without additional constraint (52)"), by variant name.
@@ -81,7 +48,7 @@ class Result:
     case_name: str
     case_yaml: str
     model: ModelInfo
-    modes: ModeResult | None = None
-    frf: FrfResult | None = None
-    variants: dict[str, ModeResult] = field(default_factory=dict)
+    modes: Modes | None = None
+    frf: Receptance | None = None
+    variants: dict[str, Modes] = field(default_factory=dict)
     attrs: dict[str, Any] = field(default_factory=dict)

@@ -45,12 +45,15 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
         model: the case's model if already built (:func:`build_model`).
 
     Returns:
-        The :class:`~substruct.run.result.Result`: modes (physical modes ascending, spurious roots
-        set aside, agreement with the check formulations), variants, receptances, model data.
+        The :class:`~substruct.run.result.Result`: modes (physical modes ascending, spurious
+        roots set aside, agreement with the check formulations, the solver that ran),
+        variants, receptances, model data.
 
     Raises:
         CaseError: input that cannot be analysed (see :func:`build_model`; inconsistent
             constraints; a model too large for the dense eigenproblem).
+        CheckError: a check formulation disagrees with the main one by more than the
+            case's ``tolerance`` (nothing is returned, so nothing is written).
     """
     from substruct import __version__
 
@@ -70,8 +73,9 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
         for i, variant in enumerate(spec.variants):
             keep = [r for r, lab in enumerate(labels) if lab not in variant.drop]
             A = sp.csr_array(asm.A[keep]) if keep else sp.csr_array((0, asm.n_dof))
-            result.variants[variant.name] = modes_result(case, asm, A,
-                                                   ("analysis", "modes", "variants", i))
+            result.variants[variant.name] = modes_result(
+                case, asm, A, ("analysis", "modes", "variants", i),
+                what=f"modes (variant {variant.name})")
     if case.analysis.frf is not None:
         result.frf = frf_result(case, model, progress)
     return result
