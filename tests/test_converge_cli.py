@@ -14,9 +14,11 @@ import yaml
 
 from substruct import cli
 from substruct.case.loader import CaseError, load_case
-from substruct.studies.convergence import StudyLevels, dofs_to_reach, paper_rod_spec
+from substruct.studies.convergence import dofs_to_reach
+from substruct.studies.levels import StudyLevels
+from substruct.studies.rod_system import paper_rod_spec
 from substruct.studies.convergence_case import spec_from_case
-from substruct.studies.convergence_report import load_h5
+from substruct.io.convergence_report import load_h5
 from cli_helpers import run, assert_one_line_error
 
 CASES = Path(__file__).resolve().parent.parent / "cases"
@@ -279,7 +281,7 @@ def test_out_must_be_a_writable_directory(tmp_path, capsys):
 
 
 def test_internal_error_is_exit_1_with_traceback(tmp_path, capsys, monkeypatch):
-    import substruct.studies.convergence_report as report
+    import substruct.io.convergence_report as report
 
     def broken(*args, **kwargs):
         raise RuntimeError("a bug")

@@ -9,23 +9,16 @@ import scipy.sparse as sp
 
 import substruct.studies.convergence as convergence
 import substruct.studies.convergence_case as convergence_case
-import substruct.studies.convergence_report as convergence_report
+import substruct.io.convergence_report as convergence_report
 import substruct.models.enrichment as enrichment
-from substruct.studies.convergence import (
-    Attachment,
-    RodSystemSpec,
-    StudyLevels,
-    _null_space,
-    convergence_study,
-    dofs_to_reach,
-    lowest_modes,
-    paper_rod_spec,
-    parse_levels,
-)
-from substruct.studies.convergence_report import load_h5, print_table, run_convergence, save_h5
+from substruct.studies.convergence import convergence_study, dofs_to_reach, lowest_modes
+from substruct.studies.levels import StudyLevels, parse_levels
+from substruct.studies.rod_system import Attachment, RodSystemSpec, paper_rod_spec
+from substruct.io.convergence_report import load_h5, print_table, run_convergence, save_h5
 from substruct.models.enrichment import rod_assumed_modes_enriched, static_shapes
 from substruct.models.rod import paper_taper, rod_assumed_modes, rod_fe, uniform_rod_frequencies
 from substruct.analysis.dense_modes import coupled_modes
+from substruct.linalg.nullspace import master_slave
 
 L = 200.0
 EA0 = 6.0e6
@@ -133,7 +126,7 @@ def test_sparse_null_space_with_redundant_rows():
     A[1, [5, 9, 17]] = rng.normal(size=3)
     A[2] = A[0] + 2 * A[1]  # redundant
     A[3, [29]] = 1.0
-    Z = _null_space(sp.csr_array(A))
+    Z = master_slave(sp.csr_array(A)).T
     assert Z.shape == (30, 27)
     assert abs(A @ Z.toarray()).max() < 1e-14
     assert np.linalg.matrix_rank(Z.toarray()) == 27
@@ -155,6 +148,29 @@ def test_lowest_modes_agrees_with_coupled_modes(with52):
             np.testing.assert_allclose(abs(lam), ref, rtol=1e-9)
         # the sparse (shift-invert Lanczos) path gives the same roots
         np.testing.assert_allclose(lowest_modes(asm, 6, dense_limit=0), lam, rtol=1e-9)
+
+
+def test_lowest_modes_above_the_dense_limit_take_the_sparse_strategy(monkeypatch):
+    """A bare uniform fixed-free rod, P2 with 300 elements (600 coordinates): the roots come
+    from the one analysis entry point with the sparse strategy, and are the closed form
+    ``(2i - 1) pi c / 2L`` up to the P2 error (7.6e-9 for the sixth mode, 4e-12 for the
+    first)."""
+    seen = []
+    real = convergence.modes
+
+    def spy(*args, **kwargs):
+        out = real(*args, **kwargs)
+        seen.append(out.solver)
+        return out
+    monkeypatch.setattr(convergence, "modes", spy)
+    spec = RodSystemSpec("uniform", L, EA0, 1.0, "fixed-free", n_modes=6)
+    asm = spec.assemble(rod_fe("rod", L, EA0, 1.0, 300, 2))
+    assert asm.n_dof == 600
+    lam = lowest_modes(asm, 6)
+    assert seen == ["sparse"]
+    np.testing.assert_allclose(lam.imag, uniform_rod_frequencies(EA0, 1.0, L, 6), rtol=1e-8)
+    assert abs(lam[0].imag / uniform_rod_frequencies(EA0, 1.0, L, 1)[0] - 1) < 1e-10
+    assert np.all(lam.real == 0)
 
 
 def test_lowest_modes_damped_attachments():

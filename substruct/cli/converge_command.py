@@ -22,9 +22,10 @@ def converge_command(args: argparse.Namespace) -> int:
     The arguments, the case and the output files are checked before any level is computed.
     """
     from substruct.case.loader import load_case
-    from substruct.studies.convergence import VARIANTS, parse_levels, study_variants
+    from substruct.studies.convergence import VARIANTS, study_variants
     from substruct.studies.convergence_case import spec_from_case
-    report = optional_module("studies.convergence_report")
+    from substruct.studies.levels import parse_levels
+    report = optional_module("io.convergence_report")
 
     variants = [v.strip() for v in args.variants.split(",") if v.strip()]
     if not variants or any(v not in VARIANTS for v in variants):

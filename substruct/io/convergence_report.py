@@ -1,7 +1,8 @@
 """Reporting a convergence study: the table, the HDF5 file, the log-log plot, the command.
 
-The study itself (:func:`substruct.studies.convergence.convergence_study`) returns plain arrays in a
-:class:`~substruct.studies.convergence.ConvergenceResult`; this module shows and keeps them:
+The study itself (:func:`substruct.studies.convergence.convergence_study`) returns plain arrays
+in a :class:`~substruct.studies.convergence_results.ConvergenceResult`; this module, in the output
+layer above the studies, shows and keeps them:
 
 * :func:`print_table`: per variant, the limit and its uncertainty, the relative error of every
   level and mode, the fitted orders (with the theoretical ones), the cost, and how many rod DOFs
@@ -26,18 +27,10 @@ from typing import Any, Sequence
 import numpy as np
 
 from substruct.io.hdf5 import atomic_path
-from substruct.studies.convergence import (
-    VARIANTS,
-    ConvergenceResult,
-    Progress,
-    RodSystemSpec,
-    SeriesResult,
-    StudyLevels,
-    VariantResult,
-    convergence_study,
-    dofs_to_reach,
-    parse_levels,
-)
+from substruct.studies.convergence import VARIANTS, Progress, convergence_study, dofs_to_reach
+from substruct.studies.convergence_results import ConvergenceResult, SeriesResult, VariantResult
+from substruct.studies.levels import StudyLevels, parse_levels
+from substruct.studies.rod_system import RodSystemSpec
 
 __all__ = [
     "output_paths",
@@ -305,8 +298,8 @@ def run_convergence(spec: RodSystemSpec, out_dir: str | os.PathLike[str],
     Args:
         spec: the system.
         out_dir: output folder (created).
-        levels: :class:`~substruct.studies.convergence.StudyLevels`, a string for
-            :func:`~substruct.studies.convergence.parse_levels`, or ``None``.
+        levels: :class:`~substruct.studies.levels.StudyLevels`, a string for
+            :func:`~substruct.studies.levels.parse_levels`, or ``None``.
         variants: see :func:`~substruct.studies.convergence.convergence_study`.
         progress: ``progress(done, total, description)`` after each level.
         tol: tolerance of the "DOFs to reach" summary and the plot's dotted line.

@@ -19,8 +19,8 @@ an active constraint ``sum c_k u(rod@x_k) = 0``  a :class:`PointConstraint` (its
 
 Positions are resolved as ``substruct run`` resolves them (numbers, ``x=..``, expressions of
 ``L`` and the parameters such as ``rod@L/4``).  Whatever the study cannot represent is a
-:class:`~substruct.case.loader.CaseError` naming the field and the value, one line: no rod or several,
-a ``matrices`` substructure, modal damping of the rod, a discrete substructure that is not
+:class:`~substruct.case.loader.CaseError` naming the field and the value, one line: no rod or
+several, a ``matrices`` substructure, modal damping of the rod, a discrete substructure that is not
 attached to the rod (or attached twice, or at its mass when it has a separate boundary), a
 connection that joins two rod points or no rod point, a constraint with a nonzero ``rhs``, with
 ``rhs_force`` terms, with a term off the rod, or whose terms cancel (inactive constraints are
@@ -32,7 +32,7 @@ from __future__ import annotations
 from substruct.builder.points import PointUse, rod_position
 from substruct.case.loader import Case, DiscreteSpec, MatrixSpec, RodSpec, parse_point
 from substruct.case.substructures import MassSpec, SpringSpec
-from substruct.studies.convergence import Attachment, PointConstraint, RodSystemSpec
+from substruct.studies.rod_system import Attachment, PointConstraint, RodSystemSpec
 
 __all__ = ["spec_from_case", "DEFAULT_MODES"]
 
