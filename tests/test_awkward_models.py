@@ -12,7 +12,7 @@ the other formulations.
 * slow roots next to zero roots (a weakly damped rigid-body motion), which QZ alone resolves
   poorly in every formulation.
 
-How roots are reported is fixed in :class:`substruct.analysis.dense_modes.Modes`: a complex root stands for its
+How roots are reported is fixed in :class:`substruct.analysis.results.Modes`: a complex root stands for its
 conjugate pair; every real root is an entry of its own (``Im = 0``, ``omega = |lambda|``,
 damping ratio 1); an undamped rigid-body mode is one entry ``lambda = 0``.
 """
@@ -21,12 +21,14 @@ import numpy as np
 import pytest
 
 from substruct.assembly.stack import Connection, LinearConstraint, PointRef, assemble
-from substruct.linalg.constraints import ConstraintError, null_space_basis
+from substruct.linalg.constraints import ConstraintError
+from substruct.linalg.nullspace import null_space_basis
 from substruct.analysis.coupling import METHODS, constrained_acceleration, receptance, receptance_agreement
 from substruct.models.discrete import fixed_free, free_free
 from substruct.models.rod import (paper_taper, rod_assumed_modes, rod_fe,
                                   uniform_rod_frequencies)
-from substruct.analysis.dense_modes import MODE_METHODS, coupled_modes, modes_agreement
+from substruct.analysis.checks import modes_agreement
+from substruct.analysis.dense_modes import MODE_METHODS, coupled_modes
 from substruct.models.reduction import modal_truncation
 
 SPURIOUS_ZERO = "violates A u = 0"
@@ -346,7 +348,7 @@ def test_stiffness_1e12_next_to_1():
     boundary joined to the mass): ``m1 m2 w^4 - (m1 k + m2 (k0 + k)) w^2 + k0 k = 0``.  The
     frequencies (about 1 and 1e6) from all formulations; no spurious rigid-body mode (the
     unequilibrated rank test saw one: ``K / max K`` has singular values below ``1e-9``).  QZ
-    alone had the low one to ``1e-6`` (GI) and ``8e-6`` (KKT): see ``substruct.analysis.dense_modes._rayleigh``
+    alone had the low one to ``1e-6`` (GI) and ``8e-6`` (KKT): see ``substruct.analysis.pencil.rayleigh_root``
     and ``_gi_polish``."""
     m1, k0, m2, k = 1.0, 1e12, 1.0, 1.0
     asm = assemble([fixed_free("base", m1, k0), free_free("abs", m2, k)],

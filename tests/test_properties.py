@@ -35,7 +35,7 @@ nonzero physical root is at least ``1e-4`` of the largest.  Near-mechanisms (a s
 ``K`` whose null space the constraints cut at a small angle) and slow decays (weakly damped
 rigid-body motions) break it: such a root sits next to the zero roots, where the roots of every
 formulation are ill conditioned and those of the paper's pencil (34) worse, next to its
-``2 rank(A)`` defective spurious zeros; the Rayleigh refinement in ``substruct.analysis.dense_modes`` recovers
+``2 rank(A)`` defective spurious zeros; the Rayleigh refinement (``substruct.analysis.pencil``) recovers
 most of it, ``tests/test_awkward_models.py`` shows the size of the effect.
 
 Examples are drawn with ``derandomize=True`` and no example database: the same code gives the
@@ -59,7 +59,8 @@ from hypothesis import strategies as st
 from substruct.linalg.constraints import independent_rows
 from substruct.analysis.coupling import (METHODS, constrained_acceleration, receptance,
                                 receptance_agreement)
-from substruct.analysis.dense_modes import MODE_METHODS, coupled_modes, modes_agreement
+from substruct.analysis.checks import modes_agreement
+from substruct.analysis.dense_modes import MODE_METHODS, coupled_modes
 
 #: log10 of the half-width of each matrix's eigenvalue band (a condition number of 1e3)
 HALF_DECADES = 1.5
