@@ -167,8 +167,8 @@ def _timed(run, repeat: int) -> tuple[list[float], list[float], object]:
 
 
 def best_factorization() -> str:
-    from substruct.analysis.sparse_modes import _has_cholmod
-    return "cholmod" if _has_cholmod() else "superlu"
+    from substruct.linalg.factorize import has_cholmod
+    return "cholmod" if has_cholmod() else "superlu"
 
 
 def worker(kind: str, size: int, factorization: str, repeat: int) -> dict:
@@ -185,7 +185,7 @@ def worker(kind: str, size: int, factorization: str, repeat: int) -> dict:
             modes = null_space_modes(asm.M, asm.K, asm.A, N_MODES, factorization=factorization)
             return asm.n_dof, modes.omega, float(modes.residual.max())
     elif kind == "b":
-        from substruct.analysis.sparse_modes import factorizer
+        from substruct.linalg.factorize import factorizer
         Kt, Mt = monolithic_model(size)
         build = time.perf_counter() - t0
 

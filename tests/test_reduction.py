@@ -11,6 +11,7 @@ from substruct.models.rod import paper_taper, rod_assumed_modes, rod_fe, uniform
 from substruct.models.reduction import modal_truncation, undamped_modes
 from substruct.substructure import Substructure, as_csr
 from references import tapered_rod_frequency
+from references import tapered_rod_frequency
 
 
 def tapered_rod(n=8):
@@ -113,6 +114,6 @@ def test_sparse_path_uses_given_factorization():
         lu = spla.splu(sp.csc_matrix(A))
         return lu.solve
 
-    red = modal_truncation(rod, 3, dense_limit=10, factorize=factorize)
+    red = modal_truncation(rod, 3, dense_limit=10, factorization=factorize)
     assert calls == [(400, 400)]
     assert np.allclose(red.meta["omega"], uniform_rod_frequencies(1, 1, 1, 3), rtol=1e-8)

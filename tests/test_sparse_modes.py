@@ -13,14 +13,17 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-import substruct.analysis.sparse_modes as sm
+import substruct.analysis.krylov as krylov
 from substruct.assembly.stack import Connection, LinearConstraint, PointRef, assemble
 from substruct.assembly.interfaces import InterfaceError, node_dofs, tie_nodes, tie_nonmatching
 from substruct.models.discrete import free_free
 from substruct.models.solid import solid_box, solid_from_mesh, solid_rectangle
-from substruct.analysis.dense_modes import coupled_modes, modes_agreement
-from substruct.analysis.sparse_modes import (generalized_inverse_modes, master_slave, null_space_modes,
-                                    sparse_coupled_modes)
+from substruct.analysis.checks import modes_agreement
+from substruct.analysis.dense_modes import coupled_modes
+from substruct.analysis.sparse_modes import (generalized_inverse_modes, null_space_modes,
+                                             sparse_coupled_modes)
+import substruct.linalg.factorize as fz
+from substruct.linalg.nullspace import master_slave
 
 E, NU, RHO = 2.1e11, 0.3, 7850.0
 L, B, H = 1.0, 0.2, 0.2
@@ -123,14 +126,14 @@ def test_redundant_rows_and_rigid_body_modes():
 def test_factorizations_and_eigsh_never_factorizes(coupled, monkeypatch):
     asm = coupled
     calls = []
-    real = sm.spla.eigsh
+    real = krylov.spla.eigsh
 
     def spy(*args, **kwargs):
         assert kwargs.get("OPinv") is not None, "eigsh must not factorize by itself"
         calls.append(kwargs["sigma"])
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(sm.spla, "eigsh", spy)
+    monkeypatch.setattr(krylov.spla, "eigsh", spy)
     ref = null_space_modes(asm.M, asm.K, asm.A, 6)
     gi = generalized_inverse_modes(asm.M, asm.K, asm.A, 6)
     assert len(calls) == 2 and all(s < 0 for s in calls)
@@ -138,24 +141,24 @@ def test_factorizations_and_eigsh_never_factorizes(coupled, monkeypatch):
 
     def mine(A):
         seen.append(A.shape)
-        return sm.factorizer("superlu")(A)
+        return fz.factorizer("superlu")(A)
 
     custom = null_space_modes(asm.M, asm.K, asm.A, 6, factorization=mine)
     assert seen and modes_agreement(custom, ref) < 1e-10 and modes_agreement(gi, ref) < 1e-8
     lu = null_space_modes(asm.M, asm.K, asm.A, 6, factorization="superlu")
     assert modes_agreement(lu, ref) < 1e-10
-    if sm._has_cholmod():
+    if fz.has_cholmod():
         chol = null_space_modes(asm.M, asm.K, asm.A, 6, factorization="cholmod")
         assert modes_agreement(chol, ref) < 1e-10
-    monkeypatch.setattr(sm, "_has_cholmod", lambda: False)
-    assert sm.factorizer("auto") is sm._superlu_spd
-    assert sm.factorizer("auto", spd=False) is sm._superlu
+    monkeypatch.setattr(fz, "has_cholmod", lambda: False)
+    assert fz.factorizer("auto") is fz.superlu_spd
+    assert fz.factorizer("auto", spd=False) is fz.superlu
     with pytest.raises(ValueError, match="needs scikit-sparse"):
-        sm.factorizer("cholmod")
+        fz.factorizer("cholmod")
     with pytest.raises(ValueError, match="unknown factorization"):
         null_space_modes(asm.M, asm.K, asm.A, 6, factorization="mumps")
     with pytest.raises(ValueError, match="saddle-point"):
-        sm.factorizer("cholmod", spd=False)
+        fz.factorizer("cholmod", spd=False)
     with pytest.raises(ValueError, match="unknown method"):
         sparse_coupled_modes(asm.M, asm.K, asm.A, 6, method="qr")
 

@@ -5,8 +5,8 @@ non-proportional), with no dense ``n x n`` matrix.
 :math:`(\lambda^2 M + \lambda C + K) u = A^T \mu`, :math:`A u = 0`, to a first-order pencil and
 runs ``eigs`` (Arnoldi) in shift-invert mode about a small negative real shift, with one SuperLU
 factorization: either on the null-space form :math:`u = T p` (``T`` from
-:func:`substruct.analysis.sparse_modes.master_slave`) or on the Lagrange (KKT) form with multipliers, an
-independent check.  The roots are reported as :func:`substruct.analysis.dense_modes.coupled_modes` reports
+:func:`substruct.linalg.nullspace.master_slave`) or on the Lagrange (KKT) form with multipliers,
+an independent check.  The roots are reported as :func:`substruct.analysis.dense_modes.coupled_modes` reports
 them (complex ``lambda``, ``omega = |lambda|``, ``damping_ratio = -Re lambda / |lambda|``,
 complex shapes).  :func:`substruct.analysis.sparse_modes.sparse_coupled_modes` dispatches here when
 ``C`` has nonzeros.
@@ -19,37 +19,42 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from substruct.analysis.dense_modes import Modes
-from substruct.analysis.sparse_modes import (
-    Elimination,
-    _check,
-    _massless,
-    _norm2,
-    master_slave,
-)
+from substruct.analysis.krylov import check_inputs, constraint_residuals, eliminate, krylov_size
+from substruct.analysis.pencil import rayleigh_root
+from substruct.analysis.results import Modes
+from substruct.analysis.roots import REAL_TOL
+from substruct.linalg.factorize import factorizer
+from substruct.linalg.nullspace import Elimination
+from substruct.linalg.scaling import massless_coordinates
 
 __all__ = ["damped_sparse_modes", "DAMPED_SHIFT", "ZERO_ROOT"]
 
 
 def _scaled_shift_invert(Ab: sp.sparray, Bb: sp.sparray, k: int, sigma: float,
-                         ncv: int | None) -> tuple[np.ndarray, np.ndarray]:
+                         ncv: int | None, finite: int) -> tuple[np.ndarray, np.ndarray]:
     r"""Roots :math:`\mu` nearest ``sigma`` of :math:`A_b x = \mu B_b x` (real, ``B_b`` possibly
     singular), by ``eigs`` on :math:`x \mapsto (A_b - \sigma B_b)^{-1} B_b x` (SuperLU):
     :math:`\mu = \sigma + 1/\nu`.  Infinite roots are ``nu = 0`` and are never returned as
     converged nonzero ``nu``; a returned ``nu`` near 0 gives a huge ``mu``, dropped later.
-    Small pencils (``k`` too close to the size for ARPACK) are solved densely."""
+    The Arnoldi basis is capped by ``finite``, the dimension of the space the operator spans
+    (:func:`substruct.analysis.krylov.krylov_size`); pencils too small for it (``k`` too
+    close to that dimension) are solved densely."""
     N = Ab.shape[0]
-    if k + 2 >= N:
+    try:
+        size = krylov_size(k, min(finite, N), ncv, margin=2)
+    except ValueError:
+        size = 0
+    if not size:
         ab, V = sla.eig(Ab.toarray(), Bb.toarray(), homogeneous_eigvals=True)
         alpha, beta = ab
         fin = np.abs(beta) > 1e-14 * np.abs(alpha)
         return alpha[fin] / beta[fin], V[:, fin]
-    lu = spla.splu(sp.csc_matrix(Ab - sigma * Bb), permc_spec="MMD_AT_PLUS_A")
+    solve = factorizer("superlu", spd=False)(sp.csc_array(Ab - sigma * Bb))
     Bc = sp.csr_array(Bb)
-    op = spla.LinearOperator((N, N), matvec=lambda x: lu.solve(Bc @ np.asarray(x).ravel()),
+    op = spla.LinearOperator((N, N), matvec=lambda x: solve(Bc @ np.asarray(x).ravel()),
                              dtype=float)
-    v0 = lu.solve(Bc @ np.random.default_rng(0).standard_normal(N))  # no infinite part
-    nu, X = spla.eigs(op, k=k, which="LM", v0=v0, ncv=ncv)
+    v0 = solve(Bc @ np.random.default_rng(0).standard_normal(N))  # no infinite part
+    nu, X = spla.eigs(op, k=k, which="LM", v0=v0, ncv=size)
     ok = np.abs(nu) > 1e-12 * np.abs(nu).max(initial=0.0)
     return sigma + 1.0 / nu[ok], X[:, ok]
 
@@ -58,12 +63,10 @@ def _damped_finish(mu: np.ndarray, U: np.ndarray, gamma: float, M: sp.csr_array,
                    C: sp.csr_array, K: sp.csr_array, A: sp.csr_array, n_modes: int,
                    method: str) -> Modes:
     r"""Roots ``lambda = gamma mu`` and vectors ``u`` (``A u = 0``) as the dense path reports
-    them (:class:`substruct.analysis.dense_modes.Modes`): zero roots of rigid-body motions once per motion,
+    them (:class:`substruct.analysis.results.Modes`): zero roots of rigid-body motions once per motion,
     one root of each conjugate pair (``Im > 0``), real roots (``|Im| <= REAL_TOL |lambda|``)
     each on its own; refined on the Rayleigh functional; ascending in ``|lambda|``, then
     ``Re lambda``; ``n_modes`` of them."""
-    from substruct.analysis.dense_modes import REAL_TOL, _rayleigh
-
     lam = gamma * mu
     fin = np.isfinite(lam) & (np.abs(mu) < 1e8)
     lam, U = lam[fin], U[:, fin]
@@ -74,7 +77,7 @@ def _damped_finish(mu: np.ndarray, U: np.ndarray, gamma: float, M: sp.csr_array,
         # rigid-body motions (K u = 0, A u = 0): an undamped one is a defective double zero
         # root, which Arnoldi splits by ~sqrt(eps); report each motion once with lambda = 0
         # (the rank of the cluster's vectors), and a slow decay -c/m inside the cluster from
-        # the damping on those motions, as substruct.analysis.dense_modes._structure counts them
+        # the damping on those motions, as substruct.analysis.roots.root_structure counts them
         Z = U[:, zero] / np.linalg.norm(U[:, zero], axis=0)
         W, sv, _ = np.linalg.svd(Z, full_matrices=False)
         W = W[:, sv > 1e-6 * sv[0]]
@@ -87,13 +90,13 @@ def _damped_finish(mu: np.ndarray, U: np.ndarray, gamma: float, M: sp.csr_array,
             if 1e-8 * gamma < abs(rates[j]) <= ZERO_ROOT * gamma:
                 out_l.append(complex(-rates[j]))
                 out_u.append(w)
-    for j in np.flatnonzero(~zero):
+    for j in np.flatnonzero(~zero).tolist():
         l, u = complex(lam[j]), U[:, j]
         real = abs(l.imag) <= REAL_TOL * abs(l)
         if not real and l.imag < 0:
             continue
         Mu, Cu, Ku = M @ u, C @ u, K @ u
-        l, _ = _rayleigh(l, u @ Mu, u @ Cu, u @ Ku)
+        l, _ = rayleigh_root(l, u @ Mu, u @ Cu, u @ Ku)
         if real:
             l = complex(l.real, 0.0)
         out_l.append(l)
@@ -103,7 +106,7 @@ def _damped_finish(mu: np.ndarray, U: np.ndarray, gamma: float, M: sp.csr_array,
     Up = np.array(out_u, dtype=complex).T.reshape(n, -1)
     order = np.lexsort((lam_p.real, np.abs(lam_p)))[:n_modes]
     lam_p, Up = lam_p[order], Up[:, order]
-    if Up.shape[1]:  # as substruct.analysis.dense_modes._normalize: largest entry real positive, u^H M u = 1
+    if Up.shape[1]:  # as roots.normalize_shapes: largest entry real positive, u^H M u = 1
         top = Up[np.argmax(np.abs(Up), axis=0), np.arange(Up.shape[1])]
         Up = Up * (np.abs(top) / np.where(top == 0, 1, top))
         mass = np.real(np.sum(np.conj(Up) * (M @ Up), axis=0))
@@ -113,12 +116,8 @@ def _damped_finish(mu: np.ndarray, U: np.ndarray, gamma: float, M: sp.csr_array,
         Up = Up / np.where(scale > 0, scale, 1.0)
     omega = np.abs(lam_p)
     zeta = np.where(omega > 0, -lam_p.real / np.where(omega > 0, omega, 1), 0.0)
-    if A.shape[0] and Up.shape[1]:
-        res = np.linalg.norm(A @ Up, axis=0) / (_norm2(A) * np.linalg.norm(Up, axis=0))
-    else:
-        res = np.zeros(Up.shape[1])
-    return Modes(eigenvalues=lam_p, omega=omega, damping_ratio=zeta, shapes=Up, residual=res,
-                 method=method)
+    return Modes(eigenvalues=lam_p, omega=omega, damping_ratio=zeta, shapes=Up,
+                 residual=constraint_residuals(A, Up), method=method, solver="sparse-damped")
 
 
 def _balance(M: sp.sparray, C: sp.sparray, K: sp.sparray) -> tuple[float, float]:
@@ -160,14 +159,15 @@ def damped_sparse_modes(M: sp.sparray, C: sp.sparray | None, K: sp.sparray,
     coordinates and multipliers make :math:`\mathcal{B}` singular; their infinite roots are
     :math:`\nu = 0` and never computed.  Two formulations:
 
-    ``"null-space"``: :math:`u = T p` (:func:`master_slave`),
+    ``"null-space"``: :math:`u = T p` (:func:`~substruct.linalg.nullspace.master_slave`),
     :math:`M_r = T^T M' T`, etc., :math:`x = [p; s p]`,
 
     .. math::  \begin{bmatrix} 0 & I \\ -K_r & -C_r \end{bmatrix} x
                = s \begin{bmatrix} I & 0 \\ 0 & M_r \end{bmatrix} x .
 
     ``"kkt"``: Lagrange multipliers, no ``T``; independent rows ``A_k`` of ``A`` (those kept by
-    :func:`master_slave`), scaled to the size of ``K'``, :math:`x = [u; s u; \mu]`,
+    :func:`~substruct.linalg.nullspace.master_slave`, of unit norm), scaled to the size of
+    ``K'``, :math:`x = [u; s u; \mu]`,
 
     .. math::  \begin{bmatrix} 0 & I & 0 \\ -K' & -C' & -A_k^T \\ A_k & 0 & 0 \end{bmatrix} x
                = s \begin{bmatrix} I & 0 & 0 \\ 0 & M' & 0 \\ 0 & 0 & 0 \end{bmatrix} x .
@@ -190,7 +190,7 @@ def damped_sparse_modes(M: sp.sparray, C: sp.sparray | None, K: sp.sparray,
         ncv: Arnoldi basis size (``eigs`` default if ``None``).
         extra: roots computed beyond ``2 n_modes`` (conjugates, clusters).
     """
-    M, K, A, k = _check(M, K, A, n_modes)
+    M, K, A, k = check_inputs(M, K, A, n_modes)
     n = K.shape[0]
     C = sp.csr_array((n, n)) if C is None else sp.csr_array(C, dtype=float)
     if C.shape != (n, n):
@@ -198,7 +198,9 @@ def damped_sparse_modes(M: sp.sparray, C: sp.sparray | None, K: sp.sparray,
     gamma, delta = _balance(M, C, K)
     Ms, Cs, Ks = delta * gamma**2 * M, delta * gamma * C, delta * K
     s = DAMPED_SHIFT if sigma is None else float(sigma)
-    el = elimination or master_slave(A, prefer=_massless(M))
+    el = elimination or eliminate(M, A)
+    # the roots the first-order pencil has: two per free coordinate that has mass
+    finite = 2 * (el.T.shape[1] - int(np.count_nonzero(massless_coordinates(M)[el.masters])))
     if formulation == "null-space":
         T = sp.csc_array(el.T)
         r = T.shape[1]
@@ -211,9 +213,8 @@ def damped_sparse_modes(M: sp.sparray, C: sp.sparray | None, K: sp.sparray,
         method = "null-space/sparse"
     elif formulation == "kkt":
         r = n - el.rank
-        Ak = sp.csr_array(A[el.kept_rows])
+        Ak = sp.csr_array(A[el.kept_rows])  # rows of unit 2-norm (check_inputs)
         if Ak.shape[0]:
-            Ak = sp.csr_array(sp.diags_array(1.0 / abs(Ak).max(axis=1).toarray().ravel()) @ Ak)
             Ak = Ak * (float(np.mean(abs(Ks.diagonal()))) or 1.0)
         m = Ak.shape[0]
         I = sp.eye_array(n, format="csr")
@@ -230,7 +231,7 @@ def damped_sparse_modes(M: sp.sparray, C: sp.sparray | None, K: sp.sparray,
     else:  # at most 2 r roots; fewer than k modes if there are fewer (as the dense path)
         want = min(2 * k + extra, 2 * r)
         while True:
-            mu, X = _scaled_shift_invert(Ab, Bb, want, s, ncv)
+            mu, X = _scaled_shift_invert(Ab, Bb, want, s, ncv, finite)
             # the want roots nearest s hold every root with |mu| <= reach - |s|: enough if
             # that covers the k-th smallest root (a conjugate pair is 2 of them)
             reach = np.abs(mu - s).max(initial=0.0)

@@ -34,7 +34,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from substruct.analysis.sparse_modes import Factorize, factorizer
+from substruct.linalg.factorize import Factorize, factorizer
 from substruct.substructure import Substructure, as_csr
 
 __all__ = ["craig_bampton"]
@@ -71,7 +71,7 @@ def craig_bampton(sub: Substructure, boundary_dofs: Sequence[int] | np.ndarray, 
         boundary_dofs: indices (or a boolean mask) of the boundary coordinates, e.g.
             :func:`substruct.assembly.interfaces.node_dofs` of an interface.
         n_modes: number of fixed-interface normal modes kept (``0 <= n_modes < n_i``).
-        factorization: of ``K_ii`` (:func:`substruct.analysis.sparse_modes.factorizer`; SPD; ``"auto"``:
+        factorization: of ``K_ii`` (:func:`substruct.linalg.factorize.factorizer`; SPD; ``"auto"``:
             CHOLMOD if scikit-sparse is installed, else SuperLU).
         dense_limit: interiors up to this size are solved densely.
         ncv: Lanczos basis size for the sparse eigensolve.

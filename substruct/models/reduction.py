@@ -8,32 +8,25 @@
 
 Small problems (``n <= dense_limit``) are solved densely (``scipy.linalg.eigh``); large sparse ones
 by shift-invert Lanczos (``scipy.sparse.linalg.eigsh``) with an explicit ``OPinv`` built from a
-factorization chosen here (SuperLU with ``MMD_AT_PLUS_A`` ordering, or the ``factorize`` callable
-given), never one that ``eigsh`` makes for itself (DESIGN.md section 6).
+factorization of the registry (:func:`substruct.linalg.factorize.factorizer`: CHOLMOD when
+installed, else SuperLU in symmetric mode; or the callable given), never one that ``eigsh``
+makes for itself (DESIGN.md section 6).
 """
 
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import Any, Callable, Mapping, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from substruct.linalg.factorize import Factorize, factorizer
 from substruct.substructure import Substructure, as_csr
 
-__all__ = ["modal_truncation", "undamped_modes", "superlu_solver"]
-
-Solver = Callable[[np.ndarray], np.ndarray]
-Factorize = Callable[[sp.csc_array], Solver]
-
-
-def superlu_solver(A: sp.csc_array) -> Solver:
-    """``b -> A^{-1} b`` through SuperLU with the ``MMD_AT_PLUS_A`` column ordering."""
-    lu = spla.splu(sp.csc_matrix(A), permc_spec="MMD_AT_PLUS_A")
-    return lu.solve
+__all__ = ["modal_truncation", "undamped_modes"]
 
 
 def _check_count(sub: Substructure, n_modes: Any, what: str) -> int:
@@ -67,7 +60,7 @@ def _mass_normalized_sorted(lam: np.ndarray, Phi: np.ndarray, M: sp.csr_array
 
 
 def undamped_modes(sub: Substructure, n_modes: int, *, dense_limit: int = 2000,
-                   sigma: float | None = None, factorize: Factorize | None = None
+                   sigma: float | None = None, factorization: str | Factorize = "auto"
                    ) -> tuple[np.ndarray, np.ndarray]:
     """The ``n_modes`` lowest undamped modes :math:`K \\phi = \\omega^2 M \\phi`, mass-normalized.
 
@@ -85,7 +78,9 @@ def undamped_modes(sub: Substructure, n_modes: int, *, dense_limit: int = 2000,
         n_modes: number ``g`` of modes, ``1 <= g <= n``.
         dense_limit: largest ``n`` solved densely.
         sigma: shift of the sparse solve.
-        factorize: ``A -> (b -> A^{-1} b)`` for the shifted matrix (default :func:`superlu_solver`).
+        factorization: of the shifted matrix ``K - sigma M`` (symmetric positive definite):
+            a name of :func:`substruct.linalg.factorize.factorizer` (``"auto"``,
+            ``"superlu"``, ``"cholmod"``) or a callable ``A -> (b -> A^{-1} b)``.
 
     Returns:
         ``(omega, Phi)``: circular frequencies ``(g,)`` (rad/s; round-off negative eigenvalues
@@ -108,7 +103,7 @@ def undamped_modes(sub: Substructure, n_modes: int, *, dense_limit: int = 2000,
                              f"({err})") from None
     else:
         shift = -1e-9 * scale if sigma is None else float(sigma)
-        solve = (factorize or superlu_solver)(sp.csc_array(K - shift * M))
+        solve = factorizer(factorization, spd=True)(sp.csc_array(K - shift * M))
         op = spla.LinearOperator((n, n), matvec=solve, dtype=float)
         _, vecs = spla.eigsh(K, k=g, M=M, sigma=shift, which="LM", OPinv=op)
         kr, mr = vecs.T @ (K @ vecs), vecs.T @ (M @ vecs)
@@ -151,7 +146,7 @@ def _modal_damping(sub: Substructure, damping: Any, omega: np.ndarray
 def modal_truncation(sub: Substructure, n_keep: int,
                      damping: float | Sequence[float] | Mapping[str, Any] | None = None,
                      *, dense_limit: int = 2000, sigma: float | None = None,
-                     factorize: Factorize | None = None) -> Substructure:
+                     factorization: str | Factorize = "auto") -> Substructure:
     """Reduce ``sub`` to its ``n_keep`` lowest undamped modes (eqs 21-22).
 
     .. math::
@@ -179,7 +174,7 @@ def modal_truncation(sub: Substructure, n_keep: int,
     """
     g = _check_count(sub, n_keep, "n_keep")
     omega, Phi = undamped_modes(sub, g, dense_limit=dense_limit, sigma=sigma,
-                                factorize=factorize)
+                                factorization=factorization)
     psi, damping_meta = _modal_damping(sub, damping, omega)
     reduced = sub.transformed(Phi, tuple(f"y{j}" for j in range(1, g + 1)), kind="modal",
                               omega=omega, n_keep=g, reduced_from=sub.n_dof,
