@@ -27,8 +27,9 @@ _spec.loader.exec_module(make_table)
 
 CORPUS = make_table.corpus()
 #: A field path (``substructures.rod.length``, ``connections[0][1]``,
-#: ``constraints.c1.terms``) or a place in the file (``line 3, column 7``).
-FIELD = re.compile(r"[A-Za-z_][\w.@\[\]-]*|line \d+, column \d+")
+#: ``constraints.c1.terms``, a quoted key ``'a b'``), one given on the command line
+#: (``--set analysis.frf.omega``) or a place in the file (``line 3, column 7``).
+FIELD = re.compile(r"(--set )?(?:[A-Za-z_][\w.@\[\]-]*|'[^'\s]*')|line \d+, column \d+")
 
 
 def files_in(directory: Path) -> list[Path]:
@@ -49,7 +50,7 @@ def test_the_corpus_is_large_and_well_formed():
 def test_bad_case_is_one_line_exit_2_and_writes_nothing(case, tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(ROOT)
     out = tmp_path / "out"
-    code = cli.main(["run", case.path, "--out", str(out)])
+    code = cli.main(["run", case.path, "--out", str(out), *case.args])
     stdout, stderr = capsys.readouterr()
     assert code == 2, stderr
     assert stdout == ""

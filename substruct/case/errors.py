@@ -29,34 +29,106 @@ import numpy as np
 from pydantic import BaseModel, ValidationError
 
 from substruct.case.fields import NAME_PATTERN
+from substruct.case.numbers import MAX_DIGITS, BigNumber
 
-__all__ = ["CaseError", "FieldError", "MISSING", "show_value", "field_path", "translate"]
+__all__ = ["CaseError", "FieldError", "MISSING", "show_value", "field_path", "translate",
+           "printable"]
 
 #: Marks "no value" (a missing field), as opposed to a value ``None`` (YAML ``null``).
 MISSING: Any = object()
+#: Longest value shown in a message (characters).
+SHOWN = 80
+
+
+def _json_default(obj: Any) -> Any:
+    if isinstance(obj, BigNumber):
+        return str(obj)
+    if isinstance(obj, int):  # an int subclass json cannot write
+        return _int_text(int(obj))
+    if isinstance(obj, np.generic):
+        return obj.item()
+    return str(obj)
+
+
+def _int_text(n: int) -> str:
+    """``n`` in digits, shortened (never converted to text beyond 30 digits)."""
+    if abs(n) <= 10 ** MAX_DIGITS:
+        return str(n)
+    digits = int(abs(n).bit_length() * 0.30103) + 1
+    return f"{'-' if n < 0 else ''}an integer of about {digits} digits"
+
+
+def _big_ints(value: Any, depth: int = 0) -> bool:
+    """Whether ``value`` holds an ``int`` too long to write out (json would fail or stall)."""
+    if isinstance(value, int) and not isinstance(value, bool):
+        return abs(value) > 10 ** MAX_DIGITS
+    if depth > 200 or not isinstance(value, (list, tuple, dict)):
+        return False
+    items = list(value.items()) if isinstance(value, dict) else list(enumerate(value))
+    return any(_big_ints(k, depth + 1) or _big_ints(v, depth + 1) for k, v in items[:1000])
+
+
+def _shorten(value: Any) -> Any:
+    """``value`` with too-long integers replaced by their description (for json)."""
+    if isinstance(value, int) and not isinstance(value, bool):
+        return _int_text(value) if abs(value) > 10 ** MAX_DIGITS else value
+    if isinstance(value, dict):
+        return {(_int_text(k) if isinstance(k, int) and not isinstance(k, bool)
+                 and abs(k) > 10 ** MAX_DIGITS else k): _shorten(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_shorten(v) for v in value]
+    return value
+
+
+def printable(text: str) -> str:
+    """``text`` on one line with control and format characters escaped (``\\x1b``,
+    ``\\u202e``), so that a value shown cannot move the cursor, retitle or clear the user's
+    terminal, or reorder what it shows."""
+    text = " ".join(text.splitlines())
+    if text.isprintable():
+        return text
+    out = []
+    for c in text:
+        if c.isprintable():
+            out.append(c)
+        else:
+            code = ord(c)
+            out.append(f"\\x{code:02x}" if code < 0x100 else
+                       f"\\u{code:04x}" if code < 0x10000 else f"\\U{code:08x}")
+    return "".join(out)
 
 
 def show_value(value: Any) -> str:
-    """A value in an error message: one line, at most about 80 characters."""
+    """A value in an error message: one line, at most about :data:`SHOWN` characters."""
     if isinstance(value, np.generic):
         value = value.item()
-    if isinstance(value, bool):
-        text = "true" if value else "false"
-    elif value is None:
-        text = "null"
-    elif isinstance(value, (float, str)):
-        text = repr(value)
-    elif isinstance(value, (list, tuple, dict)):
-        try:
-            text = json.dumps(value, default=str)
-        except (TypeError, ValueError):
+    try:
+        if isinstance(value, bool):
+            text = "true" if value else "false"
+        elif value is None:
+            text = "null"
+        elif isinstance(value, BigNumber):
+            text = str(value)
+        elif isinstance(value, int):
+            text = _int_text(value)
+        elif isinstance(value, str):
+            text = repr(value if len(value) <= 4 * SHOWN else value[:4 * SHOWN])
+        elif isinstance(value, float):
             text = repr(value)
-    elif isinstance(value, np.ndarray):
-        text = f"array of shape {value.shape}"
-    else:
-        text = repr(value)
-    text = text.replace("\n", "\\n")
-    return text if len(text) <= 80 else text[:77] + "..."
+        elif isinstance(value, (list, tuple, dict)):
+            shown = _shorten(value) if _big_ints(value) else value
+            try:
+                text = json.dumps(shown, default=_json_default)
+            except (TypeError, ValueError, RecursionError):
+                text = repr(shown)
+        elif isinstance(value, np.ndarray):
+            text = f"array of shape {value.shape}"
+        else:
+            text = repr(value)
+    except (ValueError, RecursionError):  # a value that cannot be written out
+        text = f"a {type(value).__name__}"
+    text = printable(text.replace("\n", "\\n"))
+    return text if len(text) <= SHOWN else text[:SHOWN - 3] + "..."
 
 
 class CaseError(ValueError):
@@ -75,7 +147,7 @@ class CaseError(ValueError):
         message = ": ".join([self.source] + ([path] if path else []) + [problem])
         if value is not MISSING:
             message += f", got {show_value(value)}"
-        super().__init__(" ".join(message.splitlines()))
+        super().__init__(printable(message))
 
 
 class FieldError(ValueError):
@@ -94,12 +166,21 @@ class FieldError(ValueError):
 _DISCRIMINATORS = ("type", "method")
 
 
+def _key(key: Any) -> str:
+    """A mapping key in a field path: as written, or quoted (``'my key'``, ``'a\\x1b'``) when
+    it holds spaces, quotes or characters that are not printable."""
+    text = str(key)
+    if text and text.isprintable() and not any(c.isspace() or c in "'\"" for c in text):
+        return text
+    return repr(text)
+
+
 def field_path(loc: Sequence[str | int], raw: Any) -> str:
     """``substructures.rod.length`` / ``connections[2]`` from a location in the raw data.
 
     List items are named by their ``name`` when it is unique in the list, otherwise by their
     0-based index; union members and discriminator tags that pydantic puts into locations are
-    left out.
+    left out.  Keys with spaces, quotes or unprintable characters are quoted.
     """
     out = ""
     node = raw
@@ -109,7 +190,7 @@ def field_path(loc: Sequence[str | int], raw: Any) -> str:
                 any(node.get(key) == el for key in _DISCRIMINATORS):
             continue  # a union tag pydantic put into the location (``type: mass``)
         if isinstance(node, dict) and isinstance(el, str) and el in node:
-            out += ("." if out else "") + el
+            out += ("." if out else "") + _key(el)
             node = node[el]
         elif isinstance(node, list) and isinstance(el, int) and 0 <= el < len(node):
             item = node[el]
@@ -125,7 +206,7 @@ def field_path(loc: Sequence[str | int], raw: Any) -> str:
             out += f"[{el}]"
             node = None
         elif last and el != "[key]" and (isinstance(node, dict) or node is None):
-            out += ("." if out else "") + el
+            out += ("." if out else "") + _key(el)
             node = None
     return out
 
@@ -193,6 +274,7 @@ _SIMPLE = {
     "finite_number": "must be a finite number",
     "float_parsing": "must be a number", "float_type": "must be a number",
     "int_parsing": "must be an integer", "int_type": "must be an integer",
+    "int_parsing_size": "must be an integer of at most 30 digits",
     "int_from_float": "must be an integer",
     "bool_parsing": "must be true or false", "bool_type": "must be true or false",
     "string_type": "must be a string",
@@ -238,6 +320,7 @@ def _problem(err: Mapping[str, Any], loc: tuple, root: type[BaseModel]
         "less_than_equal": f"must be <= {ctx.get('le')}",
         "too_short": f"must have at least {ctx.get('min_length')} item(s)",
         "too_long": f"must have at most {ctx.get('max_length')} item(s)",
+        "string_too_long": f"must have at most {ctx.get('max_length')} characters",
         "literal_error": f"must be one of {ctx.get('expected')}",
     }
     if typ in _SIMPLE or typ in bounds:

@@ -16,7 +16,11 @@ the tree is walked here, node by node, against a whitelist:
 Anything else (attribute access, subscripts, lambdas, comprehensions, keyword arguments, unknown
 names, ``__import__``) raises :class:`ExpressionError` naming the offending piece.  Nothing is
 ever passed to ``eval`` or ``exec``; evaluation is numpy arithmetic on float64 arrays, so an
-overflow gives ``inf`` (caught by the callers' positivity checks), never a huge Python integer.
+overflow gives ``inf`` (caught by the callers' checks), never a huge Python integer.
+
+Numbers go through the one numeric validation of :mod:`substruct.case.numbers`: an integer
+of more than 30 digits is refused from the text, before it is parsed; a constant must be finite
+and 0 or within ``1e-30 .. 1e30`` in magnitude; so must the value of :func:`scalar`.
 """
 
 from __future__ import annotations
@@ -26,6 +30,8 @@ from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Mapping
 
 import numpy as np
+
+from substruct.case.numbers import digits_problem, number_problem
 
 __all__ = ["ExpressionError", "Expression", "FUNCTIONS", "CONSTANTS", "compile_expression",
            "profile", "scalar"]
@@ -104,6 +110,9 @@ def _check(node: ast.AST, text: str, allowed: frozenset[str], used: set[str],
         if isinstance(node.value, bool) or not isinstance(node.value, (int, float)):
             raise ExpressionError(f"only numbers are allowed as constants, not "
                                   f"{_at(node, text)}")
+        problem = number_problem(node.value)
+        if problem is not None:
+            raise ExpressionError(f"number {_at(node, text)}: {problem}")
         return
     if isinstance(node, ast.Name):
         if node.id in FUNCTIONS:
@@ -178,6 +187,9 @@ def compile_expression(text: str, names: Iterable[str] = ("x", "L")) -> Expressi
         raise ExpressionError(f"expression longer than {MAX_LENGTH} characters")
     if not text.strip():
         raise ExpressionError("empty expression")
+    problem = digits_problem(text)
+    if problem is not None:
+        raise ExpressionError(f"{problem} in {_short(text.strip())!r}")
     try:
         tree = ast.parse(text.strip(), mode="eval")
     except SyntaxError as err:
@@ -211,6 +223,9 @@ def profile(spec: Any, L: float, parameters: Mapping[str, float] | None = None
     params = dict(parameters or {})
     env = {**params, "L": float(L)}
     if _number(spec):
+        problem = number_problem(spec)
+        if problem is not None:
+            raise ExpressionError(problem)
         value = float(spec)
         return lambda x: np.full(np.shape(x), value)
     if isinstance(spec, str):
@@ -229,15 +244,31 @@ def profile(spec: Any, L: float, parameters: Mapping[str, float] | None = None
         if not isinstance(coeffs, (list, tuple)) or not coeffs:
             raise ExpressionError("poly needs a non-empty list of coefficients")
         c = np.array([scalar(v, env) for v in coeffs], dtype=float)
-        return lambda x: np.polynomial.polynomial.polyval(np.asarray(x, dtype=float), c)
+
+        def poly(x: np.ndarray) -> np.ndarray:
+            with np.errstate(all="ignore"):  # an overflow is inf, refused by the callers
+                return np.polynomial.polynomial.polyval(np.asarray(x, dtype=float), c)
+        return poly
     raise ExpressionError("expected a number, an expression string or {poly: [c0, c1, ...]}")
 
 
 def scalar(spec: Any, values: Mapping[str, float]) -> float:
-    """A number, or an expression of the names in ``values`` (no ``x``) evaluated to a float."""
+    """A number, or an expression of the names in ``values`` (no ``x``) evaluated to a float.
+
+    Raises:
+        ExpressionError: a bad expression, or a number or value out of the range of
+            :mod:`substruct.case.numbers` (not finite, or beyond ``1e-30 .. 1e30``).
+    """
     if _number(spec):
+        problem = number_problem(spec)
+        if problem is not None:
+            raise ExpressionError(problem)
         return float(spec)
     if isinstance(spec, str):
         expr = compile_expression(spec, list(values))
-        return float(expr(**{n: values[n] for n in expr.names}))
+        value = float(expr(**{n: values[n] for n in expr.names}))
+        problem = number_problem(value)
+        if problem is not None:
+            raise ExpressionError(f"{_short(expr.text)!r} = {value:.6g}: {problem}")
+        return value
     raise ExpressionError(f"expected a number or an expression, got {spec!r}")

@@ -2,13 +2,14 @@
 
 Every model of the schema (:mod:`substruct.case.loader`, :mod:`substruct.case.matrices`) derives from
 :class:`StrictModel` (unknown keys are errors, ``nan``/``inf`` are refused) and types its fields
-with the annotated types here, so that a number is never a boolean, a count is an integer
-``>= 1`` and a name is usable in a file name and in a point ``"sub@where"``.
+with the annotated types here, so that a number is never a boolean and lies within the range
+of :mod:`substruct.case.numbers` (``0`` or ``1e-30 .. 1e30`` in magnitude), a count is an
+integer within ``1 .. MAX_COUNT``, and a name is usable in a file name and in a point
+``"sub@where"``.
 """
 
 from __future__ import annotations
 
-import math
 import re
 from typing import Annotated, Any
 
@@ -21,10 +22,13 @@ from pydantic import (
     StringConstraints,
 )
 
+from substruct.case.numbers import BigNumber, digits_problem, number_problem
+
 __all__ = [
     "MEMORY_LIMIT", "MAX_ASSUMED_MODES", "MAX_ELEMENTS", "MAX_FREQUENCIES", "MAX_MATRIX_SIZE",
-    "DENSE_CHECK", "NAME_PATTERN", "Number", "Positive", "NonNegative", "Count", "Name",
-    "Point", "Distribution", "StrictModel", "parse_point", "gigabytes",
+    "MAX_DENSE_ENTRIES", "MAX_COUNT", "MAX_NAME_LENGTH", "DENSE_CHECK", "NAME_PATTERN",
+    "Number", "Positive", "NonNegative", "Count", "Name", "Point", "Distribution",
+    "StrictModel", "parse_point", "gigabytes",
 ]
 
 #: Estimated memory above which an input is refused up front (bytes).
@@ -33,7 +37,16 @@ MEMORY_LIMIT = 4e9
 MAX_ASSUMED_MODES = 20_000
 MAX_ELEMENTS = 2_000_000
 MAX_FREQUENCIES = 100_000
-MAX_MATRIX_SIZE = 5_000_000
+#: Coordinates of a substructure given by its matrices (a 3D solid of 100k coordinates
+#: already needs the 4 GB of MEMORY_LIMIT to be solved).
+MAX_MATRIX_SIZE = 1_000_000
+#: Entries of a dense matrix (inline, .npy, .npz or a Matrix Market array): 4000 x 4000, 128 MB;
+#: larger matrices are sparse and belong in Matrix Market coordinate files.
+MAX_DENSE_ENTRIES = 16_000_000
+#: Largest count of anything (elements, modes, divisions, frequencies) before its own limit.
+MAX_COUNT = 1_000_000_000
+#: Longest name of a case, substructure, constraint or variant (it names files).
+MAX_NAME_LENGTH = 100
 #: Largest matrix whose eigenvalues are checked densely (mass matrices of matrix substructures).
 DENSE_CHECK = 2000
 
@@ -41,23 +54,29 @@ DENSE_CHECK = 2000
 NAME_PATTERN = r"^[A-Za-z0-9_.-]+$"
 
 
-def _finite(value: float) -> float:
-    if not math.isfinite(value):
-        raise ValueError("must be a finite number")
+def _in_range(value: float) -> float:
+    """The one numeric validation (:func:`substruct.case.numbers.number_problem`) of a number
+    after pydantic read it (from a number, or from text such as ``"1e-310"``)."""
+    problem = number_problem(value)
+    if problem is not None:
+        raise ValueError(problem)
     return value
 
 
 def _no_bool(value: Any) -> Any:
-    if isinstance(value, bool):
-        raise ValueError("must be a number, not true/false")
+    problem = number_problem(value) if isinstance(value, (bool, BigNumber)) else None
+    if problem is not None:
+        raise ValueError(problem)
     return value
 
 
-Number = Annotated[float, BeforeValidator(_no_bool), AfterValidator(_finite)]
+#: A finite number, 0 or within 1e-30 .. 1e30 in magnitude.
+Number = Annotated[float, BeforeValidator(_no_bool), AfterValidator(_in_range)]
 Positive = Annotated[Number, Field(gt=0)]
 NonNegative = Annotated[Number, Field(ge=0)]
-Count = Annotated[int, BeforeValidator(_no_bool), Field(ge=1)]
-Name = Annotated[str, StringConstraints(pattern=NAME_PATTERN)]
+#: An integer within 1 .. MAX_COUNT (each count has its own, smaller limit too).
+Count = Annotated[int, BeforeValidator(_no_bool), Field(ge=1, le=MAX_COUNT)]
+Name = Annotated[str, StringConstraints(pattern=NAME_PATTERN, max_length=MAX_NAME_LENGTH)]
 
 
 def parse_point(text: str) -> tuple[str, str | None]:
@@ -73,6 +92,9 @@ def _point(value: Any) -> str:
     if not re.match(NAME_PATTERN, sub) or where == "":
         raise ValueError("a point is written 'substructure@where' (e.g. rod@50, P@q1) or "
                          "'substructure' for the boundary of a discrete attachment")
+    problem = digits_problem(where or "", point=True)
+    if problem is not None:
+        raise ValueError(problem)
     return value.strip()
 
 
@@ -84,8 +106,9 @@ def _spec(value: Any) -> Any:
     """A distribution: a number, an expression string or ``{poly: [...]}`` (checked later)."""
     if isinstance(value, bool) or not isinstance(value, (int, float, str, dict)):
         raise ValueError("must be a number, an expression of x and L, or {poly: [c0, c1, ...]}")
-    if isinstance(value, float) and not math.isfinite(value):
-        raise ValueError("must be a finite number")
+    problem = number_problem(value)
+    if problem is not None:
+        raise ValueError(problem)
     return value
 
 

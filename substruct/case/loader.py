@@ -27,6 +27,8 @@ The schema is split by subject, and every public name is importable from here:
 from __future__ import annotations
 
 import math
+import os
+import stat
 from pathlib import Path
 from typing import Annotated, Any, Sequence, Union
 
@@ -65,6 +67,7 @@ from substruct.case.fields import (
     parse_point,
 )
 from substruct.case.matrices import MatrixSpec
+from substruct.case.numbers import find_problem
 from substruct.case.solids import InterfaceSpec, SolidSpec
 from substruct.case.substructures import (
     AssumedModes,
@@ -85,6 +88,8 @@ __all__ = [
     "parse_case",
     "parse_point",
     "apply_overrides",
+    "read_case_text",
+    "MAX_CASE_FILE",
     "METHODS",
     "MEMORY_LIMIT",
     "MAX_ASSUMED_MODES",
@@ -109,8 +114,9 @@ __all__ = [
     "Output",
 ]
 
-#: Largest case file read (matrices belong in ``.npz``/``.mtx`` files).
-MAX_CASE_FILE = 20_000_000
+#: Largest case file read, in bytes: its YAML takes about 5 s to parse on a busy core
+#: (matrices belong in ``.npz``/``.mtx`` files).
+MAX_CASE_FILE = 500_000
 
 SubstructureSpec = Annotated[Union[RodSpec, DiscreteSpec, SpringSpec, MassSpec, MatrixSpec,
                                    SolidSpec],
@@ -229,11 +235,27 @@ def _parameters(raw: Any) -> dict[str, float]:
                 continue
             try:
                 f = float(v)
-            except ValueError:
+            except (ValueError, OverflowError):
                 continue
             if isinstance(k, str) and math.isfinite(f):
                 out[k] = f
     return out
+
+
+def _check_numbers(data: dict, source: str, set_paths: Sequence[str]) -> None:
+    """Refuse the first number of the raw data out of range (:mod:`substruct.case.numbers`),
+    before anything converts it."""
+    found = find_problem(data)
+    if found is None:
+        return
+    loc, value, problem, is_key = found
+    path = field_path(loc, data)
+    if is_key:
+        problem = f"a key {problem}"
+    if any(path == p or path.startswith(p + ".") or path.startswith(p + "[")
+           for p in set_paths):
+        problem += " (set on the command line)"
+    raise CaseError(source, path, problem, value)
 
 
 def parse_case(text: str, source: str = "<string>", base_dir: str | Path = ".",
@@ -246,6 +268,7 @@ def parse_case(text: str, source: str = "<string>", base_dir: str | Path = ".",
             raise CaseError(source, "", f"{problem}, got empty file")
         raise CaseError(source, "", f"{problem}, not a {type(data).__name__}", data)
     set_paths = apply_overrides(data, overrides, source)
+    _check_numbers(data, source, set_paths)
     context = {"parameters": _parameters(data.get("parameters")), "base_dir": Path(base_dir)}
     try:
         case = Case.model_validate(data, context=context)
@@ -269,18 +292,62 @@ def load_case(path: str | Path, overrides: Sequence[str] = ()) -> Case:
     """
     p = Path(path)
     source = str(path)
+    text = read_case_text(p, source)
+    return parse_case(text, source, p.parent, overrides)
+
+
+def read_case_text(path: Path, source: str) -> str:
+    """The text of a case file: a regular file of at most :data:`MAX_CASE_FILE` bytes of UTF-8.
+
+    The file is opened without blocking and checked before anything is read: a FIFO, a
+    device (``/dev/zero``, a terminal), a socket or a directory is refused, and so is a file
+    larger than the limit; at most ``MAX_CASE_FILE + 1`` bytes are ever read (a file growing
+    while it is read is refused too).  Line ends are read as ``\\n``.
+
+    Raises:
+        CaseError: ``<source>: <problem>``.
+    """
+    flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0)
     try:
-        if p.stat().st_size > MAX_CASE_FILE:
-            raise CaseError(source, "", "case file larger than 20 MB (put matrices in "
-                            ".npz/.mtx files)")
-        text = p.read_text(encoding="utf-8")
-    except CaseError:
-        raise
+        fd = os.open(path, flags)
     except FileNotFoundError:
         raise CaseError(source, "", "no such case file") from None
     except IsADirectoryError:
         raise CaseError(source, "", "is a directory, not a case file") from None
-    except (OSError, UnicodeDecodeError) as err:
+    except (OSError, ValueError) as err:
+        detail = getattr(err, "strerror", None) or " ".join(str(err).split())
+        raise CaseError(source, "", f"cannot read case file ({type(err).__name__}: "
+                        f"{detail})") from None
+    try:
+        info = os.fstat(fd)
+        if stat.S_ISDIR(info.st_mode):
+            raise CaseError(source, "", "is a directory, not a case file")
+        if not stat.S_ISREG(info.st_mode):
+            kind = ("a FIFO (named pipe)" if stat.S_ISFIFO(info.st_mode) else
+                    "a device" if stat.S_ISCHR(info.st_mode) or stat.S_ISBLK(info.st_mode)
+                    else "a socket" if stat.S_ISSOCK(info.st_mode) else "not a regular file")
+            raise CaseError(source, "", f"is {kind}, not a case file: a case is read from a "
+                            f"regular file")
+        limit = f"more than the {MAX_CASE_FILE} bytes read (put matrices in .npz/.mtx files)"
+        if info.st_size > MAX_CASE_FILE:
+            raise CaseError(source, "", f"a case file of {info.st_size} bytes, {limit}")
+        chunks, size = [], 0
+        while size <= MAX_CASE_FILE:
+            chunk = os.read(fd, MAX_CASE_FILE + 1 - size)
+            if not chunk:
+                break
+            chunks.append(chunk)
+            size += len(chunk)
+        if size > MAX_CASE_FILE:
+            raise CaseError(source, "", f"a case file that grew while it was read, {limit}")
+    except OSError as err:
+        raise CaseError(source, "", f"cannot read case file ({type(err).__name__}: "
+                        f"{err.strerror or err})") from None
+    finally:
+        os.close(fd)
+    try:
+        text = b"".join(chunks).decode("utf-8")
+    except UnicodeDecodeError as err:
         raise CaseError(source, "", f"cannot read case file ({type(err).__name__}: "
                         f"{' '.join(str(err).split())})") from None
-    return parse_case(text, source, p.parent, overrides)
+    return text.replace("\r\n", "\n").replace("\r", "\n")

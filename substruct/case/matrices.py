@@ -1,14 +1,23 @@
 """Substructures given by their matrices: inline rows or ``.npz``/``.npy``/``.mtx`` files.
 
 :class:`MatrixSpec` loads ``M``, ``K`` and ``C`` while the case is validated and checks what
-the coupler relies on: square, of one size, finite, ``M`` and ``K`` symmetric and positive
-semidefinite.  A file's header is read before its data, so that a matrix too large for
-the memory (or a header that lies about its size) is refused up front with an estimate instead
-of being allocated.
+the coupler relies on: square, of one size, finite and within the range of
+:mod:`substruct.case.numbers`, ``M`` and ``K`` symmetric and positive semidefinite.
+
+A file's header is read before its data, so that a matrix too large for the memory (or a
+header that lies about its size) is refused up front instead of being allocated: at most
+:data:`~substruct.case.fields.MAX_MATRIX_SIZE` coordinates, at most
+:data:`~substruct.case.fields.MAX_DENSE_ENTRIES` entries for a dense matrix (``.npy``,
+``.npz``, Matrix Market ``array``), about :data:`~substruct.case.fields.MEMORY_LIMIT` bytes
+while it is read, and no more data promised than the file (or the zip member) holds.  The file
+must be a regular file (not a FIFO or a device).
 """
 
 from __future__ import annotations
 
+import os
+import re
+import stat
 import zipfile
 from pathlib import Path
 from typing import Annotated, Any, Literal, Mapping
@@ -27,16 +36,20 @@ from substruct.case.errors import FieldError
 from substruct.case.expressions import ExpressionError, scalar
 from substruct.case.fields import (
     DENSE_CHECK,
+    MAX_DENSE_ENTRIES,
     MAX_MATRIX_SIZE,
     MEMORY_LIMIT,
     Name,
     StrictModel,
     gigabytes,
 )
+from substruct.case.numbers import array_problem, number_problem
 
 __all__ = ["MatrixSpec", "MatrixSource", "load_matrix"]
 
 _FORMS = "a matrix is a list of rows, or {file: name.npz, key: K} or {file: name.mtx}"
+#: Bytes of a Matrix Market header (banner, comments, size line) read at most.
+MTX_HEADER = 65_536
 #: Bytes per stored entry of a sparse matrix while it is read and converted (indices, copies).
 _SPARSE_ENTRY = 40
 #: Bytes per entry of a dense matrix while it is read and converted to float64 (two copies).
@@ -73,6 +86,10 @@ def _entries(field: str, rows: list, parameters: Mapping[str, float]) -> list:
             elif isinstance(v, bool) or not isinstance(v, (int, float)):
                 raise FieldError((field, i, j), "must be a number or an expression of the "
                                  "parameters", v)
+            else:
+                problem = number_problem(v)
+                if problem is not None:
+                    raise FieldError((field, i, j), problem, v)
             new.append(v)
         out.append(new)
     return out
@@ -81,7 +98,7 @@ def _entries(field: str, rows: list, parameters: Mapping[str, float]) -> list:
 # ----------------------------------------------------------------------- file headers
 
 
-def _npy_header(fp) -> tuple[tuple[int, ...], np.dtype]:
+def _npy_header(fp: Any) -> tuple[tuple[int, ...], np.dtype]:
     version = np.lib.format.read_magic(fp)
     if version == (1, 0):
         shape, _, dtype = np.lib.format.read_array_header_1_0(fp)
@@ -91,36 +108,96 @@ def _npy_header(fp) -> tuple[tuple[int, ...], np.dtype]:
 
 
 def _size_check(field: str, file: str, shape: tuple[int, ...], entries: int,
-                per_entry: int) -> None:
-    """Refuse a matrix whose header promises more than :data:`MEMORY_LIMIT` or
-    :data:`MAX_MATRIX_SIZE` coordinates, before reading its data."""
+                per_entry: int, dense: bool) -> None:
+    """Refuse a matrix whose header promises more than :data:`MEMORY_LIMIT`,
+    :data:`MAX_MATRIX_SIZE` coordinates or (dense) :data:`MAX_DENSE_ENTRIES` entries, before
+    reading its data."""
+    if any(d > MAX_MATRIX_SIZE * 1000 for d in shape) or entries > 10 ** 18:
+        raise FieldError((field, "file"), f"a matrix of shape {list(shape)} is more than the "
+                         f"{MAX_MATRIX_SIZE} coordinates accepted", file)
     need = float(entries) * per_entry
     dims = " x ".join(str(d) for d in shape)
     if need > MEMORY_LIMIT:
         raise FieldError((field, "file"), f"a {dims} matrix with {entries} stored entries "
                          f"would need about {gigabytes(need)} of memory, more than the "
                          f"{gigabytes(MEMORY_LIMIT)} allowed", file)
-    if len(shape) == 2 and max(shape) > MAX_MATRIX_SIZE:
+    if shape and max(shape) > MAX_MATRIX_SIZE:
         raise FieldError((field, "file"), f"a {dims} matrix is more than the "
                          f"{MAX_MATRIX_SIZE} coordinates accepted", file)
+    if dense and entries > MAX_DENSE_ENTRIES:
+        raise FieldError((field, "file"), f"a dense {dims} matrix has {entries} entries, more "
+                         f"than the {MAX_DENSE_ENTRIES} accepted (4000 x 4000): give a large "
+                         f"sparse matrix as a Matrix Market coordinate file (.mtx)", file)
+
+
+def _promised(field: str, file: str, need: int, have: int, what: str) -> None:
+    """Refuse a header that promises more data than the file holds (before allocating)."""
+    if need > have:
+        raise FieldError((field, "file"), f"the header promises {what} ({need} bytes or "
+                         f"more) but the file holds {have} bytes after it: a truncated file "
+                         f"or a header that lies", file)
+
+
+_MTX_FORMATS = ("coordinate", "array")
+_MTX_FIELDS = ("real", "integer", "complex", "pattern")
+_MTX_SYMMETRY = ("general", "symmetric", "skew-symmetric", "hermitian")
+
+
+def _mtx_header(field: str, file: str, path: Path) -> tuple[int, int, int, str, str, str, int]:
+    """``(rows, cols, entries, format, field, symmetry, bytes after the header)`` of a Matrix
+    Market file, read from at most :data:`MTX_HEADER` bytes; numbers of more than 12 digits
+    are refused before they are converted."""
+    def bad(problem: str) -> FieldError:
+        return FieldError((field, "file"), f"not a Matrix Market file: {problem}", file)
+
+    size = path.stat().st_size
+    with open(path, "rb") as fp:
+        head = fp.read(MTX_HEADER)
+    lines = head.split(b"\n")
+    banner = lines[0].decode("latin-1").strip().split()
+    if len(banner) != 5 or banner[0].lower() != "%%matrixmarket" or \
+            banner[1].lower() != "matrix":
+        raise bad("the first line must be %%MatrixMarket matrix <format> <field> <symmetry>")
+    form, kind, symmetry = (b.lower() for b in banner[2:])
+    if form not in _MTX_FORMATS or kind not in _MTX_FIELDS or symmetry not in _MTX_SYMMETRY:
+        raise bad(f"unknown format, field or symmetry {' '.join(banner[2:])[:60]!r}")
+    offset = len(lines[0]) + 1
+    for k, raw in enumerate(lines[1:], start=1):
+        if k == len(lines) - 1 and size > len(head):  # a line cut off by the limit
+            raise bad(f"no size line in its first {MTX_HEADER} bytes")
+        offset += len(raw) + 1
+        text = raw.decode("latin-1").strip()
+        if not text or text.startswith("%"):
+            continue
+        numbers = text.split()
+        want = 3 if form == "coordinate" else 2
+        if len(numbers) != want or not all(re.fullmatch(r"\d{1,12}", n) for n in numbers):
+            raise bad(f"the size line must be {want} integers (of at most 12 digits), got "
+                      f"{text[:60]!r}")
+        rows, cols = int(numbers[0]), int(numbers[1])
+        entries = int(numbers[2]) if form == "coordinate" else rows * cols
+        return rows, cols, entries, form, kind, symmetry, max(size - offset, 0)
+    raise bad("no size line")
 
 
 def _check_header(field: str, file: str, path: Path, suffix: str, key: str | None) -> None:
     """Read the header of a matrix file (shape, type) and refuse what cannot be loaded."""
     if suffix == ".mtx":
-        import scipy.io
-        rows, cols, entries, form, kind, symmetry = scipy.io.mminfo(str(path))
-        if kind == "complex":
+        rows, cols, entries, form, kind, symmetry, left = _mtx_header(field, file, path)
+        if kind == "complex" or symmetry == "hermitian":
             raise FieldError((field, "file"), "must be a real matrix, the file holds a "
                              "complex one", file)
-        if symmetry != "general" and form == "coordinate":
-            entries *= 2
+        stored = entries * 2 if symmetry != "general" and form == "coordinate" else entries
         per = _SPARSE_ENTRY if form == "coordinate" else _DENSE_ENTRY
-        _size_check(field, file, (rows, cols), entries, per)
+        _size_check(field, file, (rows, cols), stored, per, dense=form == "array")
+        # the shortest entry lines: "i j v" (coordinate), "i j" (pattern), "v" (array)
+        line = 2 if form == "array" else 4 if kind == "pattern" else 6
+        _promised(field, file, entries * line - 1, left, f"{entries} entries")
         return
     if suffix == ".npy":
         with open(path, "rb") as fp:
             shape, dtype = _npy_header(fp)
+            left = os.fstat(fp.fileno()).st_size - fp.tell()
     else:
         with zipfile.ZipFile(path) as archive:
             member = f"{key}.npy"
@@ -128,11 +205,19 @@ def _check_header(field: str, file: str, path: Path, suffix: str, key: str | Non
                 return  # reported with the list of keys by np.load below
             with archive.open(member) as fp:
                 shape, dtype = _npy_header(fp)
+                left = archive.getinfo(member).file_size - fp.tell()
+    if any(not isinstance(d, int) or d < 0 for d in shape):
+        raise FieldError((field, "file"), "not an .npy array: its shape is not a list of "
+                         "sizes", file)
     if dtype.kind not in "biuf":
         what = "complex numbers" if dtype.kind == "c" else f"{dtype} entries"
         raise FieldError((field, "file"), f"must hold a real matrix, holds {what}", file)
-    entries = int(np.prod(shape, dtype=float)) if shape else 1
-    _size_check(field, file, shape, entries, _DENSE_ENTRY)
+    entries = 1  # a shape other than 2-D is reported once read, if it is small
+    for d in shape:
+        entries *= d
+    _size_check(field, file, shape, entries, _DENSE_ENTRY, dense=True)
+    _promised(field, file, entries * dtype.itemsize, left,
+              f"a {' x '.join(map(str, shape))} array of {dtype}")
 
 
 def load_matrix(field: str, value: Any, base: Path, parameters: Mapping[str, float]
@@ -159,8 +244,13 @@ def load_matrix(field: str, value: Any, base: Path, parameters: Mapping[str, flo
     suffix = path.suffix.lower()
     if suffix not in (".npz", ".npy", ".mtx"):
         raise FieldError((field, "file"), "matrix files are .npz, .npy or .mtx", file)
-    if not path.is_file():
-        raise FieldError((field, "file"), f"no such file ({path})", file)
+    try:
+        mode = path.stat().st_mode
+    except OSError:
+        raise FieldError((field, "file"), f"no such file ({path})", file) from None
+    if not stat.S_ISREG(mode):
+        what = "a directory" if stat.S_ISDIR(mode) else "a FIFO, a device or a socket"
+        raise FieldError((field, "file"), f"{path} is {what}, not a matrix file", file)
     if suffix in (".mtx", ".npy") and key is not None:
         raise FieldError((field, "key"), f"a {suffix} file holds one matrix: no key", key)
     try:
@@ -230,9 +320,9 @@ class MatrixSpec(StrictModel):
                                  f"coordinates accepted", shown)
             if r == 0:
                 raise FieldError(field, "must have at least one row", shown)
-            data = mat.data if sp.issparse(mat) else mat
-            if not np.all(np.isfinite(data)):
-                raise FieldError(field, "has entries that are not finite numbers", shown)
+            problem = array_problem(mat.data if sp.issparse(mat) else mat)
+            if problem is not None:
+                raise FieldError(field, problem, shown)
             if field in ("M", "K"):
                 scale = max(float(abs(mat).max()), 1e-300)
                 asym = float(abs(mat - mat.T).max())

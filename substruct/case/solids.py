@@ -8,8 +8,9 @@ solids node to node (:func:`substruct.assembly.interfaces.tie_nodes`) or through
 (:func:`substruct.assembly.interfaces.tie_nonmatching`).  See ``docs/case-files.md``, section Solids.
 
 What can be checked before anything is read or assembled is checked here: one geometry,
-material ranges, selectors, that the mesh file exists, and the size of generated meshes
-(refused with a memory estimate, as rods are).  Meshes read from files are sized when they are
+material ranges, selectors, the mesh file before its data is read (a regular file, its size,
+its format, the counts its header declares: :mod:`substruct.case.mesh_files`), and the size of
+generated meshes (refused with a memory estimate, as rods are).  Meshes read from files are sized when they are
 read (:mod:`substruct.builder.solids`), before they are assembled.
 """
 
@@ -29,6 +30,7 @@ from pydantic import (
 
 from substruct.case.errors import FieldError
 from substruct.case.fields import (
+    MAX_COUNT,
     MAX_ELEMENTS,
     MEMORY_LIMIT,
     Count,
@@ -39,6 +41,7 @@ from substruct.case.fields import (
     StrictModel,
     gigabytes,
 )
+from substruct.case.mesh_files import MAX_MESH_FILE, mesh_file_problem
 from substruct.case.substructures import ModalDamping
 
 __all__ = ["Component", "Selector", "BoxShape", "RectangleShape", "SolidDamping",
@@ -46,10 +49,6 @@ __all__ = ["Component", "Selector", "BoxShape", "RectangleShape", "SolidDamping"
 
 #: Displacement components of a solid.
 Component = Literal["x", "y", "z"]
-
-#: Largest mesh file read (bytes): the largest solid accepted (4 GB, about 100k coordinates in
-#: 3D, 600k in 2D) comes from a Gmsh file of a few tens of MB.
-MAX_MESH_FILE = 200_000_000
 
 # Peak memory of a solid through a whole run (assembly, then the sparse coupled modes by the
 # generalized-inverse and null-space paths with SuperLU), measured with 1 BLAS thread:
@@ -171,7 +170,7 @@ class SolidReduce(StrictModel):
     """``{modes: g}`` (modal truncation) or ``{method: craig-bampton, modes: g, interface: ..}``."""
 
     method: Literal["modal", "craig-bampton"] = "modal"
-    modes: Annotated[int, BeforeValidator(_no_bool), Field(ge=0)]
+    modes: Annotated[int, BeforeValidator(_no_bool), Field(ge=0, le=MAX_COUNT)]
     interface: Selector | list[Selector] | None = None
     damping: ModalDamping | None = None
 
@@ -241,15 +240,11 @@ class SolidSpec(StrictModel):
         if self.mesh is not None:
             base = Path((info.context or {}).get("base_dir", "."))
             path = base / self.mesh
-            if not path.is_file():
-                what = "is a directory, not a mesh file" if path.is_dir() else \
-                    f"no such mesh file ({path})"
-                raise FieldError("mesh", what, self.mesh)
-            size = path.stat().st_size
-            if size > MAX_MESH_FILE:
-                raise FieldError("mesh", f"mesh file of {gigabytes(size)}, more than the "
-                                 f"{gigabytes(MAX_MESH_FILE)} read (the largest solid accepted "
-                                 f"comes from a few tens of MB)", self.mesh)
+            problem = mesh_file_problem(path)
+            if problem == "no such mesh file":
+                problem = f"no such mesh file ({path})"
+            if problem is not None:
+                raise FieldError("mesh", problem, self.mesh)
         else:
             self._size()
         return self

@@ -9,7 +9,6 @@ not fit in memory are refused here, before anything is computed, with an estimat
 
 from __future__ import annotations
 
-import math
 from typing import Annotated, Any, Literal, Union
 
 import numpy as np
@@ -28,6 +27,12 @@ from substruct.case.fields import (
     Positive,
     StrictModel,
     gigabytes,
+)
+from substruct.case.numbers import (
+    MAX_DAMPING_RATIO,
+    MAX_MAGNITUDE,
+    MIN_MAGNITUDE,
+    number_problem,
 )
 
 __all__ = ["AssumedModes", "FiniteElements", "Discretization", "ModalDamping", "Reduce",
@@ -91,8 +96,14 @@ class ModalDamping(StrictModel):
                 loc = ("ratio", k) if isinstance(self.ratio, list) else "ratio"
                 if isinstance(z, bool) or not isinstance(z, (int, float)):
                     raise FieldError(loc, "a damping ratio must be a number", z)
-                if not math.isfinite(z) or z < 0:
+                problem = number_problem(z)
+                if problem == "must be a finite number" or (problem is None and z < 0):
                     raise FieldError(loc, "a damping ratio must be finite and >= 0", z)
+                if problem is not None:
+                    raise FieldError(loc, f"a damping ratio {problem}", z)
+                if z > MAX_DAMPING_RATIO:
+                    raise FieldError(loc, f"a damping ratio must be at most "
+                                     f"{MAX_DAMPING_RATIO:g} (1 is critical damping)", z)
         return self
 
     def as_argument(self) -> Any:
@@ -149,6 +160,12 @@ class RodSpec(StrictModel):
                 k = int(np.argmax(bad))
                 raise FieldError(field, f"must be > 0 and finite on [0, L]: {field}({x[k]:g}) "
                                  f"= {values[k]:g}", spec)
+            out = (values > MAX_MAGNITUDE) | (values < MIN_MAGNITUDE)
+            if out.any():
+                k = int(np.argmax(out))
+                raise FieldError(field, f"must lie within {MIN_MAGNITUDE:g} .. "
+                                 f"{MAX_MAGNITUDE:g} on [0, L]: {field}({x[k]:g}) = "
+                                 f"{values[k]:.6g}", spec)
             setattr(self, f"_{field}", f)
         if self.reduce is not None and isinstance(self.discretization, AssumedModes) and \
                 self.reduce.modes > self.discretization.n:

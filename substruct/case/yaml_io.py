@@ -17,8 +17,10 @@ from typing import Any, Sequence
 import yaml
 
 from substruct.case.errors import CaseError
+from substruct.case.numbers import MAX_DIGITS, BigNumber
 
-__all__ = ["load_yaml", "apply_overrides"]
+__all__ = ["load_yaml", "apply_overrides", "MAX_NESTING", "MAX_ALIAS_EXPANSION",
+           "MAX_SET_LENGTH"]
 
 
 #: Deepest nesting of lists and mappings accepted (a case file needs about 6 levels).
@@ -70,7 +72,19 @@ def _mapping(loader: _Loader, node: yaml.MappingNode, deep: bool = False) -> dic
     return out
 
 
+def _int(loader: _Loader, node: yaml.ScalarNode) -> Any:
+    """An integer, or a :class:`~substruct.case.numbers.BigNumber` when it is written with
+    more than :data:`~substruct.case.numbers.MAX_DIGITS` digits (never converted: Python
+    refuses to convert more than 4300 digits, and ``float()`` of a huge one overflows)."""
+    text = str(loader.construct_scalar(node))
+    big = BigNumber(text)
+    if big.digits > MAX_DIGITS:
+        return big
+    return yaml.constructor.SafeConstructor.construct_yaml_int(loader, node)
+
+
 _Loader.add_constructor(yaml.resolver.BaseResolver.DEFAULT_MAPPING_TAG, _mapping)
+_Loader.add_constructor("tag:yaml.org,2002:int", _int)
 # YAML 1.1 (PyYAML) reads 6e6, 6.0e6 and 2e-3 as strings; read them as numbers, as YAML 1.2 does
 _Loader.add_implicit_resolver(
     "tag:yaml.org,2002:float",
@@ -112,26 +126,35 @@ def _expansion(data: Any) -> tuple[int, int]:
     return size(data), stored
 
 
+def _check_aliases(data: Any, source: str, where: str = "", value: Any = None) -> None:
+    """Refuse ``data`` whose aliases expand beyond :data:`MAX_ALIAS_EXPANSION` values or make
+    it contain itself (``where`` and ``value`` name a ``--set`` override)."""
+    shown = () if value is None else (value,)
+    try:
+        expanded, stored = _expansion(data)
+    except ValueError as err:
+        raise CaseError(source, where, f"invalid YAML: {err}", *shown) from None
+    except RecursionError:
+        raise CaseError(source, where, "invalid YAML: nested too deeply", *shown) from None
+    if expanded > stored + MAX_ALIAS_EXPANSION:
+        raise CaseError(source, where, f"invalid YAML: aliases expand to more than "
+                        f"{MAX_ALIAS_EXPANSION} values ({expanded} values from {stored} "
+                        f"written)", *shown)
+
+
 def load_yaml(text: str, source: str) -> Any:
     """Parse case-file text.
 
     Anchors and aliases are allowed, but not aliases that multiply the file beyond
     :data:`MAX_ALIAS_EXPANSION` values (a "billion laughs") or make it contain itself.
+    Integers of more than :data:`~substruct.case.numbers.MAX_DIGITS` digits are read as
+    :class:`~substruct.case.numbers.BigNumber` (refused by the validation, by name).
 
     Raises:
         CaseError: ``<source>: line L, column C: invalid YAML: <problem>``.
     """
     data = _parse(text, source)
-    try:
-        expanded, stored = _expansion(data)
-    except ValueError as err:
-        raise CaseError(source, "", f"invalid YAML: {err}") from None
-    except RecursionError:
-        raise CaseError(source, "", "invalid YAML: nested too deeply") from None
-    if expanded > stored + MAX_ALIAS_EXPANSION:
-        raise CaseError(source, "", f"invalid YAML: aliases expand to more than "
-                        f"{MAX_ALIAS_EXPANSION} values ({expanded} values from {stored} "
-                        f"written)")
+    _check_aliases(data, source)
     return data
 
 
@@ -147,9 +170,15 @@ def _parse(text: str, source: str) -> Any:
         raise CaseError(source, "", f"invalid YAML: {' '.join(str(err).split())}") from None
     except RecursionError:
         raise CaseError(source, "", "invalid YAML: nested too deeply") from None
+    except (ValueError, OverflowError, MemoryError) as err:  # a scalar PyYAML cannot convert
+        raise CaseError(source, "", f"invalid YAML: {type(err).__name__}: "
+                        f"{' '.join(str(err).split())[:120]}") from None
 
 
 # ---------------------------------------------------------------------------- --set
+
+#: Longest ``--set`` override (key and value) accepted, in characters.
+MAX_SET_LENGTH = 20_000
 
 
 def _split_key(key: str) -> list[str | int]:
@@ -165,12 +194,21 @@ def _split_key(key: str) -> list[str | int]:
             parts.append(int(idx) if re.fullmatch(r"-?\d+", idx) else idx)
     if not parts or any(p == "" for p in parts):
         raise ValueError(f"cannot parse key {key!r}")
+    if len(parts) > MAX_NESTING:
+        raise ValueError(f"a key path of {len(parts)} parts, more than the {MAX_NESTING} "
+                         f"levels a case may nest")
     return parts
+
+
+def _where(key: str) -> str:
+    """``--set <key>`` for a message, the key shortened to 60 characters."""
+    key = key.strip()
+    return f"--set {key if len(key) <= 60 else key[:57] + '...'}"
 
 
 def _set_one(data: dict, key: str, value: Any, source: str) -> str:
     """Apply one override; return its canonical path (as error messages write it)."""
-    where = f"--set {key}"
+    where = _where(key)
     try:
         parts = _split_key(key)
     except ValueError as err:
@@ -244,20 +282,36 @@ def apply_overrides(data: dict, overrides: Sequence[str], source: str = "<string
     Returns:
         The canonical paths set, as validation errors write them.
 
+    Values are read by the case-file loader with its limits (nesting, aliases, no Python
+    tags, integers of more than 30 digits kept as text); an override is at most
+    :data:`MAX_SET_LENGTH` characters.
+
     Raises:
         CaseError: an override that is not ``key=value``, whose value is not YAML or whose
             path does not lead anywhere.
     """
     paths = []
     for item in overrides:
-        key, eq, text = str(item).partition("=")
+        item = str(item)
+        key, eq, text = item.partition("=")
+        if len(item) > MAX_SET_LENGTH:
+            raise CaseError(source, _where(key), f"an override of "
+                            f"{len(item)} characters, more than the {MAX_SET_LENGTH} accepted "
+                            f"(put large values in the case file)", text)
         if not eq or not key.strip():
-            raise CaseError(source, f"--set {item}", "expected key.path=value")
+            raise CaseError(source, _where(item), "expected key.path=value")
+        where = _where(key)
         try:
             value = yaml.load(text, Loader=_Loader) if text.strip() else None  # noqa: S506
         except yaml.YAMLError as err:
             what = getattr(err, "problem", None) or " ".join(str(err).split())[:80]
-            raise CaseError(source, f"--set {key.strip()}", f"value is not valid YAML "
-                            f"({what})", text) from None
+            raise CaseError(source, where, f"value is not valid YAML ({what})", text) from None
+        except RecursionError:
+            raise CaseError(source, where, "value is not valid YAML (nested too deeply)",
+                            text) from None
+        except (ValueError, OverflowError, MemoryError) as err:
+            raise CaseError(source, where, f"value is not valid YAML ({type(err).__name__}: "
+                            f"{' '.join(str(err).split())[:80]})", text) from None
+        _check_aliases(value, source, where, text)
         paths.append(_set_one(data, key.strip(), value, source))
     return paths
