@@ -63,7 +63,7 @@ from substruct.analysis.krylov import (
 from substruct.analysis.results import Modes
 from substruct.analysis.sparse_damped import damped_sparse_modes
 from substruct.linalg.factorize import Factorize, Solve, factorizer
-from substruct.linalg.nullspace import Elimination, master_slave
+from substruct.linalg.nullspace import Elimination
 from substruct.linalg.scaling import massless_coordinates
 
 __all__ = [
