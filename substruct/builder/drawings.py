@@ -72,7 +72,10 @@ def _rod_shifts(subs: dict[str, Substructure], connections: list[list[PointRef]]
               and ends[(n, "i")].substructure != ends[(n, "j")].substructure]
 
     def span(name: str) -> tuple[float, float]:
-        x = np.asarray(subs[name].geometry.points)[:, 0]
+        geometry = subs[name].geometry
+        if geometry is None:  # rods without geometry are not linked
+            return 0.0, 0.0
+        x = np.asarray(geometry.points)[:, 0]
         return float(x.min()), float(x.max())
 
     shifts: dict[str, float] = {}
@@ -121,8 +124,7 @@ def layout_drawings(asm: Assembly, connections: list[list[PointRef]]) -> list[Dr
     extent = 0.0
     for s in asm.substructures:
         if s.name not in discrete and s.geometry is not None and len(s.geometry.points):
-            p = s.geometry.points
-            extent = max(extent, float(np.ptp(p, axis=0).max()))
+            extent = max(extent, float(np.ptp(s.geometry.points, axis=0).max()))
     scale = extent / 10 if extent > 0 else 1.0
     shifts = _rod_shifts(subs, connections, scale)
     placed: dict[str, np.ndarray] = {}

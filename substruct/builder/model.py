@@ -78,11 +78,12 @@ def assemble_case(case: Case) -> Model:
                              f"{', '.join(specs)})", use.text)
         value = resolve_point(case, specs[sub], where, use)
         resolved[use.text] = (sub, value)
-        if isinstance(specs[sub], SolidSpec):
+        spec = specs[sub]
+        if isinstance(spec, SolidSpec):
             positions.setdefault(sub, []).append(value)
-        if isinstance(specs[sub], RodSpec):
+        if isinstance(spec, RodSpec):
             positions.setdefault(sub, [])
-            if all(abs(value - x) > 1e-12 * specs[sub].length for x in positions[sub]):
+            if all(abs(value - x) > 1e-12 * spec.length for x in positions[sub]):
                 positions[sub].append(value)
     subs = make_substructures(case, positions)
     subs, interface_ties = tie_and_reduce(case, subs, positions)
@@ -104,15 +105,17 @@ def assemble_case(case: Case) -> Model:
             connections.append(Connection(refs[j], refs[j + 1],
                                           name=f"{chain[j]} = {chain[j + 1]}"))
             check_connection_row(case, by_name, refs[j], refs[j + 1], (i, j + 1), chain)
-    constraints, active = [], []
+    constraints: list[LinearConstraint] = []
+    active: list[str] = []
     for con in case.constraints:
         if not con.active:
             continue
+        name = con.name or ""  # the loader names every constraint
         constraints.append(LinearConstraint(
             terms=tuple((points[p], c) for p, c in con.terms.items()), rhs=con.rhs,
             force_terms=tuple((points[p], c) for p, c in con.rhs_force.items()),
-            name=con.name))
-        active.append(con.name)
+            name=name))
+        active.append(name)
     connections += interface_ties  # rows of A after the case's connections
     try:
         asm = assemble(subs, connections, constraints)

@@ -31,7 +31,7 @@ from substruct.assembly.stack import Connection
 from substruct.case.errors import MISSING
 from substruct.case.expressions import ExpressionError, scalar
 from substruct.case.fields import MAX_ELEMENTS, MEMORY_LIMIT, gigabytes
-from substruct.case.solids import InterfaceSpec, SolidSpec, solid_memory
+from substruct.case.solids import InterfaceSpec, SolidReduce, SolidSpec, solid_memory
 from substruct.models.selection import (
     COMPONENTS,
     component_index,
@@ -120,6 +120,8 @@ def _generated(spec: SolidSpec) -> Any:
     from skfem import MeshHex, MeshQuad, MeshTet, MeshTri
 
     shape = spec.box if spec.box is not None else spec.rectangle
+    if shape is None:  # the schema asks for exactly one of mesh, box and rectangle
+        raise ValueError(f"{spec.name}: neither a mesh, nor a box, nor a rectangle")
     dim = len(shape.lengths)
     axes = [np.linspace(o, o + L, d + 1)
             for o, L, d in zip(shape.origin, shape.lengths, shape.divisions)]
@@ -264,7 +266,7 @@ def _interface_ties(case: Any, k: int, spec: InterfaceSpec, subs: dict[str, Subs
     return ties
 
 
-def _craig_bampton(case: Any, i: int, spec: SolidSpec, sub: Substructure,
+def _craig_bampton(case: Any, i: int, spec: SolidSpec, reduce: SolidReduce, sub: Substructure,
                    wheres: Sequence[Any]) -> Substructure:
     from substruct.assembly.interfaces import node_dofs
     from substruct.models.craig_bampton import craig_bampton
@@ -277,8 +279,8 @@ def _craig_bampton(case: Any, i: int, spec: SolidSpec, sub: Substructure,
         except (PointError, ValueError):
             continue  # reported where the point is used
         cols.update(int(j) for j in row.indices[row.data != 0])
-    for k, sel in enumerate(spec.reduce.selectors()):
-        field = (*loc, "interface", k) if isinstance(spec.reduce.interface, list) else \
+    for k, sel in enumerate(reduce.selectors()):
+        field = (*loc, "interface", k) if isinstance(reduce.interface, list) else \
             (*loc, "interface")
         try:
             dofs = node_dofs(sub, sel.as_argument(), sel.components)
@@ -293,16 +295,15 @@ def _craig_bampton(case: Any, i: int, spec: SolidSpec, sub: Substructure,
                          f"no interface, no point is used on it and reduce.interface is not "
                          f"given (use reduce: {{modes: ...}} for a free-standing solid)")
     try:
-        return craig_bampton(sub, np.array(sorted(cols)), spec.reduce.modes)
+        return craig_bampton(sub, np.array(sorted(cols)), reduce.modes)
     except ValueError as err:
         raise case.error((*loc, "modes"), " ".join(str(err).split()),
-                         spec.reduce.modes) from None
+                         reduce.modes) from None
 
 
-def _modal(case: Any, i: int, spec: SolidSpec, sub: Substructure) -> Substructure:
+def _modal(case: Any, i: int, r: SolidReduce, sub: Substructure) -> Substructure:
     from substruct.models.reduction import modal_truncation
 
-    r = spec.reduce
     damping = r.damping.as_argument() if r.damping is not None else None
     try:
         return modal_truncation(sub, r.modes, damping)
@@ -346,8 +347,8 @@ def tie_and_reduce(case: Any, subs: list[Substructure], positions: dict[str, lis
     for i, spec in enumerate(case.substructures):
         sub = by_name[spec.name]
         if isinstance(spec, SolidSpec) and spec.reduce is not None:
-            sub = _modal(case, i, spec, sub) if spec.reduce.method == "modal" else \
-                _craig_bampton(case, i, spec, sub, used[spec.name])
+            sub = _modal(case, i, spec.reduce, sub) if spec.reduce.method == "modal" else \
+                _craig_bampton(case, i, spec, spec.reduce, sub, used[spec.name])
         out.append(sub)
     return out, ties
 
