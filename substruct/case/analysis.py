@@ -108,9 +108,9 @@ class Omega(StrictModel):
                 raise FieldError((), f"at most {MAX_FREQUENCIES} frequencies",
                                  len(self.values))
             return self
-        for key in ("start", "stop", "num"):
-            if getattr(self, key) is None:
-                raise FieldError(key, "a frequency grid needs start, stop and num")
+        if self.start is None or self.stop is None or self.num is None:
+            key = next(k for k in ("start", "stop", "num") if getattr(self, k) is None)
+            raise FieldError(key, "a frequency grid needs start, stop and num")
         if self.stop <= self.start:
             raise FieldError("stop", f"must be > start ({self.start:g})", self.stop)
         if self.spacing == "log" and self.start <= 0:
@@ -123,6 +123,8 @@ class Omega(StrictModel):
         """The circular frequencies (rad/s)."""
         if self.values is not None:
             return np.asarray(self.values, dtype=float)
+        if self.start is None or self.stop is None or self.num is None:  # refused by _grid
+            raise ValueError("a frequency grid needs start, stop and num")
         if self.spacing == "log":
             return np.geomspace(self.start, self.stop, self.num)
         return np.linspace(self.start, self.stop, self.num)

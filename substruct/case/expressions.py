@@ -163,9 +163,11 @@ def _check(node: ast.AST, text: str, allowed: frozenset[str], used: set[str],
 
 def _evaluate(node: ast.AST, env: Mapping[str, np.ndarray]) -> np.ndarray:
     if isinstance(node, ast.Constant):
-        return np.float64(node.value)
+        if not isinstance(node.value, (int, float)):  # _check lets only numbers through
+            raise ExpressionError(f"not a number: {node.value!r}")
+        return np.asarray(node.value, dtype=np.float64)
     if isinstance(node, ast.Name):
-        return env[node.id] if node.id in env else np.float64(CONSTANTS[node.id])
+        return env[node.id] if node.id in env else np.asarray(CONSTANTS[node.id], np.float64)
     if isinstance(node, ast.BinOp):
         return _BINOPS[type(node.op)](_evaluate(node.left, env), _evaluate(node.right, env))
     if isinstance(node, ast.UnaryOp):

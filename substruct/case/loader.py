@@ -159,12 +159,12 @@ class Case(StrictModel):
         for k, c in enumerate(self.constraints):
             if c.name is None:
                 c.name = f"constraint{k + 1}"
-        self._unique("constraints", [c.name for c in self.constraints], "constraint")
+        self._unique("constraints", [str(c.name) for c in self.constraints], "constraint")
         modes = self.analysis.modes
         if modes is not None:
             self._unique(("analysis", "modes", "variants"), [v.name for v in modes.variants],
                          "variant")
-            active = [c.name for c in self.constraints if c.active]
+            active = [str(c.name) for c in self.constraints if c.active]
             for i, variant in enumerate(modes.variants):
                 for j, name in enumerate(variant.drop):
                     if name not in active:
@@ -173,9 +173,10 @@ class Case(StrictModel):
                                          f"no active constraint of that name (active: "
                                          f"{known})", name)
             sizes = [s.n_dof() for s in self.substructures]
-            if None not in sizes and modes.count > sum(sizes):
+            counted = [n for n in sizes if n is not None]
+            if len(counted) == len(sizes) and modes.count > sum(counted):
                 raise FieldError(("analysis", "modes", "count"), f"more modes than the "
-                                 f"{sum(sizes)} coordinates of the model", modes.count)
+                                 f"{sum(counted)} coordinates of the model", modes.count)
         return self
 
     @staticmethod
@@ -213,7 +214,7 @@ class Case(StrictModel):
         return (f"# {self._source} with command-line overrides:\n{head}"
                 + yaml.safe_dump(self._raw, sort_keys=False, default_flow_style=None))
 
-    def substructure(self, name: str) -> RodSpec | DiscreteSpec | MatrixSpec | None:
+    def substructure(self, name: str) -> SubstructureSpec | None:
         """The substructure called ``name`` (or ``None``)."""
         return next((s for s in self.substructures if s.name == name), None)
 

@@ -122,7 +122,7 @@ class _SelectorModel(StrictModel):
 
     def describe(self) -> str:
         """``set 'clamp'`` / ``box [[..], [..]]``, for messages."""
-        if self.set is not None:
+        if self.box is None:
             return f"set {self.set!r}"
         return f"box {[list(self.box[0]), list(self.box[1])]}"
 
@@ -251,10 +251,12 @@ class SolidSpec(StrictModel):
 
     def _size(self) -> None:
         shape = self.box if self.box is not None else self.rectangle
+        if shape is None:  # a mesh file: sized when it is read
+            return
         key = "box" if self.box is not None else "rectangle"
         dim = 3 if self.box is not None else 2
         elements = shape.n_elements()
-        nodes = math.prod(self.order * d + 1 for d in shape.divisions)
+        nodes = math.prod(int(self.order) * d + 1 for d in shape.divisions)
         need = solid_memory(dim * nodes, dim, self.order)
         if elements > MAX_ELEMENTS or need > MEMORY_LIMIT:
             raise FieldError((key, "divisions"), f"{elements} elements ({dim * nodes} "
