@@ -57,16 +57,16 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from substruct.models.rod import (
+from substruct.models.rod_parts import (
     Profile,
-    _check_length,
-    _check_positive,
-    _check_support,
-    _drawing_points,
-    _line_geometry,
-    _position,
-    _profile,
-    _ritz_functions,
+    as_profile,
+    check_length,
+    check_positive,
+    check_support,
+    drawing_points,
+    line_geometry,
+    ritz_functions,
+    rod_point,
 )
 from substruct.substructure import Substructure, as_csr
 
@@ -132,10 +132,10 @@ def static_shapes(length: float, EA: Profile | float, m: Profile | float,
         ``x -> (psi, dpsi)``, arrays ``(k, len(x))`` of values and slopes (at ``x = a`` the slope
         is the one from the right).
     """
-    L = _check_length("static shapes", length)
-    _check_support(support, "static shapes")
-    EAf, mf = _profile("rod", "EA", EA), _profile("rod", "m", m)
-    a = np.array([_position("static shapes", x, L) for x in points], dtype=float)[:, None]
+    L = check_length("static shapes", length)
+    check_support(support, "static shapes")
+    EAf, mf = as_profile("rod", "EA", EA), as_profile("rod", "m", m)
+    a = np.array([rod_point("static shapes", x, L) for x in points], dtype=float)[:, None]
     F = _Antiderivative(lambda x: 1.0 / EAf(x), L)
     FL, Fa = float(F(np.array(L))), F(a[:, 0])[:, None]
     if support == "free-free":
@@ -210,26 +210,26 @@ def rod_assumed_modes_enriched(name: str, length: float, EA: Profile | float,
         the M-norm of its shape outside the span of the sines and of the shapes kept before it,
         relative to its M-norm (compared with ``drop_tol``).
     """
-    L = _check_length(name, length)
-    _check_support(support, name)
+    L = check_length(name, length)
+    check_support(support, name)
     n = int(n_modes)
     if n < 1 or n != n_modes:
         raise ValueError(f"{name}: n_modes must be a positive integer, got {n_modes!r}")
-    pts = [_position(name, x, L) for x in points]
+    pts = [rod_point(name, x, L) for x in points]
     if not pts:
         raise ValueError(f"{name}: an enriched basis needs at least one load point")
     ne = int(n_quad_elements) if n_quad_elements is not None else max(64, 4 * n)
     if ne < 1:
         raise ValueError(f"{name}: n_quad_elements must be positive, got {n_quad_elements!r}")
-    EAf, mf = _profile(name, "EA", EA), _profile(name, "m", m)
+    EAf, mf = as_profile(name, "EA", EA), as_profile(name, "m", m)
 
     edges = np.unique(np.concatenate([np.linspace(0.0, L, ne + 1), pts]))
     edges = edges[np.concatenate([[True], np.diff(edges) > 1e-12 * L])]
     xq, wq = _gauss_nodes(edges)
     EAq, mq = EAf(xq), mf(xq)
-    _check_positive(name, "EA", EAq)
-    _check_positive(name, "m", mq)
-    sines = _ritz_functions(support, L, n)
+    check_positive(name, "EA", EAq)
+    check_positive(name, "m", mq)
+    sines = ritz_functions(support, L, n)
     statics = static_shapes(L, EAf, mf, pts, support)
     phi, dphi = sines(xq)
     psi, dpsi = statics(xq)
@@ -279,12 +279,12 @@ def rod_assumed_modes_enriched(name: str, length: float, EA: Profile | float,
         return E.T @ np.vstack([sines(x)[0], statics(x)[0]])
 
     def locate(where: Any) -> sp.csr_array:
-        x = _position(name, where, L)
+        x = rod_point(name, where, L)
         return sp.csr_array(values(np.array([x])).T)
 
     dropped = [p for j, p in enumerate(pts) if j not in kept]
-    xs, glyphs = _drawing_points(L, np.linspace(0.0, L, 201), list(pts) + list(nodes_at), name)
-    geometry = _line_geometry(xs, sp.csr_array(values(xs).T), glyphs)
+    xs, glyphs = drawing_points(L, np.linspace(0.0, L, 201), list(pts) + list(nodes_at), name)
+    geometry = line_geometry(xs, sp.csr_array(values(xs).T), glyphs)
     meta: dict[str, Any] = {
         "length": L, "n_modes": n, "support": support, "mapping": "physical",
         "n_quad_elements": len(edges) - 1, "static_points": [float(pts[j]) for j in kept],

@@ -9,19 +9,33 @@ Both makers discretize the same continuous model (eq 44)
 with ``EA`` and ``m`` given as numpy-vectorized callables of ``x`` (or constants).  Supports are
 named ``"<end at x=0>-<end at x=L>"``: ``"fixed-free"`` (the paper's rod), ``"fixed-fixed"``,
 ``"free-free"``, ``"free-fixed"``.  Points on a rod are positions ``x`` (a float, or a string
-``"x=..."``); a point outside ``[0, L]`` (tolerance ``1e-9 L``) raises :class:`PointError`.
+``"x=..."``; :func:`substruct.models.rod_parts.rod_point`); a point outside ``[0, L]`` raises
+:class:`PointError`.
 The rod is drawn along the global ``x`` axis and displaces along it.
 """
 
 from __future__ import annotations
 
-from typing import Any, Callable, Sequence
+from typing import Any, Sequence
 
 import numpy as np
 import scipy.sparse as sp
 from skfem import Basis, BilinearForm, ElementLineP1, ElementLineP2, MeshLine, asm
 
-from substruct.substructure import Geometry, PointError, Substructure, as_csr
+from substruct.models.rod_parts import (
+    SUPPORTS,
+    Profile,
+    as_profile,
+    check_length,
+    check_positive,
+    check_support,
+    drawing_points,
+    line_geometry,
+    point_label,
+    ritz_functions,
+    rod_point,
+)
+from substruct.substructure import PointError, Substructure, as_csr
 
 __all__ = [
     "SUPPORTS",
@@ -30,15 +44,6 @@ __all__ = [
     "rod_fe",
     "uniform_rod_frequencies",
 ]
-
-SUPPORTS = ("fixed-free", "fixed-fixed", "free-free", "free-fixed")
-"""Support names: end condition at ``x = 0``, then at ``x = L``."""
-
-Profile = Callable[[np.ndarray], np.ndarray]
-
-
-# ---------------------------------------------------------------------------------- helpers
-
 
 def paper_taper(EA0: float, m0: float, L: float) -> tuple[Profile, Profile]:
     """Stiffness and mass distributions of the tapered rod of section 6.
@@ -77,7 +82,7 @@ def uniform_rod_frequencies(EA: float, m: float, L: float, k: int,
 
     for :math:`i = 1, \\dots, k`.
     """
-    _check_support(support, "uniform rod")
+    check_support(support, "uniform rod")
     c = np.sqrt(float(EA) / float(m))
     i = np.arange(1, int(k) + 1, dtype=float)
     factor = {"fixed-free": (2 * i - 1) / 2, "free-fixed": (2 * i - 1) / 2,
@@ -85,96 +90,7 @@ def uniform_rod_frequencies(EA: float, m: float, L: float, k: int,
     return factor * np.pi * c / float(L)
 
 
-def _check_support(support: str, name: str) -> None:
-    if support not in SUPPORTS:
-        raise ValueError(f"{name}: unknown support {support!r}; expected one of {SUPPORTS}")
-
-
-def _check_length(name: str, length: float) -> float:
-    L = float(length)
-    if not np.isfinite(L) or L <= 0:
-        raise ValueError(f"{name}: length must be positive and finite, got {length!r}")
-    return L
-
-
-def _profile(name: str, field: str, f: Profile | float) -> Profile:
-    """A vectorized callable for a constant or a callable distribution."""
-    if callable(f):
-        return lambda x: np.broadcast_to(np.asarray(f(x), dtype=float), np.shape(x))
-    value = float(f)
-    return lambda x: np.full(np.shape(x), value)
-
-
-def _check_positive(name: str, field: str, values: np.ndarray) -> None:
-    if not np.all(np.isfinite(values)) or np.any(values <= 0):
-        bad = values[~(np.isfinite(values) & (values > 0))][0]
-        raise ValueError(f"{name}: {field}(x) must be positive and finite on [0, L]; "
-                         f"found {field} = {bad!r}")
-
-
-def _position(name: str, where: Any, L: float) -> float:
-    """The position ``x`` of a point reference on a rod of length ``L`` (clipped to ``[0, L]``)."""
-    ref = where
-    if isinstance(ref, str):
-        ref = ref.strip()
-        ref = ref[2:] if ref.startswith("x=") else ref
-    if isinstance(ref, bool):
-        raise PointError(f"{name}: a point on a rod is a position x, got {where!r}")
-    try:
-        x = float(ref)
-    except (TypeError, ValueError):
-        raise PointError(f"{name}: a point on a rod is a position x in [0, {L:g}], "
-                         f"got {where!r}") from None
-    tol = 1e-9 * L
-    if not np.isfinite(x) or x < -tol or x > L + tol:
-        raise PointError(f"{name}: point x = {x!r} is not on the rod [0, {L:g}]")
-    return min(max(x, 0.0), L)
-
-
-def _label(x: float) -> str:
-    return f"x={float(x):.12g}"
-
-
-def _line_geometry(xs: np.ndarray, rows: sp.csr_array, glyphs: dict[str, int]) -> Geometry:
-    """Drawing nodes at ``(xs, 0, 0)``; ``rows`` (N x n) gives their axial displacement."""
-    N, n = rows.shape
-    points = np.column_stack([xs, np.zeros(N), np.zeros(N)])
-    rows = sp.coo_array(rows)
-    interp = sp.csr_array((rows.data, (3 * rows.row, rows.col)), shape=(3 * N, n))
-    cells = [("line", np.column_stack([np.arange(N - 1), np.arange(1, N)]))]
-    return Geometry(points=points, cells=cells, interp=interp, glyphs=glyphs)
-
-
-def _drawing_points(L: float, base: np.ndarray, nodes_at: Sequence[float], name: str
-                    ) -> tuple[np.ndarray, dict[str, int]]:
-    """``base`` drawing positions merged with ``nodes_at``; glyphs name the latter."""
-    marks = [_position(name, x, L) for x in nodes_at]
-    xs = np.unique(np.concatenate([base, marks]))
-    glyphs = {_label(x): int(np.argmin(abs(xs - x))) for x in marks}
-    return xs, glyphs
-
-
 # -------------------------------------------------------------------------- assumed modes
-
-
-def _ritz_functions(support: str, L: float, n: int
-                    ) -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]:
-    """``x -> (phi, dphi)``, each ``(n, len(x))``: the eigenfunctions of the uniform rod."""
-    i = np.arange(1, n + 1, dtype=float)[:, None]
-    kind, k = {
-        "fixed-free": ("sin", (2 * i - 1) * np.pi / (2 * L)),
-        "fixed-fixed": ("sin", i * np.pi / L),
-        "free-free": ("cos", (i - 1) * np.pi / L),
-        "free-fixed": ("cos", (2 * i - 1) * np.pi / (2 * L)),
-    }[support]
-
-    def functions(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        kx = k * np.asarray(x, dtype=float)[None, :]
-        if kind == "sin":
-            return np.sin(kx), k * np.cos(kx)
-        return np.cos(kx), -k * np.sin(kx)
-
-    return functions
 
 
 def rod_assumed_modes(name: str, length: float, EA: Profile | float, m: Profile | float,
@@ -229,8 +145,8 @@ def rod_assumed_modes(name: str, length: float, EA: Profile | float, m: Profile 
         A :class:`Substructure` with coordinates ``q1 .. qn`` and ``meta`` holding the
         discretization data.
     """
-    L = _check_length(name, length)
-    _check_support(support, name)
+    L = check_length(name, length)
+    check_support(support, name)
     n = int(n_modes)
     if n < 1 or n != n_modes:
         raise ValueError(f"{name}: n_modes must be a positive integer, got {n_modes!r}")
@@ -239,15 +155,15 @@ def rod_assumed_modes(name: str, length: float, EA: Profile | float, m: Profile 
     ne = int(n_quad_elements) if n_quad_elements is not None else max(64, 4 * n)
     if ne < 1:
         raise ValueError(f"{name}: n_quad_elements must be positive, got {n_quad_elements!r}")
-    EAf, mf = _profile(name, "EA", EA), _profile(name, "m", m)
+    EAf, mf = as_profile(name, "EA", EA), as_profile(name, "m", m)
 
     basis = Basis(MeshLine(np.linspace(0.0, L, ne + 1)), ElementLineP1(), intorder=intorder)
     xq = basis.mapping.F(basis.X)[0].ravel()
     wq = np.asarray(basis.dx).ravel()
     EAq, mq = EAf(xq), mf(xq)
-    _check_positive(name, "EA", EAq)
-    _check_positive(name, "m", mq)
-    functions = _ritz_functions(support, L, n)
+    check_positive(name, "EA", EAq)
+    check_positive(name, "m", mq)
+    functions = ritz_functions(support, L, n)
     phi, dphi = functions(xq)
     Mdense = (phi * (mq * wq)) @ phi.T
     Kdense = (dphi * (EAq * wq)) @ dphi.T
@@ -258,11 +174,11 @@ def rod_assumed_modes(name: str, length: float, EA: Profile | float, m: Profile 
                             "n_quad_elements": ne, "intorder": intorder}
     if mapping == "physical":
         def locate(where: Any) -> sp.csr_array:
-            x = _position(name, where, L)
+            x = rod_point(name, where, L)
             return sp.csr_array(functions(np.array([x]))[0].T)
 
-        xs, glyphs = _drawing_points(L, np.linspace(0.0, L, 201), nodes_at, name)
-        geometry = _line_geometry(xs, sp.csr_array(functions(xs)[0].T), glyphs)
+        xs, glyphs = drawing_points(L, np.linspace(0.0, L, 201), nodes_at, name)
+        geometry = line_geometry(xs, sp.csr_array(functions(xs)[0].T), glyphs)
     else:
         s = n if literal_stations is None else int(literal_stations)
         if not 1 <= s <= n:
@@ -271,7 +187,7 @@ def rod_assumed_modes(name: str, length: float, EA: Profile | float, m: Profile 
         meta["literal_stations"] = s
 
         def locate(where: Any) -> sp.csr_array:
-            x = _position(name, where, L)
+            x = rod_point(name, where, L)
             j = round(x * s / L)
             if j < 1 or abs(x - j * L / s) > 1e-9 * L:
                 raise PointError(
@@ -286,9 +202,9 @@ def rod_assumed_modes(name: str, length: float, EA: Profile | float, m: Profile 
         keep = j >= 1
         rows = sp.csr_array((np.ones(keep.sum()), (np.nonzero(keep)[0], j[keep] - 1)),
                             shape=(len(xs), n))
-        marks = [x for x in nodes_at if np.min(abs(xs - _position(name, x, L))) <= 1e-9 * L]
-        glyphs = {_label(x): int(np.argmin(abs(xs - float(x)))) for x in marks}
-        geometry = _line_geometry(xs, rows, glyphs)
+        marks = [x for x in nodes_at if np.min(abs(xs - rod_point(name, x, L))) <= 1e-9 * L]
+        glyphs = {point_label(x): int(np.argmin(abs(xs - float(x)))) for x in marks}
+        geometry = line_geometry(xs, rows, glyphs)
 
     return Substructure(
         name=name, M=M, K=K, C=as_csr(None, n),
@@ -345,21 +261,21 @@ def rod_fe(name: str, length: float, EA: Profile | float, m: Profile | float,
         support: one of :data:`SUPPORTS`.
         nodes_at: positions that must be mesh nodes; also marked as drawing glyphs.
     """
-    L = _check_length(name, length)
-    _check_support(support, name)
+    L = check_length(name, length)
+    check_support(support, name)
     if int(n_elements) != n_elements or n_elements < 1:
         raise ValueError(f"{name}: n_elements must be a positive integer, got {n_elements!r}")
     if order not in (1, 2):
         raise ValueError(f"{name}: order must be 1 or 2, got {order!r}")
-    marks = [_position(name, x, L) for x in nodes_at]
-    EAf, mf = _profile(name, "EA", EA), _profile(name, "m", m)
+    marks = [rod_point(name, x, L) for x in nodes_at]
+    EAf, mf = as_profile(name, "EA", EA), as_profile(name, "m", m)
 
     mesh = MeshLine(_fe_mesh_points(L, int(n_elements), marks))
     element = ElementLineP1() if order == 1 else ElementLineP2()
     basis = Basis(mesh, element, intorder=2 * order + 4)
     xq = basis.mapping.F(basis.X)[0]
-    _check_positive(name, "EA", EAf(xq))
-    _check_positive(name, "m", mf(xq))
+    check_positive(name, "EA", EAf(xq))
+    check_positive(name, "m", mf(xq))
 
     @BilinearForm
     def stiffness(u, v, w):
@@ -395,7 +311,7 @@ def rod_fe(name: str, length: float, EA: Profile | float, m: Profile | float,
         return row
 
     def locate(where: Any) -> sp.csr_array:
-        x = _position(name, where, L)
+        x = rod_point(name, where, L)
         return sp.csr_array(full_row(x)[:, free])
 
     order_x = np.argsort(dofx, kind="stable")
@@ -404,12 +320,12 @@ def rod_fe(name: str, length: float, EA: Profile | float, m: Profile | float,
     rows = sp.csr_array((np.ones(on_free.sum()),
                          (np.nonzero(on_free)[0], position[order_x][on_free])),
                         shape=(len(xs), n))
-    glyphs = {_label(x): int(np.argmin(abs(xs - x))) for x in marks}
-    geometry = _line_geometry(xs, rows, glyphs)
+    glyphs = {point_label(x): int(np.argmin(abs(xs - x))) for x in marks}
+    geometry = line_geometry(xs, rows, glyphs)
 
     return Substructure(
         name=name, M=as_csr(M_all[free][:, free]), K=as_csr(K_all[free][:, free]),
-        C=as_csr(None, n), dof_labels=tuple(_label(dofx[d]) for d in free), locate=locate,
+        C=as_csr(None, n), dof_labels=tuple(point_label(dofx[d]) for d in free), locate=locate,
         kind=f"rod/fe/P{order}", geometry=geometry,
         meta={"length": L, "order": order, "n_elements": int(mesh.t.shape[1]),
               "h_max": float(np.max(np.diff(mesh.p[0][np.argsort(mesh.p[0])]))),
