@@ -33,6 +33,7 @@ from typing import Any, Iterator
 
 import numpy as np
 
+from substruct.case.fields import gigabytes
 from substruct.case.numbers import array_problem
 
 __all__ = ["MAX_MESH_FILE", "MAX_MESH_POINTS", "MAX_MESH_CELLS", "MESH_HEADER",
@@ -272,7 +273,7 @@ def read_mesh_file(path: str | os.PathLike) -> Any:
             mesh = meshio.read(p, file_format=fmt)
     except MemoryError:
         raise MeshFileError(f"cannot read mesh file {p}: reading it would take more than the "
-                            f"{MESH_READ_MEMORY // 10**9} GB of memory allowed for a mesh"
+                            f"{gigabytes(MESH_READ_MEMORY)} of memory allowed for a mesh"
                             ) from None
     except SystemExit:  # meshio gives up on a file with sys.exit(1), after printing why
         raise MeshFileError(f"cannot read mesh file {p} (not a readable {fmt} file)") from None
