@@ -45,7 +45,8 @@ from substruct.case.mesh_files import MAX_MESH_FILE, mesh_file_problem
 from substruct.case.substructures import ModalDamping
 
 __all__ = ["Component", "Selector", "BoxShape", "RectangleShape", "SolidDamping",
-           "SolidReduce", "SolidSpec", "InterfaceSpec", "solid_memory", "MAX_MESH_FILE"]
+           "SolidReduce", "SolidSpec", "InterfaceSpec", "solid_memory", "MAX_MESH_FILE",
+           "MAX_ASPECT", "MIN_RELATIVE_SIZE"]
 
 #: Displacement components of a solid.
 Component = Literal["x", "y", "z"]
@@ -134,6 +135,35 @@ Selector = Annotated[_SelectorModel, BeforeValidator(_selector)]
 # ------------------------------------------------------------------------- geometries
 
 
+#: Largest ratio of the longest to the shortest side of a generated element.
+MAX_ASPECT = 1e6
+#: Smallest side of a generated element relative to its coordinates (it must stay far above
+#: their rounding, 2.2e-16 of them).
+MIN_RELATIVE_SIZE = 1e-6
+
+
+def _check_grid(lengths: tuple[float, ...], divisions: tuple[int, ...],
+                origin: tuple[float, ...]) -> None:
+    """Refuse a generated mesh whose elements are degenerate: sides more than
+    :data:`MAX_ASPECT` apart, or too small to be told apart at their coordinates (a box far
+    from the origin for its size).  Checked before anything is meshed."""
+    sides = [length / n for length, n in zip(lengths, divisions)]
+    axes = "xyz"
+    for k, (side, o, length) in enumerate(zip(sides, origin, lengths)):
+        reach = max(abs(o), abs(o + length))
+        if side < MIN_RELATIVE_SIZE * reach:
+            raise FieldError("origin", f"elements of side {side:.3g} along {axes[k]} at "
+                             f"coordinates up to {reach:.3g} cannot be told apart (a side must "
+                             f"be at least {MIN_RELATIVE_SIZE:g} of the coordinates): move the "
+                             f"origin closer", list(origin))
+    if max(sides) > MAX_ASPECT * min(sides):
+        longest, shortest = sides.index(max(sides)), sides.index(min(sides))
+        raise FieldError("lengths", f"elements {max(sides) / min(sides):.3g} times longer along "
+                         f"{axes[longest]} than along {axes[shortest]} (sides "
+                         f"{max(sides):.3g} and {min(sides):.3g}; at most {MAX_ASPECT:g}): "
+                         f"change the lengths or the divisions", list(lengths))
+
+
 class BoxShape(StrictModel):
     """``{lengths: [lx, ly, lz], divisions: [nx, ny, nz], origin: [x0, y0, z0], cell: hex}``."""
 
@@ -141,6 +171,11 @@ class BoxShape(StrictModel):
     divisions: tuple[Count, Count, Count]
     origin: tuple[Number, Number, Number] = (0.0, 0.0, 0.0)
     cell: Literal["hex", "tet"] = "hex"
+
+    @model_validator(mode="after")
+    def _grid(self) -> "BoxShape":
+        _check_grid(self.lengths, self.divisions, self.origin)
+        return self
 
     def n_elements(self) -> int:
         n = math.prod(self.divisions)
@@ -154,6 +189,11 @@ class RectangleShape(StrictModel):
     divisions: tuple[Count, Count]
     origin: tuple[Number, Number] = (0.0, 0.0)
     cell: Literal["quad", "tri"] = "quad"
+
+    @model_validator(mode="after")
+    def _grid(self) -> "RectangleShape":
+        _check_grid(self.lengths, self.divisions, self.origin)
+        return self
 
     def n_elements(self) -> int:
         n = math.prod(self.divisions)

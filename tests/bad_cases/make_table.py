@@ -198,7 +198,7 @@ def _n(x: float) -> str:
 def limits() -> str:
     """The section on classes of hostile input and their limits, from the constants."""
     from substruct.case import expressions, fields, loader, matrices, mesh_files, numbers
-    from substruct.case import yaml_io
+    from substruct.case import solids, yaml_io
     from substruct.case.fields import gigabytes
 
     def code(module, name):
@@ -253,6 +253,11 @@ def limits() -> str:
          f"error like any other; coordinates in range, cells that point at points",
          code(mesh_files, "MAX_MESH_FILE") + ", `MAX_MESH_POINTS`, `MAX_MESH_CELLS`, "
          "`MESH_READ_MEMORY`"),
+        ("generated solids", f"the elements of a `box` or `rectangle` at most "
+         f"{_n(solids.MAX_ASPECT)} times longer one way than another, and each side at least "
+         f"{_n(solids.MIN_RELATIVE_SIZE)} of the coordinates it lies at (a box far from the "
+         f"origin for its size would have nodes that cannot be told apart)",
+         code(solids, "MAX_ASPECT") + ", `MIN_RELATIVE_SIZE`"),
         ("terminal", "control and format characters of a value or a key shown in a message "
          "are escaped (`\\x1b`, `\\u202e`): an error line cannot retitle, clear or reorder "
          "the terminal", "-"),
