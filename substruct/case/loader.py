@@ -114,9 +114,9 @@ __all__ = [
     "Output",
 ]
 
-#: Largest case file read, in bytes: its YAML takes about 5 s to parse on a busy core
+#: Largest case file read, in bytes: its YAML takes up to about 6 s to parse on a busy core
 #: (matrices belong in ``.npz``/``.mtx`` files).
-MAX_CASE_FILE = 500_000
+MAX_CASE_FILE = 200_000
 
 SubstructureSpec = Annotated[Union[RodSpec, DiscreteSpec, SpringSpec, MassSpec, MatrixSpec,
                                    SolidSpec],

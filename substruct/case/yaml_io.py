@@ -24,7 +24,7 @@ __all__ = ["load_yaml", "apply_overrides", "MAX_NESTING", "MAX_ALIAS_EXPANSION",
 
 
 #: Deepest nesting of lists and mappings accepted (a case file needs about 6 levels).
-MAX_NESTING = 100
+MAX_NESTING = 20
 
 
 class _Loader(yaml.SafeLoader):
