@@ -14,14 +14,13 @@ from substruct.builder.points import point_uses
 from substruct.case.loader import Case, parse_point
 from substruct.case.substructures import SpringSpec
 from substruct.linalg.constraints import independent_rows
+from substruct.linalg.scaling import row_scale
 from substruct.substructure import Substructure
 
 __all__ = ["check_connection_row", "warn_free_springs", "check_consistent"]
 
 #: Largest constraint matrix (entries) whose consistency is checked densely before computing.
 CONSISTENCY_LIMIT = 5_000_000
-
-
 
 
 def check_connection_row(case: Case, by_name: dict[str, Substructure], a: PointRef,
@@ -83,25 +82,32 @@ def check_consistent(case: Case, asm: Assembly, n_connections: int) -> None:
     m, N = A.shape
     if m == 0 or (asm.R.nnz == 0 and not np.any(asm.b)) or m * N > CONSISTENCY_LIMIT:
         return
-    rows = independent_rows(A)
+    # decided on the equilibrated rows D A q = D b + D R F, whatever the scale of each row
+    scale = row_scale(A, keep_zero=True)
+    As = sp.csr_array(scale.apply(sp.csr_array(A)))
+    rows = independent_rows(As)
     if rows.dropped.size == 0:
         return
     labels = list(asm.constraint_labels)
+    d = np.ldexp(1.0, -scale.exponent)
     for field, rhs in (("rhs", asm.b.reshape(m, 1)), ("rhs_force", asm.R.toarray())):
-        scale = max(float(np.abs(rhs).max()), 1e-300)
-        err = np.abs(rhs[rows.dropped] - rows.combination @ rhs[rows.keep]).max(axis=1) / scale
+        rs = scale.apply(np.asarray(rhs, dtype=float))
+        size = max(float(np.abs(rs).max()), 1e-300)
+        err = np.abs(rs[rows.dropped] - rows.combination @ rs[rows.keep]).max(axis=1) / size
         bad = np.flatnonzero(err > 1e-8)
         if bad.size:
-            # the dependency  sum_r c_r A_r = 0  whose right-hand sides do not cancel
-            c = np.zeros(m)
-            c[rows.keep] = -rows.combination[bad[0]]
-            c[rows.dropped[bad[0]]] = 1.0
-            involved = np.flatnonzero(np.abs(c) > 1e-12 * np.abs(c).max())
+            # the dependency  sum_r c_r (D A)_r = 0  whose right-hand sides do not cancel,
+            # written on the rows of A themselves: sum_r (c_r d_r) A_r = 0
+            cs = np.zeros(m)
+            cs[rows.keep] = -rows.combination[bad[0]]
+            cs[rows.dropped[bad[0]]] = 1.0
+            involved = np.flatnonzero(np.abs(cs) > 1e-12 * np.abs(cs).max())
+            c = cs * d
             # blame the last user constraint involved (connections have no right-hand side)
             t = int(max(involved, key=lambda r: (r >= n_connections, r)))
             _inconsistent(case, field, labels, n_connections, t,
                           {int(r): -c[r] / c[t] for r in involved if r != t},
-                          float(np.abs(c @ rhs).max() / abs(c[t]) / scale))
+                          float(np.abs(cs @ rs).max() / abs(cs[t]) / size))
 
 
 def _inconsistent(case: Case, field: str, labels: list[str], n_connections: int, t: int,
