@@ -103,7 +103,7 @@ BAD = [
     ("too many assumed modes", TABLE1, (*ROD, "discretization", "n"), 50000,
      "substructures.rod.discretization.n: 50000 assumed modes would need about", "got 50000"),
     ("too many elements", FE, (*ROD, "discretization", "elements"), 3_000_000,
-     "substructures.rod.discretization.elements: 3000000 elements would need about 6 GB",
+     "substructures.rod.discretization.elements: 3000000 elements would need about 12 GB",
      "got 3000000"),
     ("fractional count", TABLE1, (*ROD, "discretization", "n"), 8.5,
      "substructures.rod.discretization.n: must be an integer", "got 8.5"),
