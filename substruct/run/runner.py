@@ -30,9 +30,20 @@ __all__ = ["Model", "build_model", "run_case", "Progress"]
 
 def build_model(case: Case) -> Model:
     """Refuse a model too large for the dense analyses it asks for, then assemble it
-    (:func:`substruct.builder.model.assemble_case`)."""
+    (:func:`substruct.builder.model.assemble_case`).
+
+    Raises:
+        CaseError: a dense analysis too large; ``analysis.modes.count`` larger than the number
+            of coordinates of the assembled model (the case layer refuses it when the sizes are
+            known from the file; finite elements and solids are sized only once built).
+    """
     check_dense_sizes(case, min_size(case))
-    return assemble_case(case)
+    model = assemble_case(case)
+    spec = case.analysis.modes
+    if spec is not None and spec.count > model.assembly.n_dof:
+        raise case.error(("analysis", "modes", "count"), f"more modes than the "
+                         f"{model.assembly.n_dof} coordinates of the model", spec.count)
+    return model
 
 
 def run_case(case: Case, progress: Progress | None = None, model: Model | None = None
