@@ -358,3 +358,25 @@ def test_the_memory_cap_is_lifted_after_the_read():
         with mesh_files._memory_cap(50_000_000):
             np.ones(200_000_000)
     assert np.ones(50_000_000).sum() == 50_000_000
+
+
+def test_a_mirrored_hexahedron_reads_and_a_collapsed_one_is_named(tmp_path):
+    """Every corner negative (the numbering of a mirror image) integrates like the original;
+    one corner at zero is refused with the cell and its nodes."""
+    import meshio
+
+    pts = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1],
+                    [1, 1, 1], [0, 1, 1]], dtype=float)
+    mirrored = np.array([[4, 5, 6, 7, 0, 1, 2, 3]])
+    meshio.write(tmp_path / "m.vtu", meshio.Mesh(pts, [("hexahedron", mirrored)]))
+    assert len(read_mesh_file(tmp_path / "m.vtu").points) == 8
+    flat = pts.copy()
+    flat[6] = [1, 1, 0]  # the top corner pushed down onto the bottom face
+    meshio.write(tmp_path / "f.vtu", meshio.Mesh(flat, [("hexahedron", np.arange(8)[None])]))
+    with pytest.raises(MeshFileError, match=r"hexahedron cell 0 is collapsed \(a zero Jacobian"):
+        read_mesh_file(tmp_path / "f.vtu")
+    tri = np.array([[0, 0, 0], [1, 0, 0], [2, 0, 0], [0, 1, 0]], dtype=float)
+    meshio.write(tmp_path / "t.vtu", meshio.Mesh(tri, [("triangle", np.array([[0, 1, 3],
+                                                                              [0, 1, 2]]))]))
+    with pytest.raises(MeshFileError, match=r"triangle cell 1 is collapsed .*: nodes \[0, 1, 2\]"):
+        read_mesh_file(tmp_path / "t.vtu")

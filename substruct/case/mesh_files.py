@@ -16,7 +16,9 @@ A solid's ``mesh:`` is any file that meshio reads.  Before a byte of its data is
 its memory capped at :data:`MESH_READ_MEMORY` beyond what the process already uses (a
 compressed data block that inflates, an XDMF data set that is huge), and the mesh it returns
 checked: coordinates finite and within ``1e30`` in magnitude, every cell index pointing at a
-point.  Every problem is a :class:`MeshFileError`, one line.
+point, and no cell of the solid collapsed (a zero Jacobian at a corner, relative to its size)
+or folded (Jacobians of both signs), before anything is assembled.  Every problem is a
+:class:`MeshFileError`, one line, naming the cell.
 """
 
 from __future__ import annotations
@@ -37,8 +39,8 @@ from substruct.case.fields import gigabytes
 from substruct.case.numbers import array_problem
 
 __all__ = ["MAX_MESH_FILE", "MAX_MESH_POINTS", "MAX_MESH_CELLS", "MESH_HEADER",
-           "MESH_READ_MEMORY", "MeshFileError", "mesh_file_problem", "read_mesh_file",
-           "mesh_format"]
+           "MESH_READ_MEMORY", "DEGENERATE", "MeshFileError", "mesh_file_problem",
+           "read_mesh_file", "mesh_format"]
 
 #: Largest mesh file read (bytes): the largest solid accepted (4 GB, about 100k coordinates in
 #: 3D, 600k in 2D) comes from a Gmsh file of a few tens of MB.
@@ -219,8 +221,64 @@ def _memory_cap(extra: int) -> Iterator[None]:
         resource.setrlimit(resource.RLIMIT_AS, (soft, hard))
 
 
+#: Cells whose shape is checked (the cells a solid is made of), by vertex count.
+_VOLUME = {"hexahedron": 8, "hexahedron20": 8, "hexahedron27": 8, "tetra": 4, "tetra10": 4}
+_PLANAR = {"quad": 4, "quad8": 4, "quad9": 4, "triangle": 3, "triangle6": 3}
+#: The edges at each corner of a quadrilateral / hexahedron (VTK and Gmsh vertex order), in
+#: the order that gives a positive Jacobian for a positively oriented cell.
+_QUAD_CORNERS = np.array([[0, 1, 3], [1, 2, 0], [2, 3, 1], [3, 0, 2]])
+_HEX_CORNERS = np.array([[0, 1, 3, 4], [1, 2, 0, 5], [2, 3, 1, 6], [3, 0, 2, 7],
+                         [4, 7, 5, 0], [5, 4, 6, 1], [6, 5, 7, 2], [7, 6, 4, 3]])
+#: A corner Jacobian below this fraction of the cell's size (its diameter to the power of the
+#: dimension) is zero: the cell is collapsed.
+DEGENERATE = 1e-12
+
+
+def _corner_jacobians(xyz: np.ndarray, conn: np.ndarray, nv: int, dim: int) -> np.ndarray:
+    """The Jacobian determinant at each corner of each cell, ``(cells, corners)``; one per
+    simplex (its volume or area, times ``dim!``)."""
+    p = xyz[conn]  # (cells, nv, dim)
+    if nv == dim + 1:  # a simplex: one affine map
+        return np.linalg.det(p[:, 1:, :] - p[:, :1, :])[:, None]
+    corners = _HEX_CORNERS if dim == 3 else _QUAD_CORNERS
+    edges = p[:, corners[:, 1:], :] - p[:, corners[:, :1], :]  # (cells, corners, dim, dim)
+    return np.linalg.det(edges)
+
+
+def _check_shapes(points: np.ndarray, cells: Any) -> None:
+    """Refuse a collapsed cell (a zero Jacobian somewhere: nodes that coincide, a zero area or
+    volume) or a folded one (Jacobians of both signs at its corners), naming the first; an
+    inverted cell (every corner negative) is a mirrored numbering and integrates correctly."""
+    types = [c.type for c in cells]
+    table = _VOLUME if any(t in _VOLUME for t in types) else _PLANAR
+    dim = 3 if table is _VOLUME else 2
+    xyz = np.asarray(points, dtype=float)[:, :dim] if points.shape[1] >= dim else None
+    if xyz is None:
+        return
+    for block in cells:
+        if block.type not in table or len(block.data) == 0:
+            continue
+        nv = table[block.type]
+        conn = np.asarray(block.data)[:, :nv]
+        for start in range(0, len(conn), 200_000):
+            part = conn[start:start + 200_000]
+            with np.errstate(all="ignore"):
+                jac = _corner_jacobians(xyz, part, nv, dim)
+                ext = np.ptp(xyz[part], axis=1).max(axis=1) ** dim
+            small = np.abs(jac) <= DEGENERATE * ext[:, None]
+            mixed = (jac.max(axis=1) > 0) & (jac.min(axis=1) < 0)
+            bad = small.any(axis=1) | mixed
+            if bad.any():
+                k = int(np.argmax(bad))
+                what = "folded (its corners have Jacobians of both signs)" if mixed[k] and \
+                    not small[k].any() else "collapsed (a zero Jacobian: coinciding nodes or " \
+                    "no area or volume)"
+                nodes = [int(v) for v in part[k]]
+                raise MeshFileError(f"{block.type} cell {start + k} is {what}: nodes {nodes}")
+
+
 def _check_mesh(mesh: Any) -> None:
-    """Coordinates in range and cell indices that point at points."""
+    """Coordinates in range, cell indices that point at points, cells that are not degenerate."""
     points = np.asarray(mesh.points)
     if points.ndim != 2 or points.shape[1] not in (2, 3):
         raise MeshFileError(f"points must be 2 or 3 coordinates each, got an array of shape "
@@ -247,6 +305,7 @@ def _check_mesh(mesh: Any) -> None:
                                 f"{n} points (0..{n - 1})")
     if total > MAX_MESH_CELLS:
         raise MeshFileError(f"{total} cells, more than the {MAX_MESH_CELLS} accepted")
+    _check_shapes(points, mesh.cells)
 
 
 def read_mesh_file(path: str | os.PathLike) -> Any:

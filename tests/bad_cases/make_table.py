@@ -250,9 +250,11 @@ def limits() -> str:
          f"{_n(mesh_files.MAX_MESH_POINTS)} points and {_n(mesh_files.MAX_MESH_CELLS)} cells; "
          f"the read itself at most {gigabytes(mesh_files.MESH_READ_MEMORY)} of memory (a "
          f"compressed block that inflates); a file meshio gives up on (it would exit) is an "
-         f"error like any other; coordinates in range, cells that point at points",
+         f"error like any other; coordinates in range, cells that point at points; no cell of "
+         f"the solid collapsed or folded: the Jacobian at every corner above "
+         f"{_n(mesh_files.DEGENERATE)} of the cell's size, of one sign, the cell named",
          code(mesh_files, "MAX_MESH_FILE") + ", `MAX_MESH_POINTS`, `MAX_MESH_CELLS`, "
-         "`MESH_READ_MEMORY`"),
+         "`MESH_READ_MEMORY`, `DEGENERATE`"),
         ("generated solids", f"the elements of a `box` or `rectangle` at most "
          f"{_n(solids.MAX_ASPECT)} times longer one way than another, and each side at least "
          f"{_n(solids.MIN_RELATIVE_SIZE)} of the coordinates it lies at (a box far from the "
