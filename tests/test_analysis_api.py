@@ -74,7 +74,9 @@ def test_auto_is_sparse_above_the_limit_and_matches_the_closed_form():
     M, C, K = chain(n)
     assert choose_solver(M, C, fix_first(n), 6).strategy == "sparse"
     res = modes(M, C, K, fix_first(n), 6, checks=("null-space", "kkt"))
-    assert res.solver == "sparse" and res.method == "generalized-inverse/sparse"
+    # the production path: null-space numbers, KKT and generalized-inverse residual checks
+    assert res.solver == "sparse" and res.method == "null-space/sparse"
+    assert list(res.agreement) == ["kkt-residual", "generalized-inverse-residual"]
     np.testing.assert_allclose(res.omega, chain_omega(n - 1, 6), rtol=1e-9)
     assert max(res.agreement.values()) < 1e-9
     assert res.shapes.shape == (n, 6) and np.all(np.abs(res.shapes[0]) < 1e-12)

@@ -48,6 +48,7 @@ from substruct.analysis.checks import (
 from substruct.analysis.coupling import receptance
 from substruct.analysis.dense_modes import MODE_METHODS, coupled_modes
 from substruct.analysis.krylov import check_inputs, eliminate, free_coordinates, krylov_size
+from substruct.analysis.production import production_modes
 from substruct.analysis.results import DEFAULT_TOLERANCE, Modes, Receptance
 from substruct.analysis.sparse_modes import has_damping, sparse_coupled_modes
 from substruct.linalg.nullspace import Elimination
@@ -158,15 +159,23 @@ def modes(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
           K: sp.sparray | np.ndarray, A: sp.sparray | np.ndarray | None,
           count: int | None = None, *, method: str = "generalized-inverse",
           checks: Sequence[str] = (), solver: str = "auto",
-          tolerance: float = DEFAULT_TOLERANCE, what: str = "modes") -> Modes:
+          tolerance: float = DEFAULT_TOLERANCE, what: str = "modes",
+          full_checks: bool = False) -> Modes:
     r"""Coupled modes of ``M u'' + C u' + K u = 0`` under ``A u = 0``, with their cross-checks.
 
     .. math::  (\lambda^2 M + \lambda C + K)\, u = A^T \mu, \qquad A u = 0
                \qquad \text{(eqs 23-34)}
 
-    The strategy (dense, sparse, sparse-damped) is :func:`choose_solver`'s; each check
-    formulation is solved by the same strategy and compared with the main one
-    (:func:`substruct.analysis.checks.modes_agreement`).  On a damped model the sparse
+    The strategy (dense, sparse, sparse-damped) is :func:`choose_solver`'s.  Dense and
+    sparse-damped: the main formulation is ``method``, each check formulation is solved by the
+    same strategy and compared with it (:func:`substruct.analysis.checks.modes_agreement`).
+    Sparse (undamped): the production path (:func:`substruct.analysis.production.production_modes`),
+    whatever ``method`` names: the numbers from the null-space form (``method`` of the result
+    ``"null-space/sparse"``), the KKT and generalized-inverse forms as residual checks
+    (``agreement`` keys ``"kkt-residual"`` and ``"generalized-inverse-residual"``; a check
+    skipped as too costly is named in ``solver``); ``full_checks`` solves the named method and
+    checks in full instead (the sparse eigensolves of each formulation, compared).  On a
+    damped model the sparse
     ``"null-space"`` and ``"generalized-inverse"`` are one pencil, so neither is reported as a
     check of the other (``"kkt"`` is an independent one).
 
@@ -180,6 +189,7 @@ def modes(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
         solver: ``"auto"``, ``"dense"`` or ``"sparse"`` (:func:`choose_solver`).
         tolerance: the largest relative eigenvalue disagreement a check may have.
         what: how the analysis is named in error messages.
+        full_checks: on the sparse path, solve ``method`` and each check in full.
 
     Returns:
         The main formulation's :class:`~substruct.analysis.results.Modes`, with ``agreement``
@@ -207,12 +217,22 @@ def modes(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
         assert count is not None  # choose_solver is dense when every mode is asked
         return _sparse(M, C, K, A, count, formulation, choice)
 
-    main = solve(method)
-    agreement = {m: modes_agreement(solve(m), main) for m in others}
-    require_agreement(what, method, agreement, tolerance)
-    solver_label = main.solver
-    if choice.note or not main.solver or main.solver == choice.strategy:
-        solver_label = choice.label
+    if choice.strategy == "sparse" and not full_checks:
+        assert count is not None
+        try:
+            main, agreement, note = production_modes(M, K, A, count,
+                                                     elimination=choice.elimination)
+        except ValueError as err:
+            raise ValueError(f"sparse eigensolver: {' '.join(str(err).split())}") from None
+        require_agreement(what, main.method, agreement, tolerance)
+        solver_label = f"sparse ({note})" if note else "sparse"
+    else:
+        main = solve(method)
+        agreement = {m: modes_agreement(solve(m), main) for m in others}
+        require_agreement(what, method, agreement, tolerance)
+        solver_label = main.solver
+        if choice.note or not main.solver or main.solver == choice.strategy:
+            solver_label = choice.label
     # one type, one set of scalar types whatever the strategy: complex roots and shapes (the
     # undamped sparse solvers compute real ones), real frequencies, ratios and residuals
     return dataclasses.replace(

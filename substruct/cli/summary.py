@@ -105,8 +105,11 @@ def print_modes(modes: Any, out: TextIO, requested: int | None = None) -> None:
             out.write(f"    {count} x {reason}\n")
     if modes.agreement:
         figures = ", ".join(f"{k} {v:.1e}" for k, v in modes.agreement.items())
-        out.write(f"  agreement with check formulations (max relative eigenvalue "
-                  f"difference): {figures}\n")
+        what = "max relative eigenvalue difference; *-residual: relative residual of " \
+            "these modes in that formulation's equations" if any(
+                k.endswith("-residual") for k in modes.agreement) else \
+            "max relative eigenvalue difference"
+        out.write(f"  agreement with check formulations ({what}): {figures}\n")
 
 
 def print_frf(frf: Any, out: TextIO) -> None:
