@@ -280,17 +280,25 @@ def parse_case(text: str, source: str = "<string>", base_dir: str | Path = ".",
     return case
 
 
-def load_case(path: str | Path, overrides: Sequence[str] = ()) -> Case:
-    """Read, override and validate a case file.
+def load_case(path: str | Path | dict, overrides: Sequence[str] = ()) -> Case:
+    """Read, override and validate a case: a file, a mapping, or YAML text.
 
     Args:
-        path: the YAML file; matrix files named in it are relative to its directory.
+        path: the YAML file (matrix and mesh files named in it are relative to its
+            directory); or the case as a ``dict`` (as ``yaml.safe_load`` gives it) or as YAML
+            text (a ``str`` holding a line break), both with files relative to the current
+            directory and named ``<dict>`` / ``<string>`` in messages.
         overrides: ``key.path=value`` strings (``substruct run --set``), applied before
             validation.
 
     Raises:
         CaseError: one line, ``<file>: <field.path>: <what is wrong>, got <value>``.
     """
+    if isinstance(path, dict):
+        text = yaml.safe_dump(path, sort_keys=False)
+        return parse_case(text, "<dict>", Path.cwd(), overrides)
+    if isinstance(path, str) and "\n" in path:
+        return parse_case(path, "<string>", Path.cwd(), overrides)
     p = Path(path)
     source = str(path)
     text = read_case_text(p, source)
