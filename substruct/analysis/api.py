@@ -48,7 +48,14 @@ from substruct.analysis.checks import (
 from substruct.analysis.coupling import receptance
 from substruct.analysis.dense_modes import MODE_METHODS, coupled_modes
 from substruct.analysis.krylov import check_inputs, eliminate, free_coordinates, krylov_size
+from substruct.analysis.modal_frf import ModalOptions, frf_method, modal_receptance_sweep
 from substruct.analysis.production import production_modes
+from substruct.analysis.production_sweep import (
+    PRODUCTION_SWEEP,
+    production_sweep,
+    production_sweep_applies,
+    sweep_checks,
+)
 from substruct.analysis.results import DEFAULT_TOLERANCE, Modes, Receptance
 from substruct.analysis.sparse_modes import has_damping, sparse_coupled_modes
 from substruct.linalg.nullspace import Elimination
@@ -273,7 +280,8 @@ def receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
                      input_names: Sequence[str] | None = None,
                      output_names: Sequence[str] | None = None,
                      constraint_labels: Sequence[str] | None = None,
-                     progress: Progress | None = None, what: str = "frf") -> Receptance:
+                     progress: Progress | None = None, what: str = "frf",
+                     modal: ModalOptions | None = None) -> Receptance:
     r"""Receptances of a system under ``A q = R F`` at a frequency grid, with their
     cross-checks and constraint residual (eqs 11-15).
 
@@ -287,19 +295,31 @@ def receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
         inputs: ``n x p`` generalized forces ``e_j`` (columns).
         outputs: ``q x n`` output rows ``o_i``.
         R: ``m x n``, ties the constraint to the force (``None``: ``A q = 0``).
-        method: the main formulation (``"generalized-inverse"``, ``"null-space"``, ``"kkt"``).
+        method: the main formulation (``"generalized-inverse"``, ``"null-space"``, ``"kkt"``),
+            ``"modal"`` (modal superposition with a residual flexibility, checked by the direct
+            ``checks`` at a few frequencies:
+            :func:`substruct.analysis.modal_frf.modal_receptance_sweep`) or ``"auto"``
+            (:func:`substruct.analysis.modal_frf.frf_method`).
         checks: check formulations (the main one and repeats are skipped).
         tolerance: the largest ``max |H_check - H| / max |H|`` a check may have.
         input_names, output_names: names of the inputs and outputs (default ``"1"``, ...).
         constraint_labels: constraint names for error messages.
         progress: called as ``progress(done, total, method)`` during the sweeps.
         what: how the analysis is named in error messages.
+        modal: options of the modal sweep (the defaults of
+            :class:`~substruct.analysis.modal_frf.ModalOptions` if ``None``).
 
     Raises:
         CheckError: a check disagrees by more than ``tolerance``.
         ConstraintError: a redundant constraint row with an inconsistent ``R``.
         ValueError: an unknown method; a singular system (e.g. eq 15 at ``omega = 0``).
     """
+    method = frf_method(method, K.shape[0], R)
+    if method == "modal":
+        return modal_receptance_sweep(K, M, C, A, omegas, inputs, outputs, R=R,
+                                      options=modal or ModalOptions(), checks=checks,
+                                      tolerance=tolerance, input_names=input_names,
+                                      output_names=output_names, what=what)
     Ks = sp.csr_array(K, dtype=float)
     n = Ks.shape[0]
     Ms = sp.csr_array(M, dtype=float)
@@ -313,7 +333,9 @@ def receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
     labels = None if constraint_labels is None else list(constraint_labels)
     rows = sp.csr_array(sp.vstack([out_rows, As])) if m else out_rows
     k_out = out_rows.shape[0]
-    full = _sweep(Ks, Ms, Cs, As, w, Rs, method, forces, rows, labels, progress)
+    production = production_sweep_applies(n, Rs, method)
+    full = production_sweep(Ks, Ms, Cs, As, w, forces, rows, progress) if production else \
+        _sweep(Ks, Ms, Cs, As, w, Rs, method, forces, rows, labels, progress)
     H = full[:, :k_out]
     scale = max(float(np.abs(H).max(initial=0.0)), 1e-300)
     residual = 0.0
@@ -321,7 +343,10 @@ def receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
         RE = (Rs @ forces).toarray() if Rs is not None else np.zeros((m, forces.shape[1]))
         residual = float(np.abs(full[:, k_out:] - RE[None]).max() / scale)
     agreement = {}
-    for check in check_methods(method, checks):
+    if production:  # checked at a few frequencies (analysis/production_sweep.py)
+        agreement = sweep_checks(Ks, Ms, Cs, As, w, forces, out_rows, H, method, checks, labels)
+        method = PRODUCTION_SWEEP
+    for check in [] if production else check_methods(method, checks):
         Hc = _sweep(Ks, Ms, Cs, As, w, Rs, check, forces, out_rows, labels, progress)
         agreement[check] = receptance_difference(Hc, H)
     require_agreement(what, method, agreement, tolerance)

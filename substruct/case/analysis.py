@@ -27,7 +27,7 @@ from substruct.case.fields import (
 )
 
 __all__ = ["METHODS", "TOLERANCE", "Method", "ConstraintSpec", "Variant", "ModesAnalysis",
-           "Omega", "FrfAnalysis", "Analysis", "Output"]
+           "Omega", "ModalFrf", "FrfAnalysis", "Analysis", "Output"]
 
 #: Formulations that an analysis may name (see :mod:`substruct.analysis.coupling`).
 METHODS = ("generalized-inverse", "null-space", "kkt")
@@ -130,16 +130,39 @@ class Omega(StrictModel):
         return np.linspace(self.start, self.stop, self.num)
 
 
+class ModalFrf(StrictModel):
+    """How ``method: modal`` sums the coupled modes (:mod:`substruct.analysis.modal_frf`)."""
+
+    #: the number of modes kept (default: those up to cutoff x the highest frequency)
+    count: Count | None = None
+    cutoff: Annotated[Number, Field(ge=1)] = 10.0
+    residual: Literal["second-order", "static", "none"] = "second-order"
+    #: frequencies of the grid at which the direct solve checks the modal sum
+    check_frequencies: Annotated[int, Field(ge=0, le=100)] = 3
+    solver: Literal["auto", "dense", "sparse"] = "auto"
+
+
 class FrfAnalysis(StrictModel):
     """Receptances ``H[k, i, j]`` (eqs 11-15) at ``omega`` for forces at ``inputs``."""
 
     omega: Omega
     inputs: Annotated[list[Point], Field(min_length=1)]
     outputs: Annotated[list[Point], Field(min_length=1)]
-    method: Method = "generalized-inverse"
+    #: a direct formulation, modal (modal superposition) or auto (modal on large models)
+    method: Method | Literal["modal", "auto"] = "generalized-inverse"
     check: list[Method] = Field(default_factory=list)
+    modal: ModalFrf = Field(default_factory=ModalFrf)
+    #: the unit of the omega grid's values (rad/s or Hz)
+    units: Literal["rad/s", "Hz"] = "rad/s"
+    #: what the results are reported as: u / F, velocity / F or acceleration / F
+    quantity: Literal["receptance", "mobility", "accelerance"] = "receptance"
     #: largest max |H_check - H| / max |H| a check may have; a larger one fails the run
     tolerance: Positive = TOLERANCE
+
+    def omegas(self) -> np.ndarray:
+        """The circular frequencies of the grid (rad/s), converted from Hz if ``units: Hz``."""
+        w = self.omega.grid()
+        return 2 * np.pi * w if self.units == "Hz" else w
 
     @model_validator(mode="after")
     def _positive(self) -> "FrfAnalysis":

@@ -25,6 +25,7 @@ import scipy.sparse as sp
 
 from substruct.analysis.api import Progress, modes, receptance_sweep
 from substruct.analysis.errors import CheckError
+from substruct.analysis.modal_frf import ModalOptions
 from substruct.analysis.results import Modes, Receptance
 from substruct.assembly.stack import Assembly
 from substruct.builder.model import Model
@@ -117,11 +118,14 @@ def frf_result(case: Case, model: Model, progress: Progress | None) -> Receptanc
     inputs = sp.csc_array(asm.rows([model.points[p] for p in spec.inputs]).T)
     outputs = asm.rows([model.points[p] for p in spec.outputs])
     try:
-        return receptance_sweep(asm.K, asm.M, asm.C, asm.A, spec.omega.grid(), inputs, outputs,
+        modal = ModalOptions(spec.modal.count, spec.modal.cutoff, spec.modal.residual,
+                             spec.modal.check_frequencies, spec.modal.solver)
+        return receptance_sweep(asm.K, asm.M, asm.C, asm.A, spec.omegas(), inputs, outputs,
                                 R=asm.R, method=spec.method, checks=spec.check,
                                 tolerance=spec.tolerance, input_names=spec.inputs,
                                 output_names=spec.outputs,
-                                constraint_labels=asm.constraint_labels, progress=progress)
+                                constraint_labels=asm.constraint_labels, progress=progress,
+                                modal=modal)
     except ValueError as err:  # ConstraintError included
         raise case.error(("analysis", "frf"), " ".join(str(err).split())) from None
     except CheckError as err:
