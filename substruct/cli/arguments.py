@@ -46,6 +46,8 @@ def build_parser() -> argparse.ArgumentParser:
                      help="override a case value, e.g. substructures.c.stiffness=8000 "
                      "(repeatable; list items by name or 0-based index)")
     run.add_argument("--force", action="store_true", help="overwrite an existing result")
+    run.add_argument("--no-pictures", action="store_true",
+                     help="write the result file only (as output: {pictures: false})")
     run.add_argument("--quiet", action="store_true",
                      help="no progress bar and no table (errors are still reported)")
     run.add_argument("--json", action="store_true",
@@ -89,4 +91,6 @@ def build_parser() -> argparse.ArgumentParser:
     export.add_argument("--variant", default=None, help="export the modes of this variant")
     export.add_argument("--out", default=None, metavar="DIR",
                         help="output directory (default: beside the result)")
+    export.add_argument("--force", action="store_true",
+                        help="replace files of the same names (never the result itself)")
     return parser

@@ -1,17 +1,81 @@
 """Files the commands touch: output directories checked before anything is computed, result
-files read back, and the optional layers (pictures, exports) imported only when needed."""
+files read back, and the optional layers (pictures, exports) imported only when needed.
+
+An output directory is refused, before anything is computed, when it is given as ``''`` (use
+``.`` for the working directory), is or lies below a dangling symbolic link or a file, has a
+component or would hold a file name longer than the file system allows (``NAME_MAX``, usually
+255 bytes, counting the temporary names of the set), or cannot be written."""
 
 from __future__ import annotations
 
 import importlib
+import os
 import tempfile
 from pathlib import Path
 from types import ModuleType
-from typing import Any
+from typing import Any, Sequence
 
 from substruct.cli.arguments import InputError
 
-__all__ = ["writable_dir", "optional_module", "load_result"]
+__all__ = ["writable_dir", "check_out_dir", "optional_module", "load_result",
+           "TEMP_NAME_EXTRA"]
+
+#: Bytes a temporary name adds to a file name (``.substruct-<name>.<random>.commit``).
+TEMP_NAME_EXTRA = 30
+
+
+def _limit(path: Path, name: str, default: int) -> int:
+    try:
+        return int(os.pathconf(path, name))
+    except (OSError, ValueError, AttributeError):
+        return default
+
+
+def _shown(name: str) -> str:
+    return repr(name) if len(name) <= 40 else repr(name[:37] + "...")
+
+
+def check_out_dir(text: str, what: str, names: Sequence[str] = ()) -> Path:
+    """``text`` as an output directory that can hold the files ``names``; raise
+    :class:`InputError` (one line) for every path that would fail only once written.
+
+    Args:
+        text: the directory as the user gave it.
+        what: how the user named it (``--out``), for the message.
+        names: file names the command will write into it.
+    """
+    if not str(text).strip():
+        raise InputError(f"{what} {text!r}: an empty directory name; give a directory "
+                         "(. for the working directory)")
+    out = Path(text)
+    probe = out
+    while not probe.exists():
+        if probe.is_symlink():
+            raise InputError(f"{what} {out}: {probe} is a symbolic link to "
+                             f"{os.readlink(probe)}, which does not exist")
+        if probe.parent == probe:
+            break
+        probe = probe.parent
+    name_max = _limit(probe, "PC_NAME_MAX", 255)
+    for part in out.parts:
+        if len(os.fsencode(part)) > name_max:
+            raise InputError(f"{what} {_shown(str(out))}: the name {_shown(part)} has "
+                             f"{len(os.fsencode(part))} bytes, more than the {name_max} the "
+                             "file system allows")
+    for name in names:
+        size = len(os.fsencode(name)) + TEMP_NAME_EXTRA
+        if size > name_max:
+            raise InputError(f"{what} {out}: the file name {_shown(name)} is too long "
+                             f"({size - TEMP_NAME_EXTRA} bytes; with its temporary name at "
+                             f"most {name_max} bytes): shorten the case name")
+    path_max = _limit(probe, "PC_PATH_MAX", 4096)
+    longest = max([len(os.fsencode(n)) for n in names] + [0]) + 2 * TEMP_NAME_EXTRA
+    full = len(os.fsencode(os.path.abspath(out))) + longest
+    if full >= path_max:
+        raise InputError(f"{what} {_shown(str(out))}: a path of {full} bytes to its files, "
+                         f"more than the {path_max} the file system allows")
+    writable_dir(out, what)
+    return out
 
 
 def writable_dir(out: Path, what: str) -> None:

@@ -43,7 +43,9 @@ _RUN: dict[str, Callable[[argparse.Namespace], int]] = {
 
 
 def _one_line(text: object) -> str:
-    return " ".join(str(text).split())
+    from substruct.case.errors import printable
+
+    return printable(" ".join(str(text).split()))
 
 
 def _error(message: object, code: int) -> int:

@@ -1,57 +1,120 @@
 """``substruct info RESULT.h5`` and ``substruct export RESULT.h5``: read a result file back,
-print what it holds, or write its mode shapes for ParaView (VTU, XDMF)."""
+print what it holds, or write its mode shapes for ParaView (VTU, XDMF).
+
+A result file is untrusted input: it is read through :func:`substruct.io.hdf5.load`, which
+checks every part before using it.  ``info`` prints through :class:`EscapedText`, so that a
+string of the file cannot move the cursor, retitle or clear the terminal.  ``export`` never
+replaces the file it reads, nor, without ``--force``, any file that exists; its files are
+written as one set under the directory's lock (:mod:`substruct.io.file_set`).
+"""
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
+from typing import TextIO
 
 from substruct.cli.arguments import InputError
-from substruct.cli.files import load_result, optional_module, writable_dir
+from substruct.cli.files import check_out_dir, load_result, optional_module
 from substruct.cli.summary import print_summary, summary_json
 
-__all__ = ["info_command", "export_command"]
+__all__ = ["info_command", "export_command", "EscapedText"]
+
+
+class EscapedText:
+    """A text stream that writes control and format characters escaped (``\\x1b``), line
+    breaks and tabs excepted.
+
+    Args:
+        stream: where the text goes (``sys.stdout``).
+    """
+
+    def __init__(self, stream: TextIO):
+        self.stream = stream
+
+    def write(self, text: str) -> int:
+        """Write ``text`` with every non-printable character but ``\\n`` and ``\\t`` escaped."""
+        from substruct.case.errors import printable
+
+        lines = text.split("\n")
+        self.stream.write("\n".join("\t".join(printable(part) for part in line.split("\t"))
+                                    for line in lines))
+        return len(text)
+
+    def flush(self) -> None:
+        """Flush the stream underneath."""
+        self.stream.flush()
+
+    def isatty(self) -> bool:
+        """Whether the stream underneath is a terminal."""
+        return bool(getattr(self.stream, "isatty", lambda: False)())
 
 
 def info_command(args: argparse.Namespace) -> int:
     """Print the case, the model and the results of ``args.result``; return 0."""
     result = load_result(args.result)
-    if args.json:
+    if args.json:  # JSON escapes control characters itself
         print(json.dumps(summary_json(result, [Path(args.result)]), indent=1))
         return 0
+    out = EscapedText(sys.stdout)
     attrs = result.attrs
-    print(f"{args.result}: result of case {result.case_name!r}")
+    out.write(f"{args.result}: result of case {result.case_name!r}\n")
     for key in ("description", "created", "substruct_version", "units", "case_file",
                 "overrides"):
         if attrs.get(key):
             value = " ".join(str(attrs[key]).split())
-            print(f"  {key}: {value}")
+            out.write(f"  {key}: {value}\n")
     model = result.model
     for name, kind, a, b in zip(model.substructure_names, model.substructure_kinds,
                                 model.offsets[:-1], model.offsets[1:]):
-        print(f"  substructure {name}: {kind}, {int(b - a)} coordinate(s)")
+        out.write(f"  substructure {name}: {kind}, {int(b - a)} coordinate(s)\n")
     for label in model.constraint_labels:
-        print(f"  constraint: {label}")
-    print_summary(result, sys.stdout)
+        out.write(f"  constraint: {label}\n")
+    print_summary(result, out)  # type: ignore[arg-type]
     return 0
 
 
-def export_command(args: argparse.Namespace) -> int:
-    """Write the selected modes of ``args.result`` as VTU or XDMF; print the paths; return 0."""
-    result = load_result(args.result)
-    out = Path(args.out) if args.out else Path(args.result).resolve().parent
-    writable_dir(out, "--out")
-    export = optional_module("io.export")
-    if args.modes is not None:
-        try:
-            export.parse_modes(args.modes)
-        except ValueError as err:
-            raise InputError(f"--modes: {err}") from None
+def _same_file(a: Path, b: Path) -> bool:
     try:
-        paths = export.export_modes(result, out, args.format, args.modes, variant=args.variant)
+        return os.path.samefile(a, b)
+    except OSError:
+        return a.resolve() == b.resolve()
+
+
+def export_command(args: argparse.Namespace) -> int:
+    """Write the selected modes of ``args.result`` as VTU or XDMF; print the paths; return 0.
+
+    Every file is checked before anything is written: none may be the result read (even with
+    ``--force``), none may exist unless ``--force``.
+    """
+    from substruct.io.file_set import BusyError
+
+    result = load_result(args.result)
+    export = optional_module("io.export")
+    out = args.out if args.out is not None else str(Path(args.result).resolve().parent)
+    try:
+        paths = export.export_paths(result, Path(out) if out else Path("."), args.format,
+                                    args.modes, variant=args.variant)
     except ValueError as err:
+        text = " ".join(str(err).split())
+        raise InputError("--" + text if text.startswith("modes: ") else text) from None
+    as_file = Path(out).suffix.lower() in (".vtu", ".xdmf")
+    check_out_dir(str(Path(out).parent) if as_file else out, "--out", [p.name for p in paths])
+    for p in paths:
+        if p.exists() and _same_file(p, Path(args.result)):
+            raise InputError(f"{p} is the result being exported; export into another "
+                             "--out directory")
+        if p.exists() and not args.force:
+            raise InputError(f"{p} exists; use --force to overwrite it")
+    try:
+        paths = export.export_modes(result, out, args.format, args.modes,
+                                    variant=args.variant, force=args.force)
+    except BusyError as err:
+        raise InputError(str(err)) from None
+    except (ValueError, FileExistsError) as err:
         raise InputError(" ".join(str(err).split())) from None
     for p in paths:
         print(p)

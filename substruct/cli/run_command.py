@@ -1,5 +1,19 @@
 """``substruct run CASE.yaml``: check the outputs can be written, run the case, write the
-result file and its pictures, print the table (or ``--json``)."""
+result file and its pictures as one set, print the table (or ``--json``).
+
+The order of a run:
+
+1. the case and the output paths are checked (:func:`~substruct.cli.files.check_out_dir`);
+2. the output directory is locked (:class:`~substruct.io.file_set.OutputDir`: a second run
+   into it fails with "another run is writing DIR"; leftovers of killed runs are removed);
+3. the model is built and analysed in a child process (:func:`~substruct.cli.isolated.
+   call_isolated`), so that SIGTERM and Ctrl-C act at once even inside a long dense solve;
+4. the pictures (optional: ``--no-pictures``, ``output: {pictures: false}``) are drawn, also
+   in a child, into a staging folder, then the result file beside them;
+5. the set is committed: the new files move into place together and the previous set's
+   pictures that the new set does not have are removed.  Interrupted at any point, the
+   directory holds the previous set or the new one, never a mix.
+"""
 
 from __future__ import annotations
 
@@ -10,14 +24,25 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from substruct.cli.arguments import InputError
-from substruct.cli.files import optional_module, writable_dir
-from substruct.cli.progress import ProgressBar
+from substruct.cli.files import check_out_dir, optional_module
+from substruct.cli.isolated import call_isolated
+from substruct.cli.progress import PhaseLog, ProgressBar, phases_wanted
 from substruct.cli.summary import print_summary, summary_json
 
 if TYPE_CHECKING:
     from substruct.run.result import Result
 
-__all__ = ["run_command", "picture_paths", "write_pictures"]
+__all__ = ["run_command", "picture_paths", "write_pictures", "compute"]
+
+
+def compute(case: Any, quiet: bool) -> Result:
+    """Build and analyse ``case`` (in the child process of :func:`run_command`)."""
+    import substruct.run.runner as runner
+
+    bar = ProgressBar(sys.stderr) if not quiet else None
+    events = PhaseLog(sys.stderr, phases_wanted(sys.stderr, quiet), warn=not quiet)
+    return runner.run_case(case, progress=bar, model=runner.build_model(case, events),
+                           events=events)
 
 
 def run_command(args: argparse.Namespace) -> int:
@@ -25,27 +50,53 @@ def run_command(args: argparse.Namespace) -> int:
 
     The output directory and every file the run may write are checked before anything is
     computed; the result file is written only once every analysis (and its cross-checks)
-    has passed.
+    has passed, and together with its pictures.
     """
     from substruct.case.loader import load_case
-    from substruct.run.runner import build_model, run_case
+    from substruct.io.file_set import BusyError, OutputDir
 
     case = load_case(args.case, args.set)
-    out = Path(args.out)
-    target = out / f"{case.name}.h5"
-    writable_dir(out, "--out")
-    for path in [target, *(picture_paths(case, out) if case.output.pictures else [])]:
-        if path.exists() and not args.force:
-            raise InputError(f"{path} exists; use --force to overwrite it")
+    pictures = case.output.pictures and not getattr(args, "no_pictures", False)
+    h5_name = f"{case.name}.h5"
+    candidates = [p.name for p in picture_paths(case, Path("."))]
+    out = check_out_dir(args.out, "--out", [h5_name, *candidates])
+    try:
+        with OutputDir(out) as target:
+            files, result = _run_locked(case, args, target, out, h5_name, candidates,
+                                        pictures)
+    except BusyError as err:  # raised on entering: nothing was computed
+        raise InputError(str(err)) from None
+    _report(args, case, result, files)
+    return 0
+
+
+def _run_locked(case: Any, args: argparse.Namespace, target: Any, out: Path, h5_name: str,
+                candidates: list[str], pictures: bool) -> tuple[list[Path], Result]:
+    results = optional_module("io.hdf5")
+    for name in [h5_name, *(candidates if pictures else [])]:
+        path = out / name
         if path.is_dir():
             raise InputError(f"{path} is a directory")
-    model = build_model(case)
-    results = optional_module("io.hdf5")
-    bar = ProgressBar(sys.stderr) if not args.quiet else None
-    result = run_case(case, progress=bar, model=model)
-    files = [Path(results.save(result, target))]
-    if case.output.pictures:
-        files += write_pictures(result, out, case.name)
+        if path.exists() and not args.force:
+            raise InputError(f"{path} exists; use --force to overwrite it")
+    old = results.listed_pictures(out / h5_name) if (out / h5_name).exists() else []
+    result = call_isolated(lambda: compute(case, args.quiet))
+    staging = target.stage(case.name)
+    drawn: list[Path] = []
+    if pictures:
+        drawn = call_isolated(lambda: write_pictures(result, staging, case.name))
+    result.attrs["pictures"] = "\n".join(p.name for p in drawn)
+    results.save(result, staging / h5_name)
+    new = {h5_name, *(p.name for p in drawn)}
+    gone = [n for n in {*candidates, *old} if n not in new and n.startswith(f"{case.name}_")
+            and (out / n).is_file()]
+    placed = target.commit(staging, remove=gone)
+    order = [out / h5_name] + [out / p.name for p in drawn]
+    assert sorted(placed) == sorted(order), (placed, order)
+    return order, result
+
+
+def _report(args: argparse.Namespace, case: Any, result: Result, files: list[Path]) -> None:
     if args.json:
         print(json.dumps(summary_json(result, files), indent=1))
     elif not args.quiet:
@@ -55,7 +106,6 @@ def run_command(args: argparse.Namespace) -> int:
         if any(b != 0 for b in result.model.b):
             print("note: constant right-hand sides (rhs) do not enter modes or receptances")
         print("written: " + ", ".join(str(f) for f in files))
-    return 0
 
 
 def picture_paths(case: Any, out: Path) -> list[Path]:
@@ -71,7 +121,8 @@ def picture_paths(case: Any, out: Path) -> list[Path]:
 
 
 def write_pictures(result: Result, out: Path, name: str) -> list[Path]:
-    """The mode pictures (main modes and each variant) and the receptance picture."""
+    """The mode pictures (main modes and each variant) and the receptance picture; the
+    plotting modules are imported here, only when a picture is drawn."""
     plotting = optional_module("viz.plotting")
     files = []
     if result.modes is not None and len(result.modes.omega) and result.model.drawings:

@@ -6,23 +6,26 @@ nodal displacement of mode ``k`` is ``interp @ shapes[:, k - 1]`` reshaped to ``
 as point data ``mode_<k>_real`` and ``mode_<k>_imag`` (mode numbers are 1-based, as printed by
 ``substruct run``).  In ParaView, *Warp By Vector* with ``mode_<k>_real`` shows the mode.
 
-- ``fmt="vtu"``: one file ``<case>_modes.vtu`` holding every selected mode, with field data
+- ``fmt="vtu"``: one file ``<case>_modes.vtu`` (``<case>_modes_<variant>.vtu`` for the modes
+  of a variant) holding every selected mode, with field data
   ``mode_numbers``, ``omega`` (rad/s), ``freq_hz`` and ``damping_ratio``; with
   ``per_mode=True`` also ``<case>_mode_<k>.vtu`` files holding ``shape_real``/``shape_imag``.
 - ``fmt="xdmf"``: a time series ``<case>_modes.xdmf`` (+ its ``<case>_modes.h5``) with one step
   per mode, time = mode number, fields ``shape_real``/``shape_imag``: ParaView's time slider
   then steps through the modes.
 
-Every file is written under a temporary name in the target directory and renamed when
-complete.  The cell data ``drawing`` numbers the drawing (substructure) each cell belongs to.
+The files of one export are one set (:mod:`substruct.io.file_set`): written into a staging
+folder in the target directory under the directory's lock, read back and checked (points,
+cells, steps), then moved into place together.  An export never replaces a file unless
+``force=True``.  The mesh is checked first: known cell types with their number of nodes, no
+cell pointing past the points.  The cell data ``drawing`` numbers the drawing (substructure)
+each cell belongs to.
 """
 
 from __future__ import annotations
 
 import os
 import re
-import shutil
-import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Iterable, Sequence
@@ -32,13 +35,18 @@ import scipy.sparse as sp
 
 from substruct.analysis.results import Modes
 from substruct.builder.drawing import Drawing
+from substruct.io.file_set import OutputDir
 from substruct.io.hdf5 import atomic_path
+from substruct.io.result_reader import CELL_NODES
+from substruct.io.xdmf_export import check_xdmf, write_xdmf
 from substruct.run.result import ModelInfo, Result
 
 __all__ = ["CombinedMesh", "combined_mesh", "select_modes", "parse_modes", "export_modes",
-           "EXPORT_FORMATS"]
+           "export_paths", "EXPORT_FORMATS", "MAX_MODE_NUMBER"]
 
 EXPORT_FORMATS: tuple[str, ...] = ("vtu", "xdmf")
+#: Mode numbers above this are refused by :func:`parse_modes` before any list is built.
+MAX_MODE_NUMBER = 1_000_000
 
 
 @dataclass
@@ -68,7 +76,8 @@ def combined_mesh(model: ModelInfo | Sequence[Drawing]) -> CombinedMesh:
     """Stack the drawings of ``model`` (or a list of drawings) into one mesh.
 
     Raises:
-        ValueError: there are no drawings.
+        ValueError: there are no drawings; a cell block of an unknown type, of the wrong
+            number of nodes, or pointing past its drawing's points (named).
     """
     drawings = list(model.drawings if isinstance(model, ModelInfo) else model)
     if not drawings:
@@ -77,31 +86,66 @@ def combined_mesh(model: ModelInfo | Sequence[Drawing]) -> CombinedMesh:
     for i, d in enumerate(drawings):
         p = np.asarray(d.points, dtype=float).reshape(-1, 3)
         for cell_type, conn in d.cells:
-            cells.append((str(cell_type), np.asarray(conn, dtype=np.int64) + offsets[-1]))
+            conn = _checked_cells(d, str(cell_type), conn, len(p))
+            cells.append((str(cell_type), conn + offsets[-1]))
             owner.append(i)
         points.append(p)
-        interps.append(sp.csr_array(d.interp))
+        interp = sp.csr_array(d.interp)
+        if interp.shape[0] != 3 * len(p):
+            raise ValueError(f"drawing {d.name!r}: interp has {interp.shape[0]} rows for "
+                             f"{len(p)} points (expected {3 * len(p)})")
+        interps.append(interp)
         offsets.append(offsets[-1] + len(p))
     return CombinedMesh(points=np.vstack(points), cells=cells, cell_drawing=owner,
                         interp=sp.csr_array(sp.vstack(interps, format="csr")),
                         point_offsets=np.asarray(offsets))
 
 
-def parse_modes(text: str) -> list[int]:
+def _checked_cells(d: Drawing, cell_type: str, conn: object, n_points: int) -> np.ndarray:
+    nodes = CELL_NODES.get(cell_type)
+    if nodes is None:
+        raise ValueError(f"drawing {d.name!r}: unknown cell type {cell_type[:40]!r}")
+    a = np.asarray(conn)
+    if a.ndim != 2 or a.shape[1] != nodes or (a.size and a.dtype.kind not in "iu"):
+        raise ValueError(f"drawing {d.name!r}: {cell_type} cells must be integers of shape "
+                         f"(c, {nodes}), got {a.dtype} of shape {a.shape}")
+    a = a.astype(np.int64)
+    if a.size and (a.min() < 0 or a.max() >= n_points):
+        raise ValueError(f"drawing {d.name!r}: a {cell_type} cell points at point "
+                         f"{int(a.max() if a.max() >= n_points else a.min())}, of "
+                         f"{n_points} points")
+    return a
+
+
+def parse_modes(text: str, limit: int = MAX_MODE_NUMBER) -> list[int]:
     """Mode numbers from a command-line spec such as ``"1-6"``, ``"2,4,7-9"`` or ``"3"``.
 
+    Args:
+        text: the spec.
+        limit: the highest mode number there is; a higher one is refused before any list
+            is built (``1-99999999999999`` costs nothing).
+
     Raises:
-        ValueError: the text is not a comma-separated list of numbers and ranges.
+        ValueError: the text is not a comma-separated list of numbers and ranges, or names a
+            mode above ``limit``.
     """
     numbers: list[int] = []
-    for part in str(text).split(","):
-        m = re.fullmatch(r"\s*(\d+)\s*(?:-\s*(\d+)\s*)?", part)
-        if not m:
+    for part in str(text)[:10_000].split(","):
+        m = re.fullmatch(r"\s*(\d{1,20})\s*(?:-\s*(\d{1,20})\s*)?", part)
+        if not m or len(str(text)) > 10_000:
+            shown = text if len(text) <= 40 else text[:37] + "..."
             raise ValueError(f"modes: expected numbers and ranges such as '1-6' or '1,3,5', "
-                             f"got {text!r}")
+                             f"got {shown!r}")
         lo, hi = int(m.group(1)), int(m.group(2) or m.group(1))
         if hi < lo:
             raise ValueError(f"modes: range {part.strip()!r} runs backwards")
+        if hi > limit:
+            first = max(lo, limit + 1)
+            raise ValueError(f"modes: no mode {first}; the result has {limit} modes "
+                             f"(numbered 1 to {limit})" if limit != MAX_MODE_NUMBER else
+                             f"modes: no mode {first}; mode numbers go up to {limit}")
+        if len(numbers) + hi - lo + 1 > limit:
+            raise ValueError(f"modes: more than {limit} mode numbers in {text!r}")
         numbers.extend(range(lo, hi + 1))
     return numbers
 
@@ -116,7 +160,7 @@ def select_modes(modes: Modes, numbers: Iterable[int] | str | None) -> list[int]
     if numbers is None:
         return list(range(1, n + 1))
     if isinstance(numbers, str):
-        numbers = parse_modes(numbers)
+        numbers = parse_modes(numbers, limit=n)
     chosen: list[int] = []
     for k in numbers:
         if isinstance(k, (bool, np.bool_)) or not isinstance(k, (int, np.integer)):
@@ -142,13 +186,33 @@ def _mode_result(result: Result, variant: str | None) -> Modes:
     return result.modes
 
 
-def _target(result: Result, out: str | os.PathLike, fmt: str) -> Path:
+def _target(result: Result, out: str | os.PathLike, fmt: str, variant: str | None) -> Path:
     out = Path(out)
     if out.suffix.lower() in (".vtu", ".xdmf"):
         if out.suffix.lower() != f".{fmt}":
             raise ValueError(f"export path {str(out)!r} does not end in .{fmt} (format {fmt!r})")
         return out
-    return out / f"{_safe(result.case_name)}_modes.{fmt}"
+    tail = f"_{_safe(variant)}" if variant is not None else ""
+    return out / f"{_safe(result.case_name)}_modes{tail}.{fmt}"
+
+
+def export_paths(result: Result, out: str | os.PathLike, fmt: str = "vtu",
+                 modes: Sequence[int] | str | None = None, *, variant: str | None = None,
+                 per_mode: bool = False) -> list[Path]:
+    """Every file :func:`export_modes` would write with these arguments (nothing is written).
+
+    Raises:
+        ValueError: as :func:`export_modes`.
+    """
+    if fmt not in EXPORT_FORMATS:
+        raise ValueError(f"format must be one of {', '.join(EXPORT_FORMATS)}, got {fmt!r}")
+    numbers = select_modes(_mode_result(result, variant), modes)
+    path = _target(result, out, fmt, variant)
+    if fmt == "xdmf":
+        return [path, path.with_suffix(".h5")]
+    stem = path.stem[: -len("_modes")] if path.stem.endswith("_modes") else path.stem
+    return [path] + ([path.with_name(f"{stem}_mode_{k}.vtu") for k in numbers]
+                     if per_mode else [])
 
 
 def _safe(name: str) -> str:
@@ -158,7 +222,7 @@ def _safe(name: str) -> str:
 
 def export_modes(result: Result, out: str | os.PathLike, fmt: str = "vtu",
                  modes: Sequence[int] | str | None = None, *, variant: str | None = None,
-                 per_mode: bool = False) -> list[Path]:
+                 per_mode: bool = False, force: bool = False) -> list[Path]:
     """Write mode shapes for ParaView; return the paths written.
 
     Args:
@@ -169,9 +233,13 @@ def export_modes(result: Result, out: str | os.PathLike, fmt: str = "vtu",
         modes: 1-based mode numbers (or a spec such as ``"1-6"``); ``None`` exports all.
         variant: export the modes of ``result.variants[variant]`` instead of ``result.modes``.
         per_mode: with ``"vtu"``, also write one ``<stem>_mode_<k>.vtu`` per mode.
+        force: replace files that exist (otherwise they are refused).
 
     Raises:
-        ValueError: unknown format, bad mode number (named), no modes or no drawings.
+        ValueError: unknown format, bad mode number (named), no modes or no drawings, a
+            drawing whose cells are of an unknown type or point past its points.
+        FileExistsError: a file to write exists (and ``force`` is false).
+        substruct.io.file_set.BusyError: another process writes into the directory.
     """
     if fmt not in EXPORT_FORMATS:
         raise ValueError(f"format must be one of {', '.join(EXPORT_FORMATS)}, got {fmt!r}")
@@ -181,11 +249,25 @@ def export_modes(result: Result, out: str | os.PathLike, fmt: str = "vtu",
     if mesh.interp.shape[1] != mr.shapes.shape[0]:
         raise ValueError(f"drawings expect {mesh.interp.shape[1]} coordinates, the mode shapes "
                          f"have {mr.shapes.shape[0]}")
+    paths = export_paths(result, out, fmt, numbers, variant=variant, per_mode=per_mode)
+    for p in paths:
+        if p.is_dir() or (p.exists() and not force):
+            raise FileExistsError(f"{p} exists; use --force to overwrite it" if not p.is_dir()
+                                  else f"{p} is a directory")
     disp = {k: mesh.displacement(mr.shapes[:, k - 1]) for k in numbers}
-    path = _target(result, out, fmt)
-    if fmt == "vtu":
-        return _write_vtu(path, mesh, mr, numbers, disp, per_mode)
-    return _write_xdmf(path, mesh, numbers, disp)
+    with OutputDir(paths[0].parent) as target:
+        staging = target.stage(paths[0].stem)
+        here = staging / paths[0].name
+        if fmt == "vtu":
+            written = _write_vtu(here, mesh, mr, numbers, disp, per_mode)
+        else:
+            written = write_xdmf(here, mesh.points, mesh.cells, numbers, disp)
+            check_xdmf(here, len(mesh.points), sum(len(c) for _, c in mesh.cells),
+                       len(numbers))
+        if sorted(p.name for p in written) != sorted(p.name for p in paths):
+            raise RuntimeError(f"export wrote {written}, expected {paths}")
+        target.commit(staging)
+    return paths
 
 
 def _cell_data(mesh: CombinedMesh) -> dict[str, list[np.ndarray]]:
@@ -230,6 +312,13 @@ def _write_mesh(path: Path, mesh) -> Path:
     with atomic_path(path, suffix=".vtu.part") as tmp:
         meshio.write(tmp, mesh, file_format="vtu")
         _add_field_data(tmp, mesh.field_data)
+    back = meshio.read(path, file_format="vtu")
+    n_cells = sum(len(c.data) for c in mesh.cells)
+    if len(back.points) != len(mesh.points) or \
+            sum(len(c.data) for c in back.cells) != n_cells or \
+            any(c.data.size and c.data.max() >= len(back.points) for c in back.cells):
+        raise ValueError(f"{path.name} does not read back: {len(back.points)} points, "
+                         f"{sum(len(c.data) for c in back.cells)} cells")
     return path
 
 
@@ -251,70 +340,3 @@ def _add_field_data(path: Path, field_data: dict[str, np.ndarray]) -> None:
     path.write_text(text[:at] + block + text[at:], encoding="utf-8")
 
 
-def _by_type(cells: list[tuple[str, np.ndarray]]) -> list[tuple[str, np.ndarray]]:
-    """Cell blocks merged by type (first-seen order)."""
-    merged: dict[str, list[np.ndarray]] = {}
-    for cell_type, conn in cells:
-        merged.setdefault(cell_type, []).append(conn)
-    return [(t, np.vstack(blocks)) for t, blocks in merged.items()]
-
-
-def _xdmf_writer():
-    import xml.etree.ElementTree as ET
-
-    import h5py
-    from meshio.xdmf import TimeSeriesWriter
-    from meshio.xdmf.common import meshio_type_to_xdmf_index
-
-    class Writer(TimeSeriesWriter):
-        """meshio's writer with two fixes.
-
-        meshio opens ``<stem>.h5`` in the *working* directory; this one keeps it beside the
-        ``.xdmf`` (which refers to it by base name).  meshio's mixed topology fails on line
-        cells (it writes the polyline node count into a 2-column array); this one builds the
-        mixed connectivity itself.
-        """
-
-        def __enter__(self):
-            self.h5_filename = str(self.filename.with_suffix(".h5"))
-            self.h5_file = h5py.File(self.h5_filename, "w")
-            return self
-
-        def cells(self, cells, grid):
-            if len(cells) == 1:
-                return super().cells(cells, grid)
-            parts = []
-            for cell_type, conn in cells:
-                conn = np.asarray(conn, dtype=np.int64)
-                prefix = [meshio_type_to_xdmf_index[cell_type]]
-                if cell_type == "line":
-                    prefix.append(2)
-                head = np.tile(np.asarray(prefix, dtype=np.int64), (len(conn), 1))
-                parts.append(np.hstack([head, conn]).ravel())
-            data = np.concatenate(parts)
-            topo = ET.SubElement(grid, "Topology", TopologyType="Mixed",
-                                 NumberOfElements=str(sum(len(c) for _, c in cells)))
-            item = ET.SubElement(topo, "DataItem", DataType="Int", Dimensions=str(data.size),
-                                 Format=self.data_format, Precision="8")
-            item.text = self.numpy_to_xml_string(data)
-
-    return Writer
-
-
-def _write_xdmf(path: Path, mesh: CombinedMesh, numbers: list[int],
-                disp: dict[int, np.ndarray]) -> list[Path]:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    h5_path = path.with_suffix(".h5")
-    staging = Path(tempfile.mkdtemp(dir=path.parent, prefix=f".{path.name}.", suffix=".part"))
-    try:
-        with _xdmf_writer()(staging / path.name) as writer:
-            writer.write_points_cells(mesh.points, _by_type(mesh.cells))
-            for k in numbers:
-                writer.write_data(k, point_data={
-                    "shape_real": np.ascontiguousarray(disp[k].real, dtype=float),
-                    "shape_imag": np.ascontiguousarray(disp[k].imag, dtype=float)})
-        os.replace(staging / h5_path.name, h5_path)
-        os.replace(staging / path.name, path)
-    finally:
-        shutil.rmtree(staging, ignore_errors=True)
-    return [path, h5_path]

@@ -17,7 +17,8 @@ The layout is documented in ``docs/results.md``; in short::
 
 :func:`save` writes to a temporary file in the target directory and renames it over the
 target, so an interrupted run never leaves a broken (or half-overwritten) result.
-:func:`load` returns the same objects that were saved.
+:func:`load` (:mod:`substruct.io.result_reader`, which checks every part of the file before
+trusting it) returns the same objects that were saved.
 """
 
 from __future__ import annotations
@@ -34,18 +35,14 @@ import numpy as np
 import scipy.sparse as sp
 
 from substruct import __version__
-from substruct.builder.drawing import Drawing
-from substruct.analysis.results import DEFAULT_TOLERANCE, Modes, Receptance
+from substruct.analysis.results import Modes, Receptance
+from substruct.io.file_set import TEMP_PREFIX
+from substruct.io.result_reader import FORMAT, FORMAT_VERSION, RESERVED_ATTRS, load
 from substruct.run.result import ModelInfo, Result
 
-__all__ = ["save", "load", "atomic_path", "FORMAT", "FORMAT_VERSION"]
+__all__ = ["save", "load", "atomic_path", "listed_pictures", "FORMAT", "FORMAT_VERSION"]
 
-#: Value of the root attribute ``format`` that marks a substruct result file.
-FORMAT = "substruct-result"
-#: Layout version; bumped when the layout changes incompatibly.
-FORMAT_VERSION = 1
-#: Root attributes that :func:`load` turns into fields (not into ``Result.attrs``).
-_RESERVED = ("format", "format_version", "case_name", "case_yaml")
+_RESERVED = RESERVED_ATTRS
 #: Root attributes :func:`save` always writes itself (never taken from ``Result.attrs``).
 _OWN = _RESERVED + ("substruct_version", "created")
 _DEFAULT_UNITS = "consistent units of the case file; omega in rad/s"
@@ -86,14 +83,16 @@ def save(result: Result, path: str | os.PathLike) -> Path:
 def atomic_path(path: str | os.PathLike, suffix: str = ".part") -> Iterator[Path]:
     """Yield a temporary path beside ``path``; rename it to ``path`` if the block succeeds.
 
-    The temporary file is created in the target directory (so the final ``os.replace`` is an
+    The temporary file (``.substruct-<name>.<random><suffix>``) is created in the target
+    directory (so the final ``os.replace`` is an
     atomic rename on the same file system) with the permissions a new file would get.  If the
     block raises, the temporary file is removed and ``path`` is untouched.  Missing parent
     directories are created.
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=suffix)
+    fd, name = tempfile.mkstemp(dir=path.parent, prefix=f"{TEMP_PREFIX}{path.name}.",
+                               suffix=suffix)
     os.close(fd)
     tmp = Path(name)
     try:
@@ -225,137 +224,18 @@ def _write_model(g: h5py.Group, model: ModelInfo) -> None:
 # ----------------------------------------------------------------------------- reading
 
 
-class _Foreign(Exception):
-    """Raised inside :func:`load` for anything that is not a substruct result."""
-
-
-def load(path: str | os.PathLike) -> Result:
-    """Read a result written by :func:`save`.
-
-    Raises:
-        FileNotFoundError: ``path`` does not exist.
-        ValueError: ``"<path>: not a substruct result: <why>"`` for a file that is not HDF5,
-            is truncated, or lacks the substruct layout.
-    """
-    path = Path(path)
-    if not path.exists():
-        raise FileNotFoundError(f"{path}: no such file")
+def listed_pictures(path: str | os.PathLike) -> list[str]:
+    """The picture names a result file lists as its set (root attribute ``pictures``); ``[]``
+    when the file is missing, unreadable or lists none.  Only plain names of files beside the
+    result are returned (no directory parts)."""
     try:
-        f = h5py.File(path, "r")
-    except OSError as exc:
-        raise ValueError(f"{path}: not a substruct result: not a readable HDF5 file "
-                         f"({exc})") from None
-    try:
-        with f:
-            return _read(f)
-    except _Foreign as exc:
-        raise ValueError(f"{path}: not a substruct result: {exc}") from None
-    except (KeyError, OSError, TypeError, ValueError) as exc:
-        raise ValueError(f"{path}: not a substruct result: damaged or incomplete "
-                         f"({type(exc).__name__}: {exc})") from None
-
-
-def _read(f: h5py.File) -> Result:
-    fmt = f.attrs.get("format")
-    if fmt != FORMAT:
-        raise _Foreign(f"root attribute 'format' is {fmt!r}, expected {FORMAT!r}")
-    version = int(f.attrs.get("format_version", -1))
-    if version > FORMAT_VERSION:
-        raise _Foreign(f"format_version {version} is newer than this program reads "
-                       f"({FORMAT_VERSION}); upgrade substruct")
-    if "model" not in f:
-        raise _Foreign("no /model group")
-    attrs = {k: _plain(v) for k, v in f.attrs.items() if k not in _RESERVED}
-    variants = {}
-    if "variants" in f:
-        for gname, g in f["variants"].items():
-            variants[str(g.attrs.get("name", gname))] = _read_modes(g)
-    return Result(
-        case_name=str(f.attrs["case_name"]),
-        case_yaml=str(f.attrs["case_yaml"]),
-        model=_read_model(f["model"]),
-        modes=_read_modes(f["modes"]) if "modes" in f else None,
-        frf=_read_frf(f["frf"]) if "frf" in f else None,
-        variants=variants,
-        attrs=attrs,
-    )
-
-
-def _plain(value: Any) -> Any:
-    """h5py attribute values as plain Python scalars."""
-    if isinstance(value, bytes):
-        return value.decode("utf-8")
-    if isinstance(value, np.generic):
-        return value.item()
-    return value
-
-
-def _read_strings(g: h5py.Group, name: str) -> list[str]:
-    return [str(s) for s in g[name].asstr()[()]]
-
-
-def _read_csr(g: h5py.Group) -> sp.csr_array:
-    shape = tuple(int(s) for s in g["shape"][()])
-    return sp.csr_array((g["data"][()], g["indices"][()], g["indptr"][()]), shape=shape)
-
-
-def _read_agreement(g: h5py.Group) -> dict[str, float]:
-    prefix = "agreement_"
-    return {k[len(prefix):]: float(v) for k, v in g.attrs.items() if k.startswith(prefix)}
-
-
-def _read_modes(g: h5py.Group) -> Modes:
-    return Modes(
-        method=str(g.attrs["method"]),
-        eigenvalues=g["eigenvalues"][()],
-        omega=g["omega"][()],
-        damping_ratio=g["damping_ratio"][()],
-        shapes=g["shapes"][()],
-        residual=g["constraint_residual"][()],
-        spurious=g["spurious_eigenvalues"][()],
-        spurious_reason=_read_strings(g, "spurious_reason"),
-        agreement=_read_agreement(g),
-        solver=str(g.attrs.get("solver", "")),
-        tolerance=float(g.attrs.get("tolerance", DEFAULT_TOLERANCE)),
-    )
-
-
-def _read_frf(g: h5py.Group) -> Receptance:
-    return Receptance(
-        method=str(g.attrs["method"]),
-        omega=g["omega"][()],
-        H=g["H"][()],
-        inputs=_read_strings(g, "inputs"),
-        outputs=_read_strings(g, "outputs"),
-        agreement=_read_agreement(g),
-        constraint_residual=float(g.attrs["constraint_residual"]),
-        tolerance=float(g.attrs.get("tolerance", DEFAULT_TOLERANCE)),
-    )
-
-
-def _numbered(g: h5py.Group):
-    return [g[k] for k in sorted(g, key=int)]
-
-
-def _read_model(g: h5py.Group) -> ModelInfo:
-    drawings = []
-    for dg in _numbered(g["drawings"]):
-        cells = [(str(ds.attrs["cell_type"]), ds[()]) for ds in _numbered(dg["cells"])]
-        names = _read_strings(dg, "glyph_names")
-        indices = dg["glyph_indices"][()]
-        drawings.append(Drawing(
-            name=str(dg.attrs["name"]), kind=str(dg.attrs["kind"]), points=dg["points"][()],
-            cells=cells, interp=_read_csr(dg["interp"]),
-            glyphs={n: int(i) for n, i in zip(names, indices)},
-        ))
-    return ModelInfo(
-        dof_labels=_read_strings(g, "dof_labels"),
-        substructure_names=_read_strings(g, "substructure_names"),
-        substructure_kinds=_read_strings(g, "substructure_kinds"),
-        offsets=g["offsets"][()],
-        A=_read_csr(g["A"]),
-        b=g["b"][()],
-        R=_read_csr(g["R"]),
-        constraint_labels=_read_strings(g, "constraint_labels"),
-        drawings=drawings,
-    )
+        with h5py.File(path, "r") as f:
+            aid = f.attrs.get_id("pictures") if "pictures" in f.attrs else None
+            if aid is None or aid.shape != () or h5py.check_string_dtype(aid.dtype) is None:
+                return []
+            text = f.attrs["pictures"]
+    except Exception:  # noqa: BLE001 - a damaged old file lists nothing
+        return []
+    text = text.decode("utf-8", "replace") if isinstance(text, bytes) else str(text)
+    return [n for n in text.splitlines()
+            if n and "/" not in n and "\\" not in n and n not in (".", "..")]
