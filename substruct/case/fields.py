@@ -20,14 +20,17 @@ from pydantic import (
     ConfigDict,
     Field,
     StringConstraints,
+    ValidationInfo,
 )
 
-from substruct.case.numbers import BigNumber, digits_problem, number_problem
+from substruct.case.expressions import ExpressionError, scalar
+from substruct.case.numbers import (BigNumber, coefficient_problem, digits_problem,
+                                    number_problem)
 
 __all__ = [
     "MEMORY_LIMIT", "MAX_ASSUMED_MODES", "MAX_ELEMENTS", "MAX_FREQUENCIES", "MAX_MATRIX_SIZE",
     "MAX_DENSE_ENTRIES", "MAX_COUNT", "MAX_NAME_LENGTH", "DENSE_CHECK", "NAME_PATTERN",
-    "Number", "Positive", "NonNegative", "Count", "Name", "Point", "Distribution",
+    "Number", "Coefficient", "Positive", "NonNegative", "Count", "Name", "Point", "Distribution",
     "StrictModel", "parse_point", "gigabytes",
 ]
 
@@ -70,12 +73,64 @@ def _no_bool(value: Any) -> Any:
     return value
 
 
-#: A finite number, 0 or within 1e-30 .. 1e30 in magnitude.
-Number = Annotated[float, BeforeValidator(_no_bool), AfterValidator(_in_range)]
+def _literal(text: str, kind: type) -> bool:
+    """Whether ``text`` is a number pydantic reads itself (``"1e-310"``, ``" 12 "``, ``"nan"``)."""
+    try:
+        kind(text)
+    except (ValueError, OverflowError):
+        return False
+    return True
+
+
+def _parameter_value(value: str, info: ValidationInfo) -> float:
+    """The value of an expression of the case parameters (:func:`substruct.case.expressions.
+    scalar`: whitelisted syntax, never ``eval``), checked by the one numeric validation."""
+    params = dict((info.context or {}).get("parameters", {}))
+    if value.strip().isidentifier() and value.strip() not in params:
+        raise ValueError("must be a number")  # not a parameter of the case
+    try:
+        return scalar(value, params)
+    except ExpressionError as err:
+        raise ValueError(str(err)) from None
+
+
+def _number(value: Any, info: ValidationInfo) -> Any:
+    """A number, or text naming case parameters (``k``, ``2*k0``) evaluated to a float."""
+    if isinstance(value, str) and not _literal(value, float):
+        return _parameter_value(value, info)
+    return _no_bool(value)
+
+
+def _count(value: Any, info: ValidationInfo) -> Any:
+    """An integer, or an expression of the case parameters whose value is a whole number."""
+    if isinstance(value, str) and not _literal(value, int):
+        x = _parameter_value(value, info)
+        if x != round(x):
+            raise ValueError(f"must be an integer: {value.strip()!r} = {x:.6g}")
+        return int(round(x))
+    return _no_bool(value)
+
+
+#: A finite number, 0 or within 1e-30 .. 1e30 in magnitude; or an expression of the case
+#: parameters (``stiffness: k``, ``mass: 2*m0``) whose value is checked the same way.
+Number = Annotated[float, BeforeValidator(_number), AfterValidator(_in_range)]
 Positive = Annotated[Number, Field(gt=0)]
+
+
+def _coefficient_in_range(value: float) -> float:
+    problem = coefficient_problem(value)
+    if problem is not None:
+        raise ValueError(problem)
+    return value
+
+
+#: A constraint coefficient: like :data:`Number` but finite at any magnitude (the rows are
+#: equilibrated before any decision, so ``1e-300 q1 = 0`` means ``q1 = 0``).
+Coefficient = Annotated[float, BeforeValidator(_number), AfterValidator(_coefficient_in_range)]
 NonNegative = Annotated[Number, Field(ge=0)]
-#: An integer within 1 .. MAX_COUNT (each count has its own, smaller limit too).
-Count = Annotated[int, BeforeValidator(_no_bool), Field(ge=1, le=MAX_COUNT)]
+#: An integer within 1 .. MAX_COUNT (each count has its own, smaller limit too); or an
+#: expression of the case parameters with a whole-number value (``elements: 4*n``).
+Count = Annotated[int, BeforeValidator(_count), Field(ge=1, le=MAX_COUNT)]
 Name = Annotated[str, StringConstraints(pattern=NAME_PATTERN, max_length=MAX_NAME_LENGTH)]
 
 

@@ -52,7 +52,7 @@ from substruct.case.analysis import (
     Variant,
 )
 from substruct.case.errors import MISSING, CaseError, FieldError, field_path, translate
-from substruct.case.expressions import CONSTANTS, FUNCTIONS
+from substruct.case.expressions import CONSTANTS, FUNCTIONS, ExpressionError, scalar
 from substruct.case.fields import (
     DENSE_CHECK,
     MAX_ASSUMED_MODES,
@@ -228,7 +228,8 @@ class Case(StrictModel):
 
 
 def _parameters(raw: Any) -> dict[str, float]:
-    """The parameters that are plain finite numbers (others are reported by validation)."""
+    """The parameters that are finite numbers, or expressions of the parameters before them
+    (others are reported by validation)."""
     out: dict[str, float] = {}
     if isinstance(raw, dict):
         for k, v in raw.items():
@@ -237,7 +238,10 @@ def _parameters(raw: Any) -> dict[str, float]:
             try:
                 f = float(v)
             except (ValueError, OverflowError):
-                continue
+                try:
+                    f = scalar(v, out)
+                except ExpressionError:
+                    continue
             if isinstance(k, str) and math.isfinite(f):
                 out[k] = f
     return out

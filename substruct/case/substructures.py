@@ -15,7 +15,7 @@ import numpy as np
 from pydantic import Field, PrivateAttr, ValidationInfo, model_validator
 
 from substruct.case.errors import FieldError
-from substruct.case.expressions import ExpressionError, profile
+from substruct.case.expressions import ExpressionError, profile, scalar
 from substruct.case.fields import (
     MAX_ASSUMED_MODES,
     MAX_ELEMENTS,
@@ -89,14 +89,21 @@ class ModalDamping(StrictModel):
     rayleigh: tuple[NonNegative, NonNegative] | None = None
 
     @model_validator(mode="after")
-    def _one(self) -> "ModalDamping":
+    def _one(self, info: ValidationInfo) -> "ModalDamping":
         if (self.ratio is None) == (self.rayleigh is None):
             raise ValueError("give exactly one of ratio: z (or [z1, z2, ...]) and "
                              "rayleigh: [alpha, beta]")
         if self.ratio is not None:
             values = self.ratio if isinstance(self.ratio, list) else [self.ratio]
+            params = dict((info.context or {}).get("parameters", {}))
             for k, z in enumerate(values):
                 loc = ("ratio", k) if isinstance(self.ratio, list) else "ratio"
+                if isinstance(z, str):  # an expression of the case parameters
+                    try:
+                        z = values[k] = scalar(z, params)
+                    except ExpressionError as err:
+                        raise FieldError(loc, f"a damping ratio must be a number or an "
+                                         f"expression of the parameters: {err}", z) from None
                 if isinstance(z, bool) or not isinstance(z, (int, float)):
                     raise FieldError(loc, "a damping ratio must be a number", z)
                 problem = number_problem(z)
@@ -107,6 +114,8 @@ class ModalDamping(StrictModel):
                 if z > MAX_DAMPING_RATIO:
                     raise FieldError(loc, f"a damping ratio must be at most "
                                      f"{MAX_DAMPING_RATIO:g} (1 is critical damping)", z)
+            if not isinstance(self.ratio, list):
+                self.ratio = values[0]
         return self
 
     def as_argument(self) -> Any:
