@@ -1,0 +1,298 @@
+r"""Constrained transient response (paper eqs 5 and 10): time histories of coupled
+substructures,
+
+.. math::  M \ddot q + C \dot q + K q = P(t) + Q^c, \qquad A q = b, \qquad
+           Q^c = M \ddot q - (P - C \dot q - K q) \quad \text{(eq 5)},
+
+integrated by Newmark's average acceleration or the generalized-alpha method
+(:mod:`substruct.analysis.integrators`) in one of three forms:
+
+* ``"generalized-inverse"``: every coordinate is integrated and the acceleration of each step
+  is eq (5) with the effective matrix :math:`S` of the step in the place of :math:`M`
+  (:math:`S` is definite where :math:`M` is semidefinite, eq 10); displacements, velocities
+  and accelerations are projected onto :math:`A q = b` with the :math:`S`-orthogonal projector
+  at every step, so the constraints hold to rounding over any number of steps;
+* ``"null-space"``: :math:`q = T p + q_p` with ``T`` from the master-slave elimination
+  (:func:`substruct.linalg.nullspace.master_slave`), and :math:`T^T M T \ddot p + \dots
+  = T^T (P - K q_p)`;
+* ``"modal"``: superposition of the coupled modes (:func:`substruct.analysis.api.modes`) with
+  a static correction for the truncated ones (:mod:`substruct.analysis.transient_modal`).
+
+The initial acceleration is eq (10) (:func:`substruct.analysis.projection.constrained_acceleration`):
+consistent with the constraints and with the massless coordinates of the absorbers.  Each
+form factorizes its effective matrix once for the run.  The forms named in ``checks`` are
+computed as well and their agreement held to ``tolerance``
+(:func:`substruct.analysis.checks.require_agreement`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable, Sequence
+
+import numpy as np
+import scipy.sparse as sp
+
+from substruct.analysis.checks import check_methods, receptance_difference, require_agreement
+from substruct.analysis.integrators import (
+    Correction,
+    Scheme,
+    Work,
+    effective_matrix,
+    integrate,
+    scheme,
+)
+from substruct.analysis.krylov import eliminate
+from substruct.analysis.projection import constrained_acceleration
+from substruct.analysis.results import DEFAULT_TOLERANCE
+from substruct.analysis.transient_modal import modal_run
+from substruct.analysis.transient_record import Physical, Recorder, constraint_force_solver
+from substruct.analysis.transient_results import Transient
+from substruct.linalg.constraints import independent_rows, particular_solution, pinv_sym
+from substruct.linalg.factorize import Solve, factorizer
+from substruct.linalg.scaling import equilibrate, mass_column_scale, massless_coordinates
+
+__all__ = ["TRANSIENT_METHODS", "DENSE_STEP", "TransientOptions", "transient", "direct_run",
+           "initial_state"]
+
+#: The forms a transient analysis may name.
+TRANSIENT_METHODS = ("generalized-inverse", "null-space", "modal")
+#: Up to this many coordinates the step runs on dense arrays (an explicit inverse of S).
+DENSE_STEP = 200
+
+
+@dataclass(frozen=True)
+class TransientOptions:
+    """How a transient run is made.
+
+    Attributes:
+        integrator, rho_inf: :func:`substruct.analysis.integrators.scheme`.
+        every: record every this many steps; ``field_every``: keep the full field every this
+            many steps (0: never).
+        forces: compute the constraint forces.
+        factorization: of the effective matrix (:func:`substruct.linalg.factorize.factorizer`).
+        modal_count: the modes of the modal form (``None``: all of a dense model).
+        modal_solver: their eigensolver strategy (:func:`substruct.analysis.api.choose_solver`).
+    """
+
+    integrator: str = "newmark"
+    rho_inf: float = 1.0
+    every: int = 1
+    field_every: int = 0
+    forces: bool = True
+    factorization: str = "auto"
+    modal_count: int | None = None
+    modal_solver: str = "auto"
+
+
+def _spd_solver(S: sp.sparray | np.ndarray, kind: str) -> Solve:
+    """A solve with the symmetric positive definite ``S``: an explicit inverse if small and
+    dense, else the registry's factorization (SuperLU if CHOLMOD refuses it)."""
+    if isinstance(S, np.ndarray):
+        inv = np.linalg.inv(S)
+        return lambda r: inv @ r
+    try:
+        return factorizer(kind, spd=True)(sp.csc_array(S))
+    except Exception:  # CHOLMOD: not positive definite to its test; SuperLU pivots instead
+        return factorizer("superlu", spd=False)(sp.csc_array(S))
+
+
+def _small(*mats: sp.sparray | np.ndarray | None) -> list[np.ndarray | None]:
+    """Dense copies of small matrices (``None`` kept)."""
+    return [None if m is None else np.asarray(sp.csr_array(m).toarray()) if sp.issparse(m)
+            else np.asarray(m, float) for m in mats]
+
+
+def _correction(S: sp.sparray | np.ndarray, solve: Solve, A: sp.csr_array,
+                b: np.ndarray) -> Correction:
+    r"""The gain :math:`S^{-1} A^T (A S^{-1} A^T)^+` (``A`` equilibrated), its rank decided on
+    ``A`` with the columns scaled by ``S`` (:func:`substruct.linalg.constraints.independent_rows`)."""
+    At = sp.csr_array(A.T).toarray()
+    Y = np.asarray(solve(At)).reshape(At.shape)
+    rank = independent_rows(A, col_scale=mass_column_scale(sp.csr_array(S))).rank
+    return Correction(A=A, b=b, gain=Y @ pinv_sym(At.T @ Y, rank))
+
+
+def initial_state(M: sp.csr_array, K: sp.csr_array, A: sp.csr_array, load: np.ndarray,
+                  d0: np.ndarray, force: Callable[[np.ndarray], np.ndarray]
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    r"""``(d0, a0)``: the initial displacement and acceleration, consistent with
+    :math:`A \ddot q = 0` and the massless coordinates.  The acceleration is eq (10)
+    (:func:`substruct.analysis.projection.constrained_acceleration`, ``force(d0)`` the force
+    :math:`P - C \dot q - K q`).  Where eq (10) cannot determine a massless coordinate (one held
+    by springs only, not by a constraint), its equation is algebraic, :math:`K_s q = P_s`: the
+    massless rows of the displacement are put on it first (massed coordinates kept), and the
+    acceleration solved with those rows differentiated twice, the load taken as locally
+    constant (:math:`K_s \ddot q = 0`),
+
+    .. math::  \begin{bmatrix} \tilde M & A^T \\ A & 0 \end{bmatrix}
+               \begin{bmatrix} x \\ \lambda \end{bmatrix} =
+               \begin{bmatrix} \tilde F \\ 0 \end{bmatrix}
+
+    (:math:`\tilde M`: ``I`` then ``M`` on the massed rows and ``K`` on the massless ones).
+
+    Raises:
+        ValueError: the system is singular (a massless coordinate with no stiffness).
+    """
+    try:
+        return d0, constrained_acceleration(M, A, np.zeros(A.shape[0]), force(d0))
+    except ValueError:
+        pass
+    s = massless_coordinates(M)
+    keep: np.ndarray | list[int] = (independent_rows(A, col_scale=mass_column_scale(M)).keep
+                                    if A.shape[0] else [])
+    Ak = sp.csr_array(A[keep]) if A.shape[0] else A
+    on, off = sp.diags_array(s.astype(float)), sp.diags_array((~s).astype(float))
+    zero = np.zeros(Ak.shape[0])
+
+    def kkt(rows: sp.sparray, rhs: np.ndarray) -> np.ndarray:
+        big = sp.block_array([[rows, Ak.T], [Ak, None]], format="csc")
+        try:
+            x = factorizer("superlu", spd=False)(big)(np.concatenate([rhs, zero]))
+        except RuntimeError:
+            raise ValueError("initial state (eq 10): a massless coordinate held neither by a "
+                             "constraint nor by a stiffness") from None
+        return np.asarray(x[:M.shape[0]])
+
+    d = d0 + kkt(off + on @ K, np.where(s, load - K @ d0, 0.0))
+    return d, kkt(off @ M + on @ K, np.where(s, 0.0, force(d)))
+
+
+def direct_run(phys: Physical, form: str, s: Scheme, h: float, n_steps: int, d0: np.ndarray,
+               v0: np.ndarray, a0: np.ndarray, opts: TransientOptions) -> Recorder:
+    """One run of the generalized-inverse or the null-space form (module docstring)."""
+    M, C, K, B = phys.M, phys.C, phys.K, phys.B
+    n = M.shape[0]
+    rows = independent_rows(phys.A, col_scale=mass_column_scale(M))
+    forces = constraint_force_solver(phys.A, rows.keep) if opts.forces else None
+    if form == "generalized-inverse":
+        if n <= DENSE_STEP:
+            M, C, K, B = _small(M, C, K, B)  # type: ignore[assignment]
+        S = effective_matrix(M, C, K, s, h)
+        solve = _spd_solver(S, opts.factorization)
+        corr = _correction(S, solve, phys.A, phys.b) if phys.A.shape[0] else None
+        rec = Recorder(phys, M, K, h, forces, opts.field_every)
+        integrate(M, C, K, s, h, n_steps, B, phys.f, d0, v0, a0, solve, rec, opts.every,
+                  corr, Work(), rec.on_work)
+        return rec
+    el = eliminate(sp.csr_array(M), phys.A)
+    T = sp.csr_array(el.T)
+    qp = phys.qp if phys.qp is not None else np.zeros(n)
+    Mt, Kt = T.T @ M @ T, T.T @ K @ T
+    Ct = None if C is None else T.T @ C @ T
+    Bt = sp.hstack([T.T @ sp.csc_array(B), sp.csc_array(-(T.T @ (K @ qp))[:, None])]).tocsr()
+    ft = np.hstack([phys.f, np.ones((phys.f.shape[0], 1))])
+    p0, pv0 = d0[el.masters] - qp[el.masters], v0[el.masters]
+    pa0 = a0[el.masters]
+    if not massless_coordinates(Mt).any() and Mt.shape[0]:  # independent of eq 10
+        r0 = Bt @ ft[0] - Kt @ p0 - (Ct @ pv0 if Ct is not None else 0.0)
+        pa0 = _spd_solver(Mt if Mt.shape[0] > DENSE_STEP else Mt.toarray(), "superlu")(r0)
+    if Mt.shape[0] <= DENSE_STEP:
+        Mt, Ct, Kt, Bt = _small(Mt, Ct, Kt, Bt)  # type: ignore[assignment]
+    S = effective_matrix(Mt, Ct, Kt, s, h)
+    solve = _spd_solver(S, opts.factorization)
+    nphys = Physical(phys.M, phys.C, phys.K, phys.B, phys.f, phys.A, phys.b, phys.O, T, qp)
+    rec = Recorder(nphys, Mt, Kt, h, forces, opts.field_every)
+    integrate(Mt, Ct, Kt, s, h, n_steps, Bt, ft, p0, pv0, pa0, solve, rec, opts.every,
+              None, Work(), rec.on_work)
+    return rec
+
+
+def _difference(a: Recorder, b: Recorder) -> float:
+    """``max |y_a - y_b| / max |y_b|`` over the output displacements and the final field."""
+    ra, rb = a.arrays(), b.arrays()
+    out = receptance_difference(ra["d"], rb["d"]) if rb["d"].size else 0.0
+    last = 0.0
+    if a.last is not None and b.last is not None:
+        last = receptance_difference(a.last, b.last)
+    return max(out, last)
+
+
+def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
+              K: sp.sparray | np.ndarray, A: sp.sparray | np.ndarray | None,
+              b: np.ndarray | None, B: sp.sparray | np.ndarray, f: np.ndarray, dt: float,
+              n_steps: int, outputs: sp.sparray | np.ndarray, *,
+              output_names: Sequence[str] = (), constraint_labels: Sequence[str] = (),
+              d0: np.ndarray | None = None, v0: np.ndarray | None = None,
+              method: str = "generalized-inverse", checks: Sequence[str] = (),
+              tolerance: float = DEFAULT_TOLERANCE, options: TransientOptions | None = None,
+              what: str = "transient") -> Transient:
+    r"""Time histories of :math:`M \ddot q + C \dot q + K q = B f(t) + Q^c`, :math:`A q = b`
+    (eqs 5, 10), by ``method``, checked by ``checks``.
+
+    Args:
+        M, C, K: ``n x n`` (``M`` may be singular on massless coordinates; ``C`` may be
+            ``None``).
+        A, b: ``m x n`` constraint rows and their right-hand side (``None``: none, ``0``).
+        B, f: the loads, :math:`P(t_k) = B f_k`; ``f`` is ``(n_steps + 1) x L`` at
+            :math:`t_k = k\, dt`.
+        dt, n_steps: the constant step and the number of steps.
+        outputs: ``n_out x n`` output rows; ``output_names`` their names.
+        d0, v0: the initial displacement and velocity (zero if ``None``); they must satisfy
+            :math:`A q_0 = b`, :math:`A \dot q_0 = 0`.
+        method, checks: forms of :data:`TRANSIENT_METHODS`.
+        tolerance: the largest agreement a check may have.
+        options: :class:`TransientOptions`.
+
+    Returns:
+        :class:`~substruct.analysis.transient_results.Transient` of the main form, with the
+        checks' ``agreement``.
+
+    Raises:
+        ValueError: bad input (an unknown form, inconsistent initial conditions, massless
+            coordinates the constraints leave undetermined).
+        CheckError: a check disagrees by more than ``tolerance``.
+    """
+    opts = options or TransientOptions()
+    for name in (method, *checks):
+        if name not in TRANSIENT_METHODS:
+            raise ValueError(f"unknown method {name!r}; expected one of "
+                             f"{', '.join(TRANSIENT_METHODS)}")
+    if not dt > 0 or n_steps < 1:
+        raise ValueError(f"need dt > 0 and at least one step, got dt={dt!r}, {n_steps} steps")
+    s = scheme(opts.integrator, opts.rho_inf)
+    Ms, Ks = sp.csr_array(M, dtype=float), sp.csr_array(K, dtype=float)
+    Cs = None if C is None or sp.csr_array(C).count_nonzero() == 0 else sp.csr_array(C)
+    n = Ms.shape[0]
+    A0 = sp.csr_array((0, n)) if A is None or np.size(A) == 0 else sp.csr_array(A, dtype=float)
+    b0 = np.zeros(A0.shape[0]) if b is None else np.asarray(b, dtype=float).ravel()
+    eq = equilibrate(A0, b0, labels=list(constraint_labels) or None)
+    Ae, be = sp.csr_array(eq.A), np.asarray(eq.b)
+    Bs = sp.csr_array(B, dtype=float)
+    f = np.asarray(f, dtype=float).reshape(n_steps + 1, -1)
+    O = sp.csr_array(outputs, dtype=float)
+    d0 = np.zeros(n) if d0 is None else np.asarray(d0, dtype=float).ravel()
+    v0 = np.zeros(n) if v0 is None else np.asarray(v0, dtype=float).ravel()
+    scale = max(float(np.abs(d0).max(initial=0.0)), 1e-300)
+    for name, vec, rhs in (("displacement", d0, be), ("velocity", v0, 0.0 * be)):
+        bad = float(np.abs(Ae @ vec - rhs).max(initial=0.0))
+        ref = max(float(np.abs(vec).max(initial=0.0)), scale if name == "displacement" else 0)
+        if bad > 1e-9 * max(ref, float(np.abs(rhs).max(initial=0.0)), 1e-300):
+            raise ValueError(f"the initial {name} violates the constraints by {bad:.3g}")
+    qp = particular_solution(Ae, be) if np.any(be) else None
+    qp = None if qp is None else np.asarray(qp).ravel()
+    def force0(d: np.ndarray) -> np.ndarray:
+        return np.asarray(Bs @ f[0] - Ks @ d - (Cs @ v0 if Cs is not None else 0.0))
+
+    d0, a0 = initial_state(Ms, Ks, Ae, np.asarray(Bs @ f[0]), d0, force0)
+    phys = Physical(Ms, Cs, Ks, Bs, f, Ae, be, O, None, qp)
+
+    def run(form: str) -> Recorder:
+        if form == "modal":
+            return modal_run(phys, s, dt, n_steps, d0, v0, opts)
+        return direct_run(phys, form, s, dt, n_steps, d0, v0, a0, opts)
+
+    main = run(method)
+    agreement = {m: _difference(run(m), main) for m in check_methods(method, checks)}
+    require_agreement(what, method, agreement, tolerance)
+    r = main.arrays()
+    lam = np.asarray(eq.scale.apply(r["lam"].T)).T if r["lam"].size else r["lam"]
+    return Transient(method=method, integrator=s.name, rho_inf=float(opts.rho_inf), dt=dt,
+                     t=r["t"], outputs=list(output_names), displacement=r["d"],
+                     velocity=r["v"], acceleration=r["a"],
+                     constraint_labels=list(constraint_labels), constraint_forces=lam,
+                     constraint_residual=r["residual"],
+                     drift=float(r["residual"].max(initial=0.0) / max(main.qmax, 1e-300)),
+                     energy=r["energy"], snapshot_t=r["field_t"], snapshots=r["field"],
+                     agreement=agreement, tolerance=float(tolerance),
+                     solver="dense step" if n <= DENSE_STEP else opts.factorization)

@@ -1,0 +1,89 @@
+r"""Transient response by superposition of the coupled modes, with a static correction for the
+truncated ones: the modal check of :mod:`substruct.analysis.transient`.
+
+With the undamped coupled modes :math:`\Phi` (``A \Phi = 0``, :math:`\Phi^T M \Phi = I`,
+:math:`\Phi^T K \Phi = \Omega^2`; :func:`substruct.analysis.api.modes`),
+
+.. math::  q(t) = q_p + \Phi \eta(t) + R f(t), \qquad
+           \ddot \eta + \Phi^T C \Phi\, \dot \eta + \Omega^2 \eta = \Phi^T B f(t),
+
+.. math::  R = G B - \Phi_e \Omega_e^{-2} \Phi_e^T B ,
+
+where ``G`` is the constrained static flexibility
+(:func:`substruct.analysis.modal_frf.static_solver`, inertia relief against rigid-body modes)
+and :math:`\Phi_e` the elastic modes kept: the quasi-static response of the modes left out.
+With every coupled mode kept, :math:`R = 0` to rounding and the superposition is the direct
+integration in other coordinates (the integrators are linear and invariant under a change of
+coordinates); with fewer, the difference is the dynamic part of the truncated modes.  The modal
+equations are integrated by the same scheme and step as the direct forms.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+
+from substruct.analysis.integrators import Scheme, Work, effective_matrix, integrate
+from substruct.analysis.modal_frf import RIGID_TOL, static_solver
+from substruct.analysis.transient_record import Physical, Recorder
+
+if TYPE_CHECKING:
+    from substruct.analysis.transient import TransientOptions
+
+__all__ = ["MODAL_DEFAULT_COUNT", "coupled_basis", "modal_run"]
+
+#: Modes kept by the modal form of a model too large for the dense eigensolver, unless told.
+MODAL_DEFAULT_COUNT = 40
+
+
+def coupled_basis(phys: Physical, count: int | None, solver: str
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    r"""``(Phi, omega)``: undamped coupled modes, :math:`\Phi^T M \Phi = I`,
+    :math:`\Phi^T K \Phi = \operatorname{diag}(\omega^2)` (re-orthonormalized by a small
+    Rayleigh-Ritz, so repeated frequencies are orthogonal too)."""
+    from substruct.analysis.api import SPARSE_ABOVE, modes  # the one entry of the eigensolvers
+
+    n = phys.M.shape[0]
+    if count is None and n > SPARSE_ABOVE:
+        count = MODAL_DEFAULT_COUNT
+    md = modes(phys.M, None, phys.K, phys.A, count, solver=solver, what="transient (modal)")
+    U = np.asarray(md.shapes).real
+    Mr, Kr = U.T @ (phys.M @ U), U.T @ (phys.K @ U)
+    w2, rot = sla.eigh((Kr + Kr.T) / 2, (Mr + Mr.T) / 2)
+    Phi = U @ rot
+    scale = max(float(np.abs(w2).max(initial=0.0)), 1e-300)
+    w2 = np.where(w2 < RIGID_TOL ** 2 * scale, 0.0, w2)
+    return Phi, np.sqrt(w2)
+
+
+def modal_run(phys: Physical, s: Scheme, h: float, n_steps: int, d0: np.ndarray,
+              v0: np.ndarray, opts: "TransientOptions") -> Recorder:
+    """The modal form (module docstring), recorded like the direct forms."""
+    Phi, omega = coupled_basis(phys, opts.modal_count, opts.modal_solver)
+    M, K, B, f = phys.M, phys.K, phys.B, phys.f
+    rigid = omega == 0.0
+    Bd = np.asarray(sp.csr_array(B).toarray()) if sp.issparse(B) else np.asarray(B)
+    if Bd.shape[1]:
+        G = static_solver(sp.csr_array(K), sp.csr_array(M), phys.A, Phi[:, rigid])
+        Pe, we = Phi[:, ~rigid], omega[~rigid]
+        R = G(Bd) - Pe @ ((Pe.T @ Bd) / (we ** 2)[:, None])
+    else:
+        R = np.zeros((M.shape[0], 0))
+    qp = phys.qp if phys.qp is not None else np.zeros(M.shape[0])
+    k = Phi.shape[1]
+    Me, Ke = np.eye(k), np.diag(omega ** 2)
+    Ce = None if phys.C is None else Phi.T @ (phys.C @ Phi)
+    Be = Phi.T @ Bd
+    eta0 = Phi.T @ (M @ (d0 - qp - R @ f[0]))
+    etav0 = Phi.T @ (M @ v0)
+    r0 = Be @ f[0] - Ke @ eta0 - (Ce @ etav0 if Ce is not None else 0.0)
+    S = effective_matrix(Me, Ce, Ke, s, h)
+    inv = np.linalg.inv(S)
+    mphys = Physical(M, phys.C, K, B, f, phys.A, phys.b, phys.O, Phi, phys.qp)
+    rec = Recorder(mphys, Me, Ke, h, None, opts.field_every, offset=lambda step: R @ f[step])
+    integrate(Me, Ce, Ke, s, h, n_steps, Be, f, eta0, etav0, r0, lambda r: inv @ r, rec,
+              opts.every, None, Work(), rec.on_work)
+    return rec

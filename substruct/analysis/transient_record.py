@@ -1,0 +1,153 @@
+r"""What a transient run keeps of each recorded step: outputs at points, the constraint force of
+eq (5), the constraint residual, the energies, and the full field every k steps.
+
+The constraint force is eq (5) read backwards,
+
+.. math::  Q^c = M \ddot q - (P - C \dot q - K q) = A^T \lambda ,
+
+reported as the multipliers :math:`\lambda` of the independent rows of ``A`` (least squares
+through :math:`A_k A_k^T`, one sparse factorization; a redundant row gets 0).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable, TypeAlias
+
+import numpy as np
+import scipy.sparse as sp
+
+from substruct.analysis.integrators import Work
+from substruct.linalg.factorize import factorizer
+
+__all__ = ["Physical", "Recorder", "constraint_force_solver"]
+
+Matrix: TypeAlias = sp.sparray | np.ndarray
+
+
+def constraint_force_solver(A: sp.csr_array, keep: np.ndarray
+                            ) -> Callable[[np.ndarray], np.ndarray]:
+    r"""``Q -> lambda`` with :math:`A_k A_k^T \lambda_k = A_k Q` on the rows ``keep``; the
+    other rows 0."""
+    m = A.shape[0]
+    Ak = sp.csr_array(A[keep]) if m else A
+    if Ak.shape[0] == 0:
+        return lambda Q: np.zeros(m)
+    solve = factorizer("superlu", spd=True)(sp.csc_array(Ak @ Ak.T))
+
+    def forces(Q: np.ndarray) -> np.ndarray:
+        lam = np.zeros(m)
+        lam[keep] = solve(Ak @ Q)
+        return lam
+
+    return forces
+
+
+@dataclass(frozen=True)
+class Physical:
+    r"""The physical model beside the integrated coordinates ``x``: :math:`q = T x + q_p`
+    (``T`` ``None`` for the identity).
+
+    Attributes:
+        M, C, K: physical matrices; ``B``: the load map (``n x L``); ``f``: load values per
+            step.
+        A, b: equilibrated constraint rows.
+        O: output rows (``n_out x n``).
+    """
+
+    M: Matrix
+    C: Matrix | None
+    K: Matrix
+    B: Matrix
+    f: np.ndarray
+    A: sp.csr_array
+    b: np.ndarray
+    O: Matrix
+    T: Matrix | None = None
+    qp: np.ndarray | None = None
+
+    def position(self, x: np.ndarray) -> np.ndarray:
+        """:math:`q = T x + q_p`."""
+        q = x if self.T is None else self.T @ x
+        return q if self.qp is None else q + self.qp
+
+    def rate(self, x: np.ndarray) -> np.ndarray:
+        """:math:`\\dot q = T \\dot x` (and the same for accelerations)."""
+        return x if self.T is None else self.T @ x
+
+
+@dataclass
+class Recorder:
+    """Collects the recorded steps of one run (a :class:`substruct.analysis.integrators.Sink`).
+
+    ``M_x``, ``K_x``: the matrices of the integrated coordinates (for the energies);
+    ``forces``: ``Q -> lambda`` or ``None`` (no constraint forces); ``field_every``: keep the
+    full displacement every this many steps (0: never); ``offset``: added to the physical
+    displacement (the static correction of modal superposition), per step.
+    """
+
+    phys: Physical
+    M_x: Matrix
+    K_x: Matrix
+    dt: float
+    forces: Callable[[np.ndarray], np.ndarray] | None = None
+    field_every: int = 0
+    offset: Callable[[int], np.ndarray] | None = None
+    t: list[float] = field(default_factory=list)
+    d: list[np.ndarray] = field(default_factory=list)
+    v: list[np.ndarray] = field(default_factory=list)
+    a: list[np.ndarray] = field(default_factory=list)
+    lam: list[np.ndarray] = field(default_factory=list)
+    residual: list[float] = field(default_factory=list)
+    qmax: float = 0.0
+    energy: list[list[float]] = field(default_factory=list)
+    field_t: list[float] = field(default_factory=list)
+    fields: list[np.ndarray] = field(default_factory=list)
+    last: np.ndarray | None = None
+
+    def __call__(self, step: int, x: np.ndarray, xd: np.ndarray, xdd: np.ndarray) -> None:
+        """Record step ``step`` of the integrated state ``(x, x', x'')``."""
+        p = self.phys
+        q = p.position(x)
+        if self.offset is not None:
+            q = q + self.offset(step)
+        qd, qdd = p.rate(xd), p.rate(xdd)
+        self.t.append(step * self.dt)
+        self.d.append(np.asarray(p.O @ q))
+        self.v.append(np.asarray(p.O @ qd))
+        self.a.append(np.asarray(p.O @ qdd))
+        self.residual.append(float(np.abs(p.A @ q - p.b).max(initial=0.0)))
+        self.qmax = max(self.qmax, float(np.abs(q).max(initial=0.0)))
+        self.energy.append([0.5 * float(xd @ (self.M_x @ xd)), 0.5 * float(x @ (self.K_x @ x)),
+                            0.0, 0.0])
+        if self.forces is not None:
+            Q = p.M @ qdd + p.K @ q - p.B @ p.f[step]
+            if p.C is not None:
+                Q = Q + p.C @ qd
+            self.lam.append(self.forces(np.asarray(Q)))
+        if self.field_every and step % self.field_every == 0:
+            self.field_t.append(step * self.dt)
+            self.fields.append(np.array(q, copy=True))
+        self.last = q
+
+    def on_work(self, step: int, work: Work) -> None:
+        """Put the accumulated work and dissipation beside the energies of step ``step``."""
+        self.energy[-1][2] = work.external
+        self.energy[-1][3] = work.dissipated
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The records as arrays (``t``, ``d``, ``v``, ``a``, ``lam``, ``residual``,
+        ``energy``, ``field_t``, ``field``)."""
+        n_out = self.phys.O.shape[0]
+        m = self.phys.A.shape[0]
+
+        def stack(rows: list[np.ndarray], width: int) -> np.ndarray:
+            return np.vstack(rows) if rows else np.zeros((len(self.t), width))
+
+        n = self.phys.M.shape[0]
+        return {"t": np.asarray(self.t), "d": stack(self.d, n_out), "v": stack(self.v, n_out),
+                "a": stack(self.a, n_out),
+                "lam": stack(self.lam, m) if self.forces is not None else np.zeros((0, m)),
+                "residual": np.asarray(self.residual), "energy": np.asarray(self.energy),
+                "field_t": np.asarray(self.field_t),
+                "field": np.vstack(self.fields) if self.fields else np.zeros((0, n))}
