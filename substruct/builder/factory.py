@@ -113,7 +113,8 @@ def make_substructures(case: Case, positions: dict[str, list[float]]) -> list[Su
             subs.append(point_mass(spec.name, spec.mass))
         elif isinstance(spec, SolidSpec):
             subs.append(build_solid(case, i, spec))
-        else:
+        elif isinstance(spec, MatrixSpec):
             subs.append(_matrices_substructure(spec))
+        # type: frf has no matrices: split off by substruct.builder.frf_parts
     return subs
 

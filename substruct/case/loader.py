@@ -66,6 +66,7 @@ from substruct.case.fields import (
     StrictModel,
     parse_point,
 )
+from substruct.case.frf_substructure import FrfSpec
 from substruct.case.matrices import MatrixSpec
 from substruct.case.numbers import find_problem
 from substruct.case.solids import InterfaceSpec, SolidSpec
@@ -105,6 +106,7 @@ __all__ = [
     "Reduce",
     "DiscreteSpec",
     "MatrixSpec",
+    "FrfSpec",
     "ConstraintSpec",
     "Variant",
     "ModesAnalysis",
@@ -119,7 +121,7 @@ __all__ = [
 MAX_CASE_FILE = 200_000
 
 SubstructureSpec = Annotated[Union[RodSpec, DiscreteSpec, SpringSpec, MassSpec, MatrixSpec,
-                                   SolidSpec],
+                                   SolidSpec, FrfSpec],
                              Field(discriminator="type")]
 
 

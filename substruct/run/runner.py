@@ -12,6 +12,7 @@ from datetime import datetime, timezone
 
 import scipy.sparse as sp
 
+from substruct.builder.frf_parts import has_frf_parts, split_frf_case
 from substruct.builder.model import Model, assemble_case
 from substruct.case.loader import Case
 from substruct.run.analyses import (
@@ -23,6 +24,7 @@ from substruct.run.analyses import (
     model_info,
     modes_result,
 )
+from substruct.run.frf_route import coupled_frf_result
 from substruct.run.result import Result
 
 __all__ = ["Model", "build_model", "run_case", "Progress"]
@@ -38,7 +40,8 @@ def build_model(case: Case) -> Model:
             known from the file; finite elements and solids are sized only once built).
     """
     check_dense_sizes(case, min_size(case))
-    model = assemble_case(case)
+    # FRF substructures are coupled after the model is built (substruct.run.frf_route)
+    model = assemble_case(split_frf_case(case).model_case if has_frf_parts(case) else case)
     spec = case.analysis.modes
     if spec is not None and spec.count > model.assembly.n_dof:
         raise case.error(("analysis", "modes", "count"), f"more modes than the "
@@ -88,5 +91,6 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
                 case, asm, A, ("analysis", "modes", "variants", i),
                 what=f"modes (variant {variant.name})")
     if case.analysis.frf is not None:
-        result.frf = frf_result(case, model, progress)
+        result.frf = coupled_frf_result(case, model, progress) if has_frf_parts(case) else \
+            frf_result(case, model, progress)
     return result

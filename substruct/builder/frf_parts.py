@@ -1,0 +1,169 @@
+"""Substructures known by receptances (``type: frf``): the parts of a case that frequency-based
+substructuring couples, and the rest of the case, which is built as usual.
+
+An FRF substructure has no ``M``, ``C``, ``K`` and so cannot be a
+:class:`~substruct.substructure.Substructure`.  A case with FRF substructures is therefore
+split (:func:`split_frf_case`) into
+
+* the finite-element case: every other substructure, the connections among them, and an
+  ``analysis.frf`` whose inputs and outputs are the points of those substructures that the
+  case uses (its own inputs and outputs and the points joined to FRF substructures), so that
+  the model's receptance is square on them;
+* the FRF parts (:class:`FrfPart`, one per ``type: frf`` substructure) and the interface pairs
+  of point names, each joining two coordinates.
+
+:mod:`substruct.run.frf_route` computes the model's receptances, couples everything by
+LM-FBS (:mod:`substruct.analysis.frf_coupling`) and reports the case's inputs and outputs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from substruct.case.fields import parse_point
+from substruct.case.frf_substructure import FrfSpec
+from substruct.case.loader import Case
+
+__all__ = ["FrfPart", "FrfSplit", "MODEL_PART", "has_frf_parts", "split_frf_case",
+           "frf_case_points"]
+
+#: The name of the part that stands for the assembled finite-element model.
+MODEL_PART = "model"
+
+
+@dataclass(frozen=True)
+class FrfPart:
+    """A substructure known by its receptances.
+
+    Attributes:
+        name: the substructure's name.
+        omega: circular frequencies (rad/s), ascending.
+        labels: one label per coordinate (``"3:z"``, a point name, ...), distinct.
+        Y: complex ``(n_omega, n, n)`` receptances, ``Y[k, i, j] = u_i / F_j``.
+        interpolate: ``"none"`` or ``"linear"``: how it is put on another grid.
+    """
+
+    name: str
+    omega: np.ndarray
+    labels: list[str]
+    Y: np.ndarray
+    interpolate: str = "none"
+
+    def __post_init__(self) -> None:
+        k, n = len(self.omega), len(self.labels)
+        if self.Y.shape != (k, n, n):
+            raise ValueError(f"{self.name}: receptances of shape {self.Y.shape}, expected "
+                             f"({k}, {n}, {n}) for {k} frequencies and {n} labels")
+        if len(set(self.labels)) != n:
+            raise ValueError(f"{self.name}: labels repeated")
+
+    def index(self, label: str) -> int:
+        """The coordinate of ``label``.
+
+        Raises:
+            ValueError: an unknown label (the known ones listed, up to ten).
+        """
+        try:
+            return self.labels.index(label)
+        except ValueError:
+            known = ", ".join(self.labels[:10]) + (", ..." if len(self.labels) > 10 else "")
+            raise ValueError(f"{self.name} has no coordinate {label!r} (it has {known})") \
+                from None
+
+
+@dataclass(frozen=True)
+class FrfSplit:
+    """A case with FRF substructures, split (:func:`split_frf_case`).
+
+    Attributes:
+        model_case: the case of the other substructures (``analysis.frf`` square on
+            ``model_points``).
+        model_points: the points of the model the coupling needs, in order.
+        parts: the FRF parts, in case order.
+        pairs: interface pairs of point names (each joins two coordinates).
+    """
+
+    model_case: Case
+    model_points: list[str]
+    parts: list[FrfPart]
+    pairs: list[tuple[str, str]]
+
+
+def has_frf_parts(case: Case) -> bool:
+    """Whether a substructure of the case is ``type: frf``."""
+    return any(isinstance(s, FrfSpec) for s in case.substructures)
+
+
+def frf_case_points(case: Case) -> tuple[list[str], list[str]]:
+    """The case's ``analysis.frf`` inputs and outputs (empty if it has none)."""
+    frf = case.analysis.frf
+    return ([], []) if frf is None else (list(frf.inputs), list(frf.outputs))
+
+
+def split_frf_case(case: Case) -> FrfSplit:
+    """Split a case into the finite-element case, the FRF parts and the interface pairs.
+
+    Raises:
+        CaseError: modes asked of an assembly with FRF substructures; no ``analysis.frf``;
+            a constraint on a point of an FRF substructure; a point of one that is not among
+            its labels; no substructure with matrices.
+    """
+    frf_specs = {s.name: s for s in case.substructures if isinstance(s, FrfSpec)}
+    if case.analysis.modes is not None:
+        raise case.error(("analysis", "modes"), "the coupled modes of an assembly with FRF "
+                         f"substructures ({', '.join(frf_specs)}) are not computed: ask for frf "
+                         "only")
+    spec = case.analysis.frf
+    if spec is None:
+        raise case.error(("analysis",), "an assembly with FRF substructures needs "
+                         "analysis.frf")
+    others = [s for s in case.substructures if not isinstance(s, FrfSpec)]
+    if not others:
+        raise case.error(("substructures",), "at least one substructure must have matrices "
+                         "(FRF-only assemblies are coupled by substruct.analysis.frf_coupling)")
+
+    def is_frf(point: str) -> bool:
+        return parse_point(point)[0] in frf_specs
+
+    for k, con in enumerate(case.constraints):
+        for p in [*con.terms, *con.rhs_force]:
+            if con.active and is_frf(p):
+                raise case.error(("constraints", k, "terms", p), "a constraint cannot name a "
+                                 "point of an FRF substructure: join it by a connection", p)
+    pairs: list[tuple[str, str]] = []
+    fe_chains: list[list[str]] = []
+    for i, chain in enumerate(case.connections):
+        for j, p in enumerate(chain):
+            sub, where = parse_point(p)
+            if sub in frf_specs and (where is None or where not in frf_specs[sub].dof_labels()):
+                labels = frf_specs[sub].dof_labels()
+                known = ", ".join(labels[:10]) + (", ..." if len(labels) > 10 else "")
+                raise case.error(("connections", i, j), f"{sub} has no coordinate "
+                                 f"{where!r} (it has {known})", p)
+        for a, b in zip(chain[:-1], chain[1:]):
+            if is_frf(a) or is_frf(b):
+                pairs.append((a, b))
+            else:
+                fe_chains.append([a, b])
+    for where, points in (("inputs", spec.inputs), ("outputs", spec.outputs)):
+        for i, p in enumerate(points):
+            sub, lab = parse_point(p)
+            if sub in frf_specs and lab not in frf_specs[sub].dof_labels():
+                raise case.error(("analysis", "frf", where, i), f"{sub} has no coordinate "
+                                 f"{lab!r}", p)
+    needed = [p for pair in pairs for p in pair] + list(spec.inputs) + list(spec.outputs)
+    model_points = list(dict.fromkeys(p for p in needed if not is_frf(p)))
+    if not model_points:
+        raise case.error(("connections",), "no point of the model is joined to the FRF "
+                         "substructures or asked for")
+    frf = spec.model_copy(update={"inputs": model_points, "outputs": model_points})
+    analysis = case.analysis.model_copy(update={"frf": frf})
+    model_case = case.model_copy(update={"substructures": others, "connections": fe_chains,
+                                         "analysis": analysis})
+    parts = []
+    for s in frf_specs.values():
+        omega, labels, H = s.data()
+        parts.append(FrfPart(s.name, omega, labels, H, s.interpolate))
+    return FrfSplit(model_case, model_points, parts, pairs)

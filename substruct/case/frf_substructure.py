@@ -1,0 +1,64 @@
+"""A substructure known only by its receptances: ``type: frf``.
+
+.. code-block:: yaml
+
+    - name: meas
+      type: frf
+      file: measured.uff        # UFF 58 (pyuff) or .npz (H, labels, omega | freq_hz)
+      interpolate: none         # or linear: onto the grid of analysis.frf
+
+Its points are its labels, ``meas@3:z``.  It has no mass, damping or stiffness matrices: the
+case is coupled by frequency-based substructuring (:mod:`substruct.analysis.frf_coupling`) on
+the grid of ``analysis.frf``, after the other substructures' receptances are computed at the
+coordinates joined to it (``docs/frf.md``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+from pydantic import PrivateAttr, ValidationInfo, model_validator
+
+from substruct.case.errors import FieldError
+from substruct.case.fields import Name, StrictModel
+from substruct.case.frf_files import read_frf_file
+
+__all__ = ["FrfSpec"]
+
+
+class FrfSpec(StrictModel):
+    """Receptances on a frequency grid with labelled coordinates, from a file."""
+
+    name: Name
+    type: Literal["frf"]
+    file: str
+    #: frequency grids that differ from the analysis' are refused unless interpolated
+    interpolate: Literal["none", "linear"] = "none"
+    _data: tuple[np.ndarray, list[str], np.ndarray] | None = PrivateAttr(default=None)
+
+    @model_validator(mode="after")
+    def _load(self, info: ValidationInfo) -> "FrfSpec":
+        base = Path((info.context or {}).get("base_dir", "."))
+        path = Path(self.file)
+        path = path if path.is_absolute() else base / path
+        try:
+            self._data = read_frf_file(path)
+        except ValueError as err:
+            raise FieldError("file", " ".join(str(err).split()), self.file) from None
+        return self
+
+    def data(self) -> tuple[np.ndarray, list[str], np.ndarray]:
+        """``(omega, labels, H)`` as read (rad/s; ``H[k, i, j] = u_i / F_j``)."""
+        if self._data is None:  # set by the validator
+            raise ValueError(f"{self.name}: receptances not loaded")
+        return self._data
+
+    def dof_labels(self) -> list[str]:
+        """The labels of the coordinates."""
+        return list(self.data()[1])
+
+    def n_dof(self) -> Any:
+        """``None``: an FRF substructure adds no coordinates to the assembled model."""
+        return None

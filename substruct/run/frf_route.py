@@ -1,0 +1,75 @@
+r"""The analysis route of a case with FRF substructures (``type: frf``): the model's
+receptances at the coordinates the coupling needs, then LM-FBS with the FRF parts.
+
+.. math::  Y_c = Y - Y B^T (B Y B^T)^{-1} B Y, \qquad
+           Y = \operatorname{diag}(Y_{model}, Y_{frf_1}, \dots)  \qquad \text{(eq 15 with } A = B)
+
+``Y_model`` is :func:`substruct.run.analyses.frf_result` of the finite-element part of the case
+(:func:`substruct.builder.frf_parts.split_frf_case`: direct or modal, with its own checks),
+square on the model's points joined to the FRF parts and asked for.  The coupled receptance is
+checked by the generalized-inverse form (:func:`substruct.analysis.frf_coupling.couple`); its
+``constraint_residual`` is the interface compatibility :math:`\max |B Y_c| / \max |Y_c|`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from substruct.analysis.api import Progress
+from substruct.analysis.checks import require_agreement
+from substruct.analysis.errors import CheckError
+from substruct.analysis.frf_coupling import boolean_rows, couple
+from substruct.analysis.results import Receptance
+from substruct.builder.frf_parts import MODEL_PART, FrfPart, split_frf_case
+from substruct.builder.model import Model
+from substruct.case.fields import parse_point
+from substruct.case.loader import Case
+from substruct.run.analyses import frf_result
+
+__all__ = ["coupled_frf_result"]
+
+
+def coupled_frf_result(case: Case, model: Model, progress: Progress | None = None
+                       ) -> Receptance:
+    """The receptances ``case.analysis.frf`` asks for, of the model coupled with the case's
+    FRF substructures (``model`` is the finite-element part, built from
+    :func:`substruct.builder.frf_parts.split_frf_case`'s ``model_case``).
+
+    Raises:
+        CaseError: grids that differ without ``interpolate: linear``, a singular interface.
+        CheckError: the generalized-inverse form disagrees by more than
+            ``analysis.frf.tolerance`` (or a check of the model's receptances does).
+    """
+    spec = case.analysis.frf
+    if spec is None:
+        raise TypeError(f"case {case.name!r} asks for no receptances")
+    split = split_frf_case(case)
+    fe = frf_result(split.model_case, model, progress)
+    fe_part = FrfPart(MODEL_PART, fe.omega, list(split.model_points), fe.H)
+    frf_names = {p.name for p in split.parts}
+
+    def stacked(point: str) -> str:
+        return point if parse_point(point)[0] in frf_names else f"{MODEL_PART}@{point}"
+
+    pairs = [(stacked(a), stacked(b)) for a, b in split.pairs]
+    try:
+        w, Yc, labels, agreement = couple([fe_part, *split.parts], pairs)
+    except ValueError as err:
+        raise case.error(("substructures",), " ".join(str(err).split())) from None
+    where = {lab: i for i, lab in enumerate(labels)}
+    outs = [where[stacked(p)] for p in spec.outputs]
+    ins = [where[stacked(p)] for p in spec.inputs]
+    B = boolean_rows(labels, pairs)
+    scale = max(float(np.abs(Yc).max(initial=0.0)), 1e-300)
+    residual = float(np.abs(B @ Yc).max(initial=0.0) / scale) if len(pairs) else 0.0
+    checks = {"generalized-inverse": agreement}
+    checks.update({f"{MODEL_PART} {k}": v for k, v in fe.agreement.items()})
+    try:
+        require_agreement("frf (lm-fbs)", "lm-fbs", {"generalized-inverse": agreement},
+                          spec.tolerance)
+    except CheckError as err:
+        raise CheckError(f"{err}; to accept it, raise analysis.frf.tolerance") from None
+    return Receptance(method=f"lm-fbs ({MODEL_PART}: {fe.method})", omega=w,
+                      H=Yc[:, outs][:, :, ins], inputs=list(spec.inputs),
+                      outputs=list(spec.outputs), agreement=checks,
+                      constraint_residual=residual, tolerance=spec.tolerance)
