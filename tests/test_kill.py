@@ -1,107 +1,166 @@
-"""A run killed mid-way leaves no result, no partial file, and an earlier result untouched.
+"""A run killed at any point leaves the previous set of outputs whole: the result file and the
+pictures that belong to it, never the new result beside old pictures or the reverse.
 
-``substruct run`` writes its result to a temporary file in the output directory and renames it
-over the target only when complete (:func:`substruct.io.hdf5.atomic_path`).  Here a real process
-sweeps 20000 frequencies and is killed while it does so (SIGTERM, which it turns into a clean
-exit 143, and SIGKILL, which nothing can catch); the output directory must hold exactly what it
-held before.  A SIGTERM that arrives while the file is being written removes the temporary file.
+A real ``substruct run --force`` (through ``tests/kill_driver.py``, which pauses it at one
+point) replaces an earlier set of ``cases/three_dof_frf.yaml`` (result and two pictures) and
+is killed there: in the analysis (inside a 40-second LAPACK call), in the middle of the
+result file, after the pictures are drawn, and in the middle of the commit.  SIGTERM and
+Ctrl-C must act within 2 s and leave exactly the earlier files; SIGKILL (which nothing can
+catch) may leave hidden ``.substruct-*`` leftovers, which the next writer removes (or, for a
+commit under way, completes).
 """
 
 import os
-import pty
-import select
 import signal
 import subprocess
 import sys
 import time
 from pathlib import Path
 
+import h5py
 import pytest
 
 from substruct import cli
 
 ROOT = Path(__file__).resolve().parent.parent
-CASE = ROOT / "cases" / "tapered_rod_fe.yaml"
-TARGET = "tapered_rod_fe.h5"
-FRF = ("analysis.frf={{omega: {{start: 1, stop: 500, num: {num}}}, inputs: [rod@200], "
-       "outputs: [rod@200, rod@100]}}")
-SETS = ["--set", "analysis.modes=null", "--set", "output.pictures=false"]
+CASE = ROOT / "cases" / "three_dof_frf.yaml"
+NAME = "three_dof_frf"
+DRIVER = ROOT / "tests" / "kill_driver.py"
+NEW = ["--set", "parameters.k3=40"]
 
 
-def earlier_result(out: Path, capsys) -> bytes:
-    """A good result of the case in ``out`` (a 5-point sweep), and a file beside it."""
-    code = cli.main(["run", str(CASE), "--out", str(out), "--quiet", *SETS,
-                     "--set", FRF.format(num=5)])
-    assert code == 0, capsys.readouterr().err
+def snapshot(out: Path) -> dict[str, bytes]:
+    return {p.name: p.read_bytes() for p in sorted(out.iterdir()) if p.is_file()}
+
+
+def consistent(out: Path) -> list[str]:
+    """The set in ``out``: its result lists exactly the pictures beside it; their names."""
+    with h5py.File(out / f"{NAME}.h5", "r") as f:
+        listed = sorted(str(f.attrs["pictures"]).split("\n"))
+    pngs = sorted(p.name for p in out.iterdir() if p.suffix == ".png")
+    assert listed == pngs, (listed, pngs)
+    return pngs
+
+
+@pytest.fixture(scope="module")
+def earlier(tmp_path_factory):
+    """An earlier set (result and pictures of the case as shipped) and a file of the user."""
+    out = tmp_path_factory.mktemp("earlier") / "out"
+    assert cli.main(["run", str(CASE), "--out", str(out), "--quiet"]) == 0
     (out / "notes.txt").write_text("mine\n")
-    return (out / TARGET).read_bytes()
+    assert consistent(out) == [f"{NAME}_frf.png", f"{NAME}_modes.png"]
+    return snapshot(out)
 
 
-def start_long_sweep(out: Path) -> tuple[subprocess.Popen, int]:
-    """``substruct run --force`` of a 20000-frequency sweep, its stderr on a terminal so that
-    the progress bar shows when the sweep is under way."""
-    master, slave = pty.openpty()
-    env = {**os.environ, "MPLBACKEND": "Agg", "OMP_NUM_THREADS": "1",
-           "PYTHONPATH": str(ROOT)}
-    proc = subprocess.Popen([sys.executable, "-m", "substruct.cli", "run", str(CASE), "--out",
-                             str(out), "--force", *SETS, "--set", FRF.format(num=20000)],
-                            stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=slave,
-                            env=env, cwd=ROOT)
-    os.close(slave)
-    return proc, master
-
-
-def read_until(master: int, marker: bytes, timeout: float) -> bytes:
-    """What the process writes to its terminal, up to ``marker`` (or its exit, or timeout)."""
-    seen = b""
-    deadline = time.monotonic() + timeout
-    while marker not in seen and time.monotonic() < deadline:
-        ready, _, _ = select.select([master], [], [], 0.2)
-        if ready:
-            try:
-                chunk = os.read(master, 4096)
-            except OSError:  # the process exited and closed the terminal
-                break
-            if not chunk:
-                break
-            seen += chunk
-    return seen
-
-
-@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGKILL], ids=["SIGTERM", "SIGKILL"])
-def test_killed_run_leaves_no_result_and_keeps_the_earlier_one(sig, tmp_path, capsys):
+def fresh(tmp_path: Path, files: dict[str, bytes]) -> Path:
     out = tmp_path / "out"
-    before = earlier_result(out, capsys)
-    proc, master = start_long_sweep(out)
+    out.mkdir()
+    for name, data in files.items():
+        (out / name).write_bytes(data)
+    return out
+
+
+def start(point: str, out: Path, *extra: str) -> tuple[subprocess.Popen, int]:
+    """The driver paused at ``point``; the pid of the process that paused."""
+    env = {**os.environ, "MPLBACKEND": "Agg", "OMP_NUM_THREADS": "1", "PYTHONPATH": str(ROOT)}
+    proc = subprocess.Popen([sys.executable, str(DRIVER), point, "run", str(CASE), "--out",
+                             str(out), "--force", "--quiet", *NEW, *extra],
+                            stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, env=env, cwd=ROOT)
+    line = proc.stderr.readline().decode()
+    assert line.startswith(f"PAUSED {point} "), line + proc.stderr.read().decode()
+    return proc, int(line.split()[-1])
+
+
+def stop(proc: subprocess.Popen, sig: int) -> tuple[int, str, float]:
+    """Send ``sig``; the exit code, the rest of stderr and the seconds until the exit."""
+    t0 = time.monotonic()
+    proc.send_signal(sig)
     try:
-        seen = read_until(master, b"/20000", timeout=60)
-        assert b"/20000" in seen, seen.decode(errors="replace")
-        time.sleep(0.3)  # well inside the sweep (which takes half a minute)
-        assert proc.poll() is None, "the sweep ended before it could be killed"
-        proc.send_signal(sig)
-        code = proc.wait(timeout=20)
-        tail = read_until(master, b"terminated", timeout=2)
+        code = proc.wait(timeout=30)
     finally:
         if proc.poll() is None:
             proc.kill()
             proc.wait()
-        os.close(master)
-    if sig == signal.SIGTERM:
-        assert code == 143 and b"substruct: terminated" in tail, (code, tail)
-        assert b"Traceback" not in tail
-    else:
-        assert code == -signal.SIGKILL
-    assert sorted(p.name for p in out.iterdir()) == ["notes.txt", TARGET]
-    assert (out / TARGET).read_bytes() == before
-    assert (out / "notes.txt").read_text() == "mine\n"
+    took = time.monotonic() - t0
+    return code, proc.stderr.read().decode(), took
+
+
+def gone(pid: int, timeout: float = 5) -> bool:
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return True
+        time.sleep(0.05)
+    return False
+
+
+@pytest.mark.parametrize("point", ["compute", "write", "pictures"])
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])
+def test_sigterm_and_ctrl_c_act_within_2_s_and_keep_the_earlier_set(point, sig, tmp_path,
+                                                                     earlier):
+    out = fresh(tmp_path, earlier)
+    proc, _ = start(point, out)
+    code, err, took = stop(proc, sig)
+    expected = {signal.SIGTERM: (143, "substruct: terminated"),
+                signal.SIGINT: (130, "substruct: interrupted")}[sig]
+    assert (code, err.strip()) == expected, err
+    assert took < 2.0, f"{took:.1f} s to act"
+    assert snapshot(out) == earlier  # the same files, byte for byte, and nothing else
+    assert sorted(p.name for p in out.iterdir()) == sorted(earlier)
+
+
+@pytest.mark.parametrize("point", ["compute", "write", "pictures"])
+def test_sigkill_keeps_the_earlier_set_and_the_next_run_cleans_up(point, tmp_path, earlier,
+                                                                 capsys):
+    out = fresh(tmp_path, earlier)
+    proc, paused = start(point, out)
+    code, _, _ = stop(proc, signal.SIGKILL)
+    assert code == -signal.SIGKILL
+    assert gone(paused), "the computing child outlived its killed parent"
+    assert snapshot(out) == earlier
+    leftovers = [p.name for p in out.iterdir() if p.name not in earlier]
+    assert all(n.startswith(".substruct-") for n in leftovers), leftovers
+    if point != "compute":
+        assert leftovers  # the staging folder of the killed run ...
+    assert cli.main(["run", str(CASE), "--out", str(out), "--force", "--quiet", *NEW]) == 0
+    assert sorted(p.name for p in out.iterdir()) == sorted(earlier)  # ... is gone
+    consistent(out)
+    with h5py.File(out / f"{NAME}.h5", "r") as f:
+        assert "k3=40" in f.attrs["overrides"]
+
+
+def test_sigkill_during_the_commit_is_completed_by_the_next_writer(tmp_path, earlier):
+    from substruct.io.file_set import OutputDir
+
+    out = fresh(tmp_path, earlier)
+    proc, _ = start("commit", out)
+    code, _, _ = stop(proc, signal.SIGKILL)
+    assert code == -signal.SIGKILL
+    commits = [p for p in out.iterdir() if p.name.endswith(".commit")]
+    assert len(commits) == 1  # killed past the point of no return, one picture moved
+    assert snapshot(out) != earlier
+    with OutputDir(out) as target:  # any writer finishes the commit first
+        assert target.stale == [commits[0].name]
+    assert sorted(p.name for p in out.iterdir()) == sorted(earlier)
+    assert consistent(out) == [f"{NAME}_frf.png", f"{NAME}_modes.png"]
+    now = snapshot(out)
+    with h5py.File(out / f"{NAME}.h5", "r") as f:
+        assert "k3=40" in f.attrs["overrides"]  # the new set, whole
+    assert all(now[n] != earlier[n] for n in now if n != "notes.txt")
 
 
 def test_sigterm_while_writing_removes_the_partial_file(tmp_path, capsys, monkeypatch):
-    """SIGTERM in the middle of the HDF5 write: the ``.part`` file goes, the old result stays."""
+    """SIGTERM in the middle of the HDF5 write (in this process): the staging folder goes,
+    the old result stays, the handler is restored."""
     from substruct.io import hdf5 as results
 
     out = tmp_path / "out"
-    before = earlier_result(out, capsys)
+    args = ["run", str(CASE), "--out", str(out), "--quiet", "--no-pictures"]
+    assert cli.main(args) == 0
+    before = (out / f"{NAME}.h5").read_bytes()
     parts = []
     write_model = results._write_model
 
@@ -112,11 +171,11 @@ def test_sigterm_while_writing_removes_the_partial_file(tmp_path, capsys, monkey
         time.sleep(1)  # not reached: the handler raises first
 
     monkeypatch.setattr(results, "_write_model", interrupted)
+    capsys.readouterr()
     handler = signal.getsignal(signal.SIGTERM)
-    code = cli.main(["run", str(CASE), "--out", str(out), "--force", "--quiet", *SETS,
-                     "--set", FRF.format(num=5)])
+    code = cli.main([*args, "--force", *NEW])
     assert code == 143 and capsys.readouterr().err == "substruct: terminated\n"
-    assert len(parts) == 1  # the temporary file existed while writing ...
-    assert sorted(p.name for p in out.iterdir()) == ["notes.txt", TARGET]  # ... and is gone
-    assert (out / TARGET).read_bytes() == before
+    assert len(parts) == 1  # the staging folder existed while writing ...
+    assert sorted(p.name for p in out.iterdir()) == [f"{NAME}.h5"]  # ... and is gone
+    assert (out / f"{NAME}.h5").read_bytes() == before
     assert signal.getsignal(signal.SIGTERM) == handler  # cli.main restored the handler

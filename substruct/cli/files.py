@@ -48,20 +48,24 @@ def check_out_dir(text: str, what: str, names: Sequence[str] = ()) -> Path:
         raise InputError(f"{what} {text!r}: an empty directory name; give a directory "
                          "(. for the working directory)")
     out = Path(text)
-    probe = out
-    while not probe.exists():
-        if probe.is_symlink():
-            raise InputError(f"{what} {out}: {probe} is a symbolic link to "
-                             f"{os.readlink(probe)}, which does not exist")
-        if probe.parent == probe:
-            break
-        probe = probe.parent
-    name_max = _limit(probe, "PC_NAME_MAX", 255)
+    name_max = _limit(Path("."), "PC_NAME_MAX", 255)
     for part in out.parts:
         if len(os.fsencode(part)) > name_max:
             raise InputError(f"{what} {_shown(str(out))}: the name {_shown(part)} has "
                              f"{len(os.fsencode(part))} bytes, more than the {name_max} the "
                              "file system allows")
+    probe = out
+    try:
+        while not probe.exists():
+            if probe.is_symlink():
+                raise InputError(f"{what} {out}: {probe} is a symbolic link to "
+                                 f"{os.readlink(probe)}, which does not exist")
+            if probe.parent == probe:
+                break
+            probe = probe.parent
+    except OSError as err:
+        raise InputError(f"{what} {_shown(str(out))}: {err.strerror or err}") from None
+    name_max = _limit(probe, "PC_NAME_MAX", name_max)
     for name in names:
         size = len(os.fsencode(name)) + TEMP_NAME_EXTRA
         if size > name_max:
