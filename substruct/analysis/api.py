@@ -47,6 +47,7 @@ from substruct.analysis.checks import (
 )
 from substruct.analysis.coupling import receptance
 from substruct.analysis.dense_modes import MODE_METHODS, coupled_modes
+from substruct.analysis.events import Phase
 from substruct.analysis.krylov import check_inputs, eliminate, free_coordinates, krylov_size
 from substruct.analysis.modal_frf import ModalOptions, frf_method, modal_receptance_sweep
 from substruct.analysis.production import production_modes
@@ -167,7 +168,7 @@ def modes(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
           count: int | None = None, *, method: str = "generalized-inverse",
           checks: Sequence[str] = (), solver: str = "auto",
           tolerance: float = DEFAULT_TOLERANCE, what: str = "modes",
-          full_checks: bool = False) -> Modes:
+          full_checks: bool = False, events: Phase | None = None) -> Modes:
     r"""Coupled modes of ``M u'' + C u' + K u = 0`` under ``A u = 0``, with their cross-checks.
 
     .. math::  (\lambda^2 M + \lambda C + K)\, u = A^T \mu, \qquad A u = 0
@@ -197,6 +198,7 @@ def modes(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
         tolerance: the largest relative eigenvalue disagreement a check may have.
         what: how the analysis is named in error messages.
         full_checks: on the sparse path, solve ``method`` and each check in full.
+        events: called as each eigen solve starts (:class:`substruct.analysis.events.Phase`).
 
     Returns:
         The main formulation's :class:`~substruct.analysis.results.Modes`, with ``agreement``
@@ -219,6 +221,9 @@ def modes(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
         others = [m for m in others if not (m in same and method in same)]
 
     def solve(formulation: str) -> Modes:
+        if events is not None:
+            kind = "dense-eigen" if choice.strategy == "dense" else "sparse-eigen"
+            events(kind, f"{what} ({formulation}): {choice.strategy} eigen solve", M.shape[0])
         if choice.strategy == "dense":
             return coupled_modes(M, C, K, A, formulation, count)
         assert count is not None  # choose_solver is dense when every mode is asked
@@ -226,6 +231,9 @@ def modes(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
 
     if choice.strategy == "sparse" and not full_checks:
         assert count is not None
+        if events is not None:
+            events("sparse-eigen", f"{what}: sparse factorization and shift-invert eigen solve",
+                   M.shape[0])
         try:
             main, agreement, note = production_modes(M, K, A, count,
                                                      elimination=choice.elimination)

@@ -25,6 +25,7 @@ import scipy.sparse as sp
 
 from substruct.analysis.api import Progress, modes, receptance_sweep
 from substruct.analysis.errors import CheckError
+from substruct.analysis.events import Phase
 from substruct.analysis.modal_frf import ModalOptions
 from substruct.analysis.results import Modes, Receptance
 from substruct.assembly.stack import Assembly
@@ -43,9 +44,9 @@ DENSE_FRF_LIMIT = 4000
 
 
 def modes_result(case: Case, asm: Assembly, A: sp.csr_array, loc: tuple,
-                 what: str = "modes") -> Modes:
+                 what: str = "modes", events: Phase | None = None) -> Modes:
     """The coupled modes of ``asm`` under the rows ``A`` as ``case.analysis.modes`` asks
-    (:func:`substruct.analysis.api.modes`).
+    (:func:`substruct.analysis.api.modes`); ``events`` is told as each eigen solve starts.
 
     Raises:
         CaseError: at ``loc``, for input the solver cannot take.
@@ -57,7 +58,7 @@ def modes_result(case: Case, asm: Assembly, A: sp.csr_array, loc: tuple,
     try:
         return modes(asm.M, asm.C, asm.K, A, spec.count, method=spec.method,
                      checks=spec.check, solver=spec.solver, tolerance=spec.tolerance,
-                     what=what)
+                     what=what, events=events)
     except ValueError as err:
         raise case.error(loc, " ".join(str(err).split())) from None
     except CheckError as err:

@@ -12,6 +12,7 @@ from datetime import datetime, timezone
 
 import scipy.sparse as sp
 
+from substruct.analysis.events import Phase
 from substruct.builder.frf_parts import has_frf_parts, split_frf_case
 from substruct.builder.model import Model, assemble_case
 from substruct.case.loader import Case
@@ -27,10 +28,10 @@ from substruct.run.analyses import (
 from substruct.run.frf_route import coupled_frf_result
 from substruct.run.result import Result
 
-__all__ = ["Model", "build_model", "run_case", "Progress"]
+__all__ = ["Model", "build_model", "run_case", "Progress", "Phase"]
 
 
-def build_model(case: Case) -> Model:
+def build_model(case: Case, events: Phase | None = None) -> Model:
     """Refuse a model too large for the dense analyses it asks for, then assemble it
     (:func:`substruct.builder.model.assemble_case`).
 
@@ -40,6 +41,10 @@ def build_model(case: Case) -> Model:
             known from the file; finite elements and solids are sized only once built).
     """
     check_dense_sizes(case, min_size(case))
+    if events is not None:
+        names = ", ".join(s.name for s in case.substructures)
+        events("assembly", f"assembling {case.name}: {len(case.substructures)} "
+               f"substructure(s) ({names})", min_size(case))
     # FRF substructures are coupled after the model is built (substruct.run.frf_route)
     model = assemble_case(split_frf_case(case).model_case if has_frf_parts(case) else case)
     spec = case.analysis.modes
@@ -49,14 +54,17 @@ def build_model(case: Case) -> Model:
     return model
 
 
-def run_case(case: Case, progress: Progress | None = None, model: Model | None = None
-             ) -> Result:
+def run_case(case: Case, progress: Progress | None = None, model: Model | None = None,
+             events: Phase | None = None) -> Result:
     """Run the analyses of a case.
 
     Args:
         case: a validated case (:func:`substruct.load_case`).
         progress: called as ``progress(done, total, label)`` during frequency sweeps.
         model: the case's model if already built (:func:`build_model`).
+        events: called as each phase starts, ``events(kind, what, size)``
+            (:class:`substruct.analysis.events.Phase`): assembly, each eigen solve, each
+            receptance sweep.
 
     Returns:
         The :class:`~substruct.run.result.Result`: modes (physical modes ascending, spurious
@@ -71,9 +79,12 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
     """
     from substruct import __version__
 
-    model = build_model(case) if model is None else model
+    model = build_model(case, events) if model is None else model
     asm = model.assembly
     check_dense_modes(case, asm)
+    if events is not None:
+        events("assembly", f"model: {asm.n_dof} coordinates, {asm.A.shape[0]} constraint "
+               f"row(s), {sp.csr_array(asm.K).nnz} stiffness nonzeros", asm.n_dof)
     attrs = {"substruct_version": __version__,
              "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
              "units": case.units, "description": case.description.strip(),
@@ -82,15 +93,20 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
                     attrs={k: v for k, v in attrs.items() if v})
     spec = case.analysis.modes
     if spec is not None:
-        result.modes = modes_result(case, asm, asm.A, ("analysis", "modes"))
+        result.modes = modes_result(case, asm, asm.A, ("analysis", "modes"), events=events)
         labels = list(asm.constraint_labels)
         for i, variant in enumerate(spec.variants):
             keep = [r for r, lab in enumerate(labels) if lab not in variant.drop]
             A = sp.csr_array(asm.A[keep]) if keep else sp.csr_array((0, asm.n_dof))
             result.variants[variant.name] = modes_result(
                 case, asm, A, ("analysis", "modes", "variants", i),
-                what=f"modes (variant {variant.name})")
-    if case.analysis.frf is not None:
+                what=f"modes (variant {variant.name})", events=events)
+    frf = case.analysis.frf
+    if frf is not None:
+        if events is not None:
+            n_omega = len(frf.omega.grid())
+            events("sweep", f"receptances: {n_omega} frequencies, {len(frf.outputs)} output(s) "
+                   f"x {len(frf.inputs)} input(s), {asm.n_dof} coordinates", n_omega)
         result.frf = coupled_frf_result(case, model, progress) if has_frf_parts(case) else \
             frf_result(case, model, progress)
     return result
