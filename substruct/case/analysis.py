@@ -13,6 +13,7 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from substruct.case.errors import FieldError
+from substruct.case.transient import TransientAnalysis
 from substruct.case.fields import (
     MAX_FREQUENCIES,
     MEMORY_LIMIT,
@@ -188,10 +189,12 @@ class Analysis(StrictModel):
 
     modes: ModesAnalysis | None = None
     frf: FrfAnalysis | None = None
+    #: time histories (eqs 5, 10): substruct.case.transient
+    transient: TransientAnalysis | None = None
 
     @model_validator(mode="after")
     def _something(self) -> "Analysis":
-        if self.modes is None and self.frf is None:
+        if self.modes is None and self.frf is None and self.transient is None:
             raise ValueError("nothing to compute: give modes and/or frf")
         return self
 
