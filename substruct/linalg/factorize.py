@@ -18,6 +18,11 @@ kind               matrices and method
                    SuperLU with its default ``COLAMD`` ordering and partial pivoting
 =================  ===========================================================================
 
+Frequency sweeps of one structure factorize matrices of one sparsity pattern many times:
+:func:`fill_ordering` computes a fill-reducing symmetric ordering once and
+:func:`complex_symmetric` factorizes each (complex symmetric, not Hermitian) impedance in that
+order, so SuperLU skips its ordering step at every frequency.
+
 SuperLU factors real matrices in real arithmetic; a complex right-hand side is solved as its
 real and imaginary parts.
 """
@@ -37,7 +42,9 @@ __all__ = [
     "Solve",
     "cholmod",
     "complex_lu",
+    "complex_symmetric",
     "factorizer",
+    "fill_ordering",
     "has_cholmod",
     "superlu",
     "superlu_saddle",
@@ -101,6 +108,45 @@ def complex_lu(A: sp.sparray | sp.spmatrix) -> Solve:
     sweep and the bordered systems built on it (not symmetric, not definite)."""
     Ac = sp.csc_matrix(A)
     return _solver(spla.splu(Ac), Ac)
+
+
+def fill_ordering(pattern: sp.sparray | sp.spmatrix) -> np.ndarray:
+    r"""A fill-reducing symmetric ordering of a square sparse matrix: SuperLU's
+    ``MMD_AT_PLUS_A`` column permutation (minimum degree on :math:`|A| + |A|^T`), taken from a
+    factorization (one a sweep) of a matrix with ``pattern``'s structure and a dominant
+    diagonal (unit off-diagonal entries, diagonal the row count, so no pivoting moves it)."""
+    P = sp.csc_matrix(abs(sp.csc_matrix(pattern)))
+    P = sp.csc_matrix(P + P.T)
+    P.data[:] = 1.0
+    n = P.shape[0]
+    A = sp.csc_matrix(P + sp.diags(np.asarray(P.sum(axis=1)).ravel() + 1.0))
+    lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                   options={"SymmetricMode": True})
+    order = np.asarray(lu.perm_c, dtype=np.int64)
+    return order if order.size == n else np.arange(n)
+
+
+def complex_symmetric(A: sp.sparray | sp.spmatrix, order: np.ndarray | None = None, *,
+                      ordered: bool = False) -> Solve:
+    r"""SuperLU of a complex symmetric matrix (the impedance
+    :math:`Z = K - \omega^2 M + i \omega C` in a null-space basis) in the symmetric ordering
+    ``order`` (:func:`fill_ordering`; computed here if ``None``): ``A[order][:, order]``
+    factorized in natural order, symmetric mode, threshold pivoting preferring the diagonal
+    (``diag_pivot_thresh = 0.1``, as the saddle-point systems).  ``ordered``: ``A`` is
+    already in its order (a sweep permutes its matrices once), nothing is permuted here."""
+    Ac = sp.csc_matrix(A)
+    if ordered:
+        return _solver(spla.splu(Ac, permc_spec="NATURAL", diag_pivot_thresh=0.1,
+                                 options={"SymmetricMode": True}), Ac)
+    p = fill_ordering(Ac) if order is None else np.asarray(order)
+    inner = complex_symmetric(Ac[p][:, p], ordered=True)
+    inverse = np.empty_like(p)
+    inverse[p] = np.arange(p.size)
+
+    def solve(b: np.ndarray) -> np.ndarray:
+        return inner(np.asarray(b)[p])[inverse]
+
+    return solve
 
 
 def cholmod(A: sp.sparray | sp.spmatrix) -> Solve:

@@ -1,0 +1,92 @@
+r"""The production path of receptance sweeps: the numbers from the sparse null-space sweep, the
+named formulations as checks at a few frequencies.
+
+For models above :data:`SWEEP_SPARSE_ABOVE` coordinates under ``A q = 0`` (no force-tied
+constraint, ``R = 0``), whatever direct formulation a case names, the receptances come from
+:func:`substruct.analysis.sparse_sweep.null_space_sparse_sweep` (one sparse factorization of
+:math:`T^T Z(\omega) T` a frequency, all inputs at once).  The generalized-inverse form of eq
+(15) and the KKT form (:func:`substruct.analysis.coupling.receptance`) then check it at
+:data:`CHECK_FREQUENCIES` frequencies of the grid (its first, middle and last), each figure
+
+.. math::  \delta = \frac{\max_{k \in \text{checked}} |H^{check}_k - H_k|}
+                         {\max_{k \in \text{checked}} |H_k|} .
+
+A sweep with a force-tied constraint (``R != 0``), or of a small model, is left to the direct
+formulations (every frequency, every check).
+"""
+
+from __future__ import annotations
+
+from typing import Callable, Sequence
+
+import numpy as np
+import scipy.sparse as sp
+
+from substruct.analysis.checks import receptance_difference
+from substruct.analysis.coupling import METHODS, receptance
+from substruct.analysis.sparse_sweep import null_space_sparse_sweep
+
+__all__ = [
+    "CHECK_FREQUENCIES",
+    "PRODUCTION_SWEEP",
+    "SWEEP_SPARSE_ABOVE",
+    "check_frequencies",
+    "production_sweep",
+    "production_sweep_applies",
+    "sweep_checks",
+]
+
+#: Sweeps of models above this many coordinates take the production path.
+SWEEP_SPARSE_ABOVE = 100
+#: How many frequencies of the grid the check formulations are solved at.
+CHECK_FREQUENCIES = 3
+#: The method string of a production sweep's result.
+PRODUCTION_SWEEP = "null-space/sparse"
+
+
+def production_sweep_applies(n: int, R: sp.sparray | None, method: str) -> bool:
+    """Whether a sweep takes the production path: a direct formulation named (``method`` one of
+    :data:`substruct.analysis.coupling.METHODS`), no force-tied constraint (``R`` ``None``),
+    more than :data:`SWEEP_SPARSE_ABOVE` coordinates."""
+    return method in METHODS and R is None and n > SWEEP_SPARSE_ABOVE
+
+
+def check_frequencies(count: int) -> np.ndarray:
+    """Indices of the checked frequencies of a grid of ``count``: first, middle, last."""
+    return np.unique(np.linspace(0, count - 1, min(CHECK_FREQUENCIES, count)).round()
+                     .astype(int)) if count else np.zeros(0, dtype=int)
+
+
+def production_sweep(K: sp.csr_array, M: sp.csr_array, C: sp.csr_array | None,
+                     A: sp.csr_array, omegas: np.ndarray, inputs: sp.csc_array,
+                     rows: sp.csr_array, progress: Callable[[int, int, str], None] | None
+                     ) -> np.ndarray:
+    """The production sweep (:func:`~substruct.analysis.sparse_sweep.null_space_sparse_sweep`)
+    with progress reported as ``progress(done, total, "null-space")``."""
+    total = len(omegas)
+
+    def report(done: int) -> None:
+        if progress is not None:
+            progress(done, total, "null-space")
+
+    return null_space_sparse_sweep(K, M, C, A, omegas, inputs, rows, progress=report)
+
+
+def sweep_checks(K: sp.csr_array, M: sp.csr_array, C: sp.csr_array | None, A: sp.csr_array,
+                 omegas: np.ndarray, inputs: sp.csc_array, outputs: sp.csr_array,
+                 H: np.ndarray, method: str, checks: Sequence[str],
+                 labels: list[str] | None) -> dict[str, float]:
+    """The check figures of a production sweep ``H``: each of ``method`` and ``checks`` other
+    than ``"null-space"`` (``"kkt"`` if none is left) solved by
+    :func:`substruct.analysis.coupling.receptance` at :func:`check_frequencies`."""
+    names = [m for k, m in enumerate([method, *checks])
+             if m != "null-space" and m not in [method, *checks][:k]] or ["kkt"]
+    idx = check_frequencies(len(omegas))
+    if not idx.size:
+        return {m: 0.0 for m in names}
+    out = {}
+    for name in names:
+        Hc = receptance(K, M, C, A, omegas[idx], None, method=name, inputs=inputs,
+                        outputs=outputs, labels=labels)
+        out[name] = receptance_difference(Hc, H[idx])
+    return out

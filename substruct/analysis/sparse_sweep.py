@@ -1,0 +1,128 @@
+r"""The production receptance sweep: the null-space form on a sparse master-slave basis, one
+sparse factorization per frequency, every input at once, no dense ``n x n`` block.
+
+Under ``A q = 0`` the displacements are :math:`q = T p` (``A T = 0``,
+:func:`substruct.linalg.nullspace.master_slave`), and the receptance of eq (15) is
+
+.. math::  \hat H(\omega) = T\, Z_T(\omega)^{-1}\, T^T, \qquad
+           Z_T(\omega) = T^T K T - \omega^2\, T^T M T + i \omega\, T^T C T ,
+
+so that for inputs ``E`` (columns) and outputs ``O`` (rows)
+
+.. math::  H[k] = (O T)\, Z_T(\omega_k)^{-1} (T^T E).
+
+``T^T K T``, ``T^T M T``, ``T^T C T``, ``O T`` and ``T^T E`` are formed once; at each frequency
+:math:`Z_T` (complex symmetric, not Hermitian) is factorized by SuperLU in one fill-reducing
+ordering computed once for the sweep (:func:`substruct.linalg.factorize.fill_ordering`,
+:func:`substruct.linalg.factorize.complex_symmetric`) and solved for all inputs in one call.
+Where a reverse Cuthill-McKee ordering makes :math:`Z_T` narrow (half-bandwidth at most
+:data:`substruct.linalg.banded.BAND_MAX`: chains, rods, beams) the factorization is LAPACK's band
+LU instead (:mod:`substruct.linalg.banded`), much faster for hundreds of inputs.  The outputs
+are gathered by rows (:class:`Gather`).  The reduced system has ``n - rank(A)`` unknowns instead of the ``n + m`` of the KKT system and
+the ``n + m`` of the bordered generalized-inverse system, and needs one factorization a
+frequency instead of their two.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+import scipy.sparse as sp
+
+from substruct.analysis.krylov import eliminate
+from substruct.linalg.banded import BAND_MAX, band_ordering, band_solve, band_storage
+from substruct.linalg.factorize import complex_symmetric, fill_ordering
+from substruct.linalg.memory import factor_memory, require_memory
+from substruct.linalg.scaling import equilibrate
+
+__all__ = ["Gather", "null_space_sparse_sweep"]
+
+
+class Gather:
+    r"""``out = O X`` for a sparse ``O`` whose rows are mostly single entries (outputs at
+    coordinates that the elimination kept): those rows by one scaled row gather of ``X``,
+    the others (outputs at eliminated coordinates, interpolated points) by a sparse product."""
+
+    def __init__(self, O: sp.csr_array) -> None:
+        counts = np.diff(O.indptr)
+        self.single = np.flatnonzero(counts == 1)
+        self.cols = O.indices[O.indptr[self.single]]
+        self.vals = O.data[O.indptr[self.single]][:, None]
+        self.other = np.flatnonzero(counts != 1)
+        self.rest = sp.csr_array(O[self.other])
+
+    def __call__(self, X: np.ndarray, out: np.ndarray) -> None:
+        """Write ``O X`` into ``out``."""
+        out[self.single] = self.vals * X[self.cols]
+        if self.other.size:
+            out[self.other] = self.rest @ X
+
+
+def null_space_sparse_sweep(K: sp.sparray, M: sp.sparray, C: sp.sparray | None,
+                            A: sp.sparray, omegas: np.ndarray, inputs: sp.sparray,
+                            outputs: sp.sparray,
+                            progress: Callable[[int], None] | None = None) -> np.ndarray:
+    r"""``H[k] = (O T) Z_T(\omega_k)^{-1} (T^T E)`` for a system under ``A q = 0`` (module
+    docstring), complex ``(n_omega, n_outputs, n_inputs)``.
+
+    Args:
+        K, M, C: sparse ``n x n`` (``C`` may be ``None``).
+        A: ``m x n`` constraint rows, any rank (equilibrated here).
+        omegas: circular frequencies (rad/s).
+        inputs: ``n x p`` generalized forces (columns).
+        outputs: ``q x n`` output rows.
+        progress: called with the number of frequencies done, every 10 frequencies.
+
+    Raises:
+        ValueError: ``Z_T`` singular at a frequency (a resonance of an undamped system, or
+            ``omega = 0`` with a rigid-body motion); the factorization would not fit the
+            memory available.
+    """
+    Ks, Ms = sp.csr_array(K, dtype=float), sp.csr_array(M, dtype=float)
+    n = Ks.shape[0]
+    As = sp.csr_array(A, dtype=float)
+    As.eliminate_zeros()
+    As = sp.csr_array(equilibrate(As).A) if As.shape[0] else sp.csr_array((0, n))
+    T = sp.csc_array(eliminate(Ms, As).T)
+    Tt = sp.csr_array(T.T)
+    Kt = sp.csc_array(Tt @ Ks @ T)
+    Mt = sp.csc_array(Tt @ Ms @ T)
+    Ct = None if C is None or not sp.csr_array(C).nnz else \
+        sp.csc_array(Tt @ sp.csr_array(C, dtype=float) @ T)
+    w = np.asarray(omegas, dtype=float)
+    OT = sp.csr_array(sp.csr_array(outputs, dtype=float) @ T)
+    B = np.asarray(sp.csr_array(Tt @ sp.csc_array(inputs, dtype=float)).toarray(),
+                   dtype=complex)
+    pattern = abs(Kt) + abs(Mt) + (abs(Ct) if Ct is not None else 0)
+    out_bytes = 16.0 * w.size * OT.shape[0] * B.shape[1]
+    require_memory(factor_memory(pattern, "superlu", complex_factor=True) + out_bytes,
+                   f"the receptance sweep of {Kt.shape[0]} reduced coordinates "
+                   f"({w.size} frequencies x {OT.shape[0]} outputs x {B.shape[1]} inputs)")
+    order, width = band_ordering(pattern)
+    banded = width <= BAND_MAX
+    p = order if banded else fill_ordering(pattern)  # one ordering for every frequency
+    Kp, Mp = sp.csc_array(Kt[p][:, p]), sp.csc_array(Mt[p][:, p])
+    Cp = None if Ct is None else sp.csc_array(Ct[p][:, p])
+    Bp = np.asfortranarray(B[p])
+    gather = Gather(sp.csr_array(OT[:, p]))
+    if banded:
+        Kb, Mb = band_storage(Kp, width), band_storage(Mp, width)
+        Cb = None if Cp is None else band_storage(Cp, width)
+    H = np.empty((w.size, OT.shape[0], B.shape[1]), dtype=complex)
+    for k, wk in enumerate(w):
+        try:
+            if banded:
+                Zb = Kb - wk**2 * Mb + (0.0 if Cb is None else 1j * wk * Cb)
+                X = band_solve(Zb.astype(complex), width, Bp)
+            else:
+                Z = Kp.astype(complex) - wk**2 * Mp + (0.0 if Cp is None else 1j * wk * Cp)
+                X = complex_symmetric(Z, ordered=True)(Bp)
+        except (RuntimeError, np.linalg.LinAlgError) as exc:
+            raise ValueError(f"the receptance is singular at omega = {wk:g} rad/s (a "
+                             f"resonance of an undamped system, or a rigid-body motion at "
+                             f"omega = 0)") from exc
+        gather(np.asarray(X).reshape(Bp.shape), H[k])
+        if progress is not None and ((k + 1) % 10 == 0 or k + 1 == w.size):
+            progress(k + 1)
+    return H
