@@ -43,6 +43,12 @@ def point_uses(case: Case) -> list[PointUse]:
         uses += [PointUse(p, ("analysis", "frf", "inputs", i)) for i, p in enumerate(frf.inputs)]
         uses += [PointUse(p, ("analysis", "frf", "outputs", i))
                  for i, p in enumerate(frf.outputs)]
+    tr = case.analysis.transient
+    if tr is not None:
+        uses += [PointUse(ld.point, ("analysis", "transient", "loads", i, "point"))
+                 for i, ld in enumerate(tr.loads)]
+        uses += [PointUse(p, ("analysis", "transient", "outputs", i))
+                 for i, p in enumerate(tr.outputs)]
     return uses
 
 

@@ -37,6 +37,7 @@ import scipy.sparse as sp
 from substruct import __version__
 from substruct.analysis.results import Modes, Receptance
 from substruct.io.file_set import TEMP_PREFIX
+from substruct.io.transient_hdf5 import write_transient
 from substruct.io.result_reader import FORMAT, FORMAT_VERSION, RESERVED_ATTRS, load
 from substruct.run.result import ModelInfo, Result
 
@@ -76,6 +77,8 @@ def save(result: Result, path: str | os.PathLike) -> Path:
                     _write_modes(g, modes)
             if result.frf is not None:
                 _write_frf(f.create_group("frf", track_order=True), result.frf)
+            if result.transient is not None:
+                write_transient(f.create_group("transient", track_order=True), result.transient)
     return path
 
 

@@ -16,6 +16,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from substruct.analysis.results import Modes, Receptance
+from substruct.analysis.transient_results import Transient
 from substruct.builder.drawing import Drawing
 
 __all__ = ["ModelInfo", "Result"]
@@ -50,5 +51,6 @@ class Result:
     model: ModelInfo
     modes: Modes | None = None
     frf: Receptance | None = None
+    transient: Transient | None = None
     variants: dict[str, Modes] = field(default_factory=dict)
     attrs: dict[str, Any] = field(default_factory=dict)

@@ -26,6 +26,7 @@ from substruct.run.analyses import (
     modes_result,
 )
 from substruct.run.frf_route import coupled_frf_result
+from substruct.run.transient_run import transient_result
 from substruct.run.result import Result
 
 __all__ = ["Model", "build_model", "run_case", "Progress", "Phase"]
@@ -109,4 +110,9 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
                    f"x {len(frf.inputs)} input(s), {asm.n_dof} coordinates", n_omega)
         result.frf = coupled_frf_result(case, model, progress) if has_frf_parts(case) else \
             frf_result(case, model, progress)
+    if case.analysis.transient is not None:
+        if events is not None:
+            events("sweep", f"transient: {case.analysis.transient.steps} steps, "
+                   f"{asm.n_dof} coordinates", case.analysis.transient.steps)
+        result.transient = transient_result(case, model)
     return result
