@@ -8,22 +8,56 @@ Lagrange-multiplier formulations.
 The Python API mirrors the command line::
 
     import substruct
-    case = substruct.load_case("cases/tapered_rod.yaml")
+    case = substruct.load_case("cases/tapered_rod.yaml")    # a path, a dict or YAML text
     result = substruct.run_case(case)
-    result.modes.omega
+    result.modes.omega, result.frf.at("rod@200", "rod@50")
+    substruct.frf_figure(result)                            # a matplotlib figure
+
+The names are imported on first use (``import substruct`` stays light); ``dir(substruct)``
+lists them.
 """
+
+from __future__ import annotations
+
+from importlib import import_module
+from typing import Any
 
 __version__ = "0.1.0"
 
-__all__ = ["__version__", "load_case", "run_case"]
+#: Public name -> the module that defines it.
+_LAZY = {
+    "load_case": "substruct.case.loader",
+    "CaseError": "substruct.case.loader",
+    "build_model": "substruct.run.runner",
+    "run_case": "substruct.run.runner",
+    "Result": "substruct.run.result",
+    "Modes": "substruct.analysis.results",
+    "Receptance": "substruct.analysis.results",
+    "CheckError": "substruct.analysis.errors",
+    "modes": "substruct.analysis.api",
+    "receptance_sweep": "substruct.analysis.api",
+    "load_result": "substruct.io.hdf5",
+    "save_result": "substruct.io.hdf5",
+    "plot_modes": "substruct.viz.plotting",
+    "plot_frf": "substruct.viz.plotting",
+    "modes_figure": "substruct.viz.plotting",
+    "frf_figure": "substruct.viz.plotting",
+}
+#: Names whose defining attribute is called otherwise.
+_ATTRIBUTE = {"load_result": "load", "save_result": "save"}
+
+__all__ = ["__version__", *_LAZY]
 
 
-def __getattr__(name: str):
-    """Import the case and run layers on first use, so ``import substruct`` stays light."""
-    if name == "load_case":
-        from substruct.case.loader import load_case
-        return load_case
-    if name == "run_case":
-        from substruct.run.runner import run_case
-        return run_case
-    raise AttributeError(f"module 'substruct' has no attribute {name!r}")
+def __getattr__(name: str) -> Any:
+    """Import the defining layer on first use, so ``import substruct`` stays light."""
+    if name not in _LAZY:
+        raise AttributeError(f"module 'substruct' has no attribute {name!r}")
+    value = getattr(import_module(_LAZY[name]), _ATTRIBUTE.get(name, name))
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    """The public names, lazy ones included (what tab completion offers)."""
+    return sorted(__all__)

@@ -120,3 +120,21 @@ class Receptance:
     agreement: dict[str, float] = field(default_factory=dict)
     constraint_residual: float = 0.0
     tolerance: float = DEFAULT_TOLERANCE
+
+    def at(self, input: str, output: str) -> np.ndarray:
+        r"""The curve ``H[:, i, j]`` from a unit force at point ``input`` to point ``output``
+        (names as the case wrote them), one complex value per frequency of ``omega``.
+
+        .. math::  H_{ij}(\omega_k) = o_i\, \hat H(\omega_k)\, e_j
+
+        Raises:
+            KeyError: ``input`` is not an input or ``output`` not an output of the sweep
+                (the message lists them).
+        """
+        if input not in self.inputs:
+            raise KeyError(f"{input!r} is not an input of the receptances "
+                           f"(inputs: {', '.join(self.inputs)})")
+        if output not in self.outputs:
+            raise KeyError(f"{output!r} is not an output of the receptances "
+                           f"(outputs: {', '.join(self.outputs)})")
+        return self.H[:, self.outputs.index(output), self.inputs.index(input)]

@@ -23,7 +23,7 @@ from substruct.viz.mode_drawing import CMAP, INK, draw_mode, vtk_text
 if TYPE_CHECKING:
     from substruct.analysis.results import Modes
 
-__all__ = ["plot_modes", "grid_shape", "mode_title", "modes_to_draw", "save_png"]
+__all__ = ["plot_modes", "render_modes", "grid_shape", "mode_title", "modes_to_draw", "save_png"]
 
 #: Height of the header row of a mode picture, in pixels.
 HEADER = 100
@@ -106,11 +106,17 @@ def _window(lay: Layout, bounds: list[float], rows: int, cols: int) -> tuple[int
 def plot_modes(result: Result, png_path: str | os.PathLike, n_modes: int = 6,
                variant: str | None = None, *, window_size: tuple[int, int] | None = None
                ) -> Path:
-    """Draw the first ``n_modes`` mode shapes in one PNG (a grid of views); return its path.
+    """Draw the first ``n_modes`` mode shapes in one PNG (a grid of views); return its path
+    (the picture of :func:`render_modes`, same arguments)."""
+    return save_png(render_modes(result, n_modes, variant, window_size=window_size), png_path)
+
+
+def render_modes(result: Result, n_modes: int = 6, variant: str | None = None, *,
+                 window_size: tuple[int, int] | None = None) -> np.ndarray:
+    """The first ``n_modes`` mode shapes drawn in one image (a grid of views), as an RGB array.
 
     Args:
         result: a result with modes and drawings.
-        png_path: the PNG to write (parent directories are created).
         n_modes: how many modes, from the lowest (fewer if the result has fewer).
         variant: draw ``result.variants[variant]`` instead of ``result.modes``.
         window_size: ``(width, height)`` in pixels; default 1600 wide, rows as tall as the
@@ -178,7 +184,7 @@ def plot_modes(result: Result, png_path: str | os.PathLike, n_modes: int = 6,
         image = plotter.screenshot(return_img=True)
     finally:
         plotter.close()
-    return save_png(image, png_path)
+    return np.asarray(image)
 
 
 def _camera(plotter: Any, lay: Layout, bounds: list[float], title_room: float = 0.14) -> None:
