@@ -93,7 +93,7 @@ def test_harmonic_steady_state_is_the_receptance():
     e[3] = 1.0
     H = receptance(K, M, C, A, np.array([w]), method="kkt", inputs=sp.csc_array(e),
                    outputs=sp.identity(4, format="csr"))[0][:, 0]
-    h = 2e-5
+    h = 5e-5
     n = int(round(2 * np.pi / w / h))
     t = h * np.arange(n + 1)
     r = transient(M, C, K, A, None, e, np.cos(w * t)[:, None], h, n, sp.identity(4),
@@ -170,3 +170,43 @@ def test_inconsistent_initial_displacement_is_refused():
     with pytest.raises(ValueError, match="initial displacement violates"):
         transient(M, None, K, A, None, np.zeros((4, 1)), np.zeros((11, 1)), 1e-3, 10,
                   sp.identity(4), d0=np.array([0.01, 0.0, 0.0, 0.0]))
+
+
+def test_shipped_impact_case_writes_the_transient_group(tmp_path):
+    import h5py
+
+    from substruct import cli
+    out = tmp_path / "out"
+    assert cli.main(["run", str(CASES / "tapered_rod_impact.yaml"), "--out", str(out)]) == 0
+    with h5py.File(out / "tapered_rod_impact.h5") as f:
+        g = f["transient"]
+        assert g.attrs["agreement_modal"] < 1e-6 and g.attrs["drift"] < 1e-13
+        assert g["displacement"].shape == (5001, 4) and g["displacement"].attrs["units"] == "length"
+        e = g["energy"][:]
+        balance = e[:, 0] + e[:, 1] - e[:, 2] + e[:, 3]
+        assert np.abs(balance - balance[0]).max() < 1e-9 * np.abs(e[:, 2]).max()
+
+
+@pytest.mark.parametrize("change, fragment", [
+    ({"dt": 0}, "analysis.transient.dt"),
+    ({"dt": 1.0, "t_end": 0.5}, "must be at most t_end"),
+    ({"every": 1, "t_end": 1e3, "dt": 1e-4, "outputs": ["rod@200"] * 3000}, "more than the 4 GB allowed"),
+])
+def test_bad_transient_input_is_one_line(change, fragment):
+    import yaml
+
+    from substruct.case.loader import CaseError
+    data = yaml.safe_load((CASES / "tapered_rod_impact.yaml").read_text())
+    data["analysis"]["transient"].update(change)
+    with pytest.raises(CaseError, match=fragment):
+        load_case(data)
+
+
+@pytest.mark.parametrize("rows, fragment", [
+    ("0,0\n0.1,nan\n", "not finite"), ("0,0\n0.2,1\n0.1,2\n", "not strictly increasing")])
+def test_bad_load_table_is_refused(tmp_path, rows, fragment):
+    from substruct.case.transient import read_table
+    p = tmp_path / "load.csv"
+    p.write_text(rows)
+    with pytest.raises(ValueError, match=fragment):
+        read_table(p)
