@@ -110,6 +110,8 @@ class Receptance:
         agreement: check formulation -> ``max |H_check - H| / max |H|``.
         constraint_residual: :math:`\max |A \hat q - R F| / \max |H|` over all frequencies.
         tolerance: the largest ``agreement`` the result was allowed.
+        quantity: what ``H`` is: ``"receptance"`` (u / F), ``"mobility"`` (velocity / F) or
+            ``"accelerance"`` (acceleration / F) (:mod:`substruct.analysis.frf_quantity`).
     """
 
     method: str
@@ -120,6 +122,7 @@ class Receptance:
     agreement: dict[str, float] = field(default_factory=dict)
     constraint_residual: float = 0.0
     tolerance: float = DEFAULT_TOLERANCE
+    quantity: str = "receptance"
 
     def at(self, input: str, output: str) -> np.ndarray:
         r"""The curve ``H[:, i, j]`` from a unit force at point ``input`` to point ``output``

@@ -158,7 +158,8 @@ def split_frf_case(case: Case) -> FrfSplit:
     if not model_points:
         raise case.error(("connections",), "no point of the model is joined to the FRF "
                          "substructures or asked for")
-    frf = spec.model_copy(update={"inputs": model_points, "outputs": model_points})
+    frf = spec.model_copy(update={"inputs": model_points, "outputs": model_points,
+                                  "quantity": "receptance"})
     analysis = case.analysis.model_copy(update={"frf": frf})
     model_case = case.model_copy(update={"substructures": others, "connections": fe_chains,
                                          "analysis": analysis})

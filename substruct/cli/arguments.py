@@ -83,9 +83,10 @@ def build_parser() -> argparse.ArgumentParser:
     info.add_argument("result", metavar="RESULT.h5")
     info.add_argument("--json", action="store_true", help="machine-readable summary")
 
-    export = sub.add_parser("export", help="write mode shapes for ParaView (VTU or XDMF)")
+    export = sub.add_parser("export", help="write mode shapes for ParaView (VTU or XDMF), or "
+                            "receptances and modes as UFF 58/55/15 (uff)")
     export.add_argument("result", metavar="RESULT.h5")
-    export.add_argument("--format", required=True, choices=("vtu", "xdmf"))
+    export.add_argument("--format", required=True, choices=("vtu", "xdmf", "uff"))
     export.add_argument("--modes", default=None, metavar="SPEC",
                         help="mode numbers, e.g. 1-6 or 1,3,5 (default: all)")
     export.add_argument("--variant", default=None, help="export the modes of this variant")
@@ -93,4 +94,7 @@ def build_parser() -> argparse.ArgumentParser:
                         help="output directory (default: beside the result)")
     export.add_argument("--force", action="store_true",
                         help="replace files of the same names (never the result itself)")
+    from substruct.cli.compare_command import add_compare_parser
+
+    add_compare_parser(sub)
     return parser

@@ -26,9 +26,11 @@ from typing import Callable, Sequence
 
 from substruct.cli.arguments import COMMANDS, InputError, build_parser
 from substruct.cli.converge_command import converge_command
-from substruct.cli.result_commands import export_command, info_command
+from substruct.cli.compare_command import compare_command
+from substruct.cli.result_commands import info_command
 from substruct.cli.run_command import run_command
 from substruct.cli.signals import Terminated, silence_stdout, terminate_on_sigterm
+from substruct.cli.uff_export import export_dispatch
 
 __all__ = ["main", "BAD_INPUT", "FAILED"]
 
@@ -39,7 +41,7 @@ FAILED = 1
 
 _RUN: dict[str, Callable[[argparse.Namespace], int]] = {
     "run": run_command, "converge": converge_command, "info": info_command,
-    "export": export_command}
+    "export": export_dispatch, "compare": compare_command}
 
 
 def _one_line(text: object) -> str:

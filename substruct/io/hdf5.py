@@ -9,7 +9,8 @@ The layout is documented in ``docs/results.md``; in short::
                            solver, tolerance
     /variants/<name>/      same as /modes (attr ``name`` holds the name verbatim)
     /frf/                  omega, H, inputs, outputs; attrs method, agreement_<m>,
-                           constraint_residual, tolerance
+                           constraint_residual, tolerance, quantity (receptance, mobility
+                           or accelerance; receptance if absent)
     /model/                dof_labels, substructure_names, substructure_kinds, offsets,
                            A (CSR group), b, R (CSR group), constraint_labels
     /model/drawings/<i>/   points, interp (CSR group), cells/<k> (attr cell_type),
@@ -193,6 +194,7 @@ def _write_frf(g: h5py.Group, frf: Receptance) -> None:
     g.attrs["method"] = str(frf.method)
     g.attrs["constraint_residual"] = float(frf.constraint_residual)
     g.attrs["tolerance"] = float(frf.tolerance)
+    g.attrs["quantity"] = str(frf.quantity)
     _write_agreement(g, frf.agreement)
     _array(g, "omega", np.asarray(frf.omega, dtype=float), "rad/s")
     _array(g, "H", np.asarray(frf.H))

@@ -168,7 +168,8 @@ def _frf(rd: _Reader, g: h5py.Group) -> Receptance:
         H=rd.array(g, "H", "fc", 3, (len(omega), len(outputs), len(inputs))),
         inputs=inputs, outputs=outputs, agreement=_agreement(attrs),
         constraint_residual=float(attrs["constraint_residual"]),
-        tolerance=float(attrs.get("tolerance", DEFAULT_TOLERANCE)))
+        tolerance=float(attrs.get("tolerance", DEFAULT_TOLERANCE)),
+        quantity=_text(attrs.get("quantity", "receptance")))
 
 
 def _numbered(members: list[tuple[str, h5py.Group]], where: str) -> list[h5py.Group]:

@@ -29,9 +29,11 @@ import numpy as np
 
 from substruct.analysis.results import Modes
 from substruct.case.frf_files import label_node_dir
+from substruct.io.hdf5 import atomic_path
+from substruct.run.result import Result
 
 __all__ = ["QUANTITY_CODES", "uff58_sets", "uff55_sets", "uff15_set", "write_uff",
-           "read_uff", "frf_nodes"]
+           "read_uff", "frf_nodes", "uff_path", "export_uff"]
 
 #: UFF specific data types of the ordinate of each quantity (denominator: force, 13).
 QUANTITY_CODES = {"receptance": 8, "mobility": 11, "accelerance": 12}
@@ -126,3 +128,35 @@ def read_uff(path: str | os.PathLike) -> list[dict[str, Any]]:
 
     sets = pyuff.UFF(str(path)).read_sets()
     return [sets] if isinstance(sets, dict) else list(sets)
+
+
+def uff_path(result: Result, out: str | os.PathLike) -> Path:
+    """Where :func:`export_uff` writes: ``out`` if it ends in ``.uff``, else
+    ``out/<case>.uff``."""
+    p = Path(out)
+    return p if p.suffix.lower() == ".uff" else p / f"{result.case_name}.uff"
+
+
+def export_uff(result: Result, out: str | os.PathLike, force: bool = False) -> Path:
+    """Write the result's receptances (58), modes (55) and their nodes (15) to one UFF file
+    (:func:`uff_path`), atomically; return its path.
+
+    Raises:
+        FileExistsError: the file exists and ``force`` is not set.
+        ValueError: a result with neither modes nor receptances.
+    """
+    path = uff_path(result, out)
+    if path.exists() and not force:
+        raise FileExistsError(f"{path} exists; use --force to overwrite it")
+    sets: list[dict[str, Any]] = []
+    if result.modes is not None and len(result.modes):
+        sets.append(uff15_set(result.modes.shapes.shape[0]))
+        sets += uff55_sets(result.modes, result.case_name)
+    frf = result.frf
+    if frf is not None:
+        sets += uff58_sets(frf.omega, frf.H, frf.outputs, frf.inputs, frf.quantity)
+    if not sets:
+        raise ValueError(f"{result.case_name}: no modes and no receptances to export")
+    with atomic_path(path, suffix=".uff") as tmp:
+        write_uff(tmp, sets)
+    return path

@@ -26,6 +26,7 @@ import scipy.sparse as sp
 from substruct.analysis.api import Progress, modes, receptance_sweep
 from substruct.analysis.errors import CheckError
 from substruct.analysis.events import Phase
+from substruct.analysis.frf_quantity import as_quantity
 from substruct.analysis.modal_frf import ModalOptions
 from substruct.analysis.results import Modes, Receptance
 from substruct.assembly.stack import Assembly
@@ -121,12 +122,12 @@ def frf_result(case: Case, model: Model, progress: Progress | None) -> Receptanc
     try:
         modal = ModalOptions(spec.modal.count, spec.modal.cutoff, spec.modal.residual,
                              spec.modal.check_frequencies, spec.modal.solver)
-        return receptance_sweep(asm.K, asm.M, asm.C, asm.A, spec.omegas(), inputs, outputs,
-                                R=asm.R, method=spec.method, checks=spec.check,
-                                tolerance=spec.tolerance, input_names=spec.inputs,
-                                output_names=spec.outputs,
-                                constraint_labels=asm.constraint_labels, progress=progress,
-                                modal=modal)
+        return as_quantity(receptance_sweep(
+            asm.K, asm.M, asm.C, asm.A, spec.omegas(), inputs, outputs,
+            R=asm.R, method=spec.method, checks=spec.check, tolerance=spec.tolerance,
+            input_names=spec.inputs, output_names=spec.outputs,
+            constraint_labels=asm.constraint_labels, progress=progress, modal=modal),
+            spec.quantity)
     except ValueError as err:  # ConstraintError included
         raise case.error(("analysis", "frf"), " ".join(str(err).split())) from None
     except CheckError as err:

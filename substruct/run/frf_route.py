@@ -19,6 +19,7 @@ from substruct.analysis.api import Progress
 from substruct.analysis.checks import require_agreement
 from substruct.analysis.errors import CheckError
 from substruct.analysis.frf_coupling import boolean_rows, couple
+from substruct.analysis.frf_quantity import as_quantity
 from substruct.analysis.results import Receptance
 from substruct.builder.frf_parts import MODEL_PART, FrfPart, split_frf_case
 from substruct.builder.model import Model
@@ -69,7 +70,8 @@ def coupled_frf_result(case: Case, model: Model, progress: Progress | None = Non
                           spec.tolerance)
     except CheckError as err:
         raise CheckError(f"{err}; to accept it, raise analysis.frf.tolerance") from None
-    return Receptance(method=f"lm-fbs ({MODEL_PART}: {fe.method})", omega=w,
-                      H=Yc[:, outs][:, :, ins], inputs=list(spec.inputs),
-                      outputs=list(spec.outputs), agreement=checks,
-                      constraint_residual=residual, tolerance=spec.tolerance)
+    coupled = Receptance(method=f"lm-fbs ({MODEL_PART}: {fe.method})", omega=w,
+                         H=Yc[:, outs][:, :, ins], inputs=list(spec.inputs),
+                         outputs=list(spec.outputs), agreement=checks,
+                         constraint_residual=residual, tolerance=spec.tolerance)
+    return as_quantity(coupled, spec.quantity)

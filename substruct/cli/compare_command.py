@@ -1,0 +1,109 @@
+"""``substruct compare A.h5 B.h5``: the modes of two results (or two variants) side by side.
+
+Prints a frequency table (each mode of the first paired with the mode of the second of largest
+MAC, :mod:`substruct.analysis.mac`; by order when no coordinates are shared) and the MAC
+matrix; ``--image PNG`` draws the matrix (:mod:`substruct.viz.mac_picture`), ``--json`` prints
+all of it as JSON.  The shapes are compared on the coordinates the two models share by label
+(all of them for two variants or two runs of one case).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from substruct.analysis.mac import mac_matrix, pair_modes
+from substruct.cli.arguments import InputError
+from substruct.cli.files import load_result, optional_module
+
+__all__ = ["add_compare_parser", "compare_command", "compare_modes"]
+
+
+def add_compare_parser(sub: Any) -> None:
+    """Add ``compare`` to the sub-parsers ``sub`` of the ``substruct`` parser."""
+    p = sub.add_parser("compare", help="compare the modes of two results: frequencies, MAC")
+    p.add_argument("first", metavar="A.h5")
+    p.add_argument("second", metavar="B.h5")
+    p.add_argument("--variant-a", default=None, help="the modes of this variant of A")
+    p.add_argument("--variant-b", default=None, help="the modes of this variant of B")
+    p.add_argument("--image", default=None, metavar="PNG", help="draw the MAC matrix")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+
+
+def _modes(path: str, variant: str | None) -> tuple[Any, Any]:
+    result = load_result(path)
+    if variant is not None:
+        if variant not in result.variants:
+            known = ", ".join(result.variants) or "none"
+            raise InputError(f"{path} has no variant {variant!r} (it has {known})")
+        return result, result.variants[variant]
+    if result.modes is None:
+        raise InputError(f"{path} holds no modes")
+    return result, result.modes
+
+
+def compare_modes(a: Any, ma: Any, b: Any, mb: Any) -> dict[str, Any]:
+    """The comparison of the modes ``ma`` of result ``a`` with ``mb`` of ``b`` as data: the
+    common coordinates, the MAC matrix (``None`` without common coordinates) and the rows of
+    the frequency table."""
+    labels_b = {lab: k for k, lab in enumerate(b.model.dof_labels)}
+    common = [(i, labels_b[lab]) for i, lab in enumerate(a.model.dof_labels) if lab in labels_b]
+    mac = None
+    if common:
+        ia, ib = (np.array(x) for x in zip(*common))
+        mac = mac_matrix(ma.shapes[ia], mb.shapes[ib])
+    pairs = pair_modes(mac) if mac is not None else np.arange(len(ma))
+    rows = []
+    for j in range(len(ma)):
+        k = int(pairs[j])
+        fa = float(ma.freq_hz[j])
+        fb = float(mb.freq_hz[k]) if 0 <= k < len(mb) else None
+        rows.append({"mode_a": j + 1, "freq_a_hz": fa, "mode_b": k + 1 if fb is not None else None,
+                     "freq_b_hz": fb, "difference": (fb - fa) / fa if fb is not None and fa
+                     else None,
+                     "mac": float(mac[j, k]) if mac is not None and fb is not None else None})
+    return {"common_coordinates": len(common), "rows": rows,
+            "mac": None if mac is None else mac.tolist()}
+
+
+def compare_command(args: argparse.Namespace) -> int:
+    """Print the comparison of the modes of ``args.first`` and ``args.second``; return 0."""
+    a, ma = _modes(args.first, args.variant_a)
+    b, mb = _modes(args.second, args.variant_b)
+    data = compare_modes(a, ma, b, mb)
+    name_a = args.first + (f" ({args.variant_a})" if args.variant_a else "")
+    name_b = args.second + (f" ({args.variant_b})" if args.variant_b else "")
+    if args.image is not None:
+        if data["mac"] is None:
+            raise InputError("the results share no coordinate: no MAC matrix to draw")
+        optional_module("viz.mac_picture").mac_picture(
+            np.array(data["mac"]), Path(args.image),
+            (Path(name_a).name, Path(name_b).name), ma.freq_hz, mb.freq_hz)
+    if args.json:
+        print(json.dumps({"a": name_a, "b": name_b, **data}, indent=1))
+        return 0
+    n = data["common_coordinates"]
+    print(f"A: {name_a}: {len(ma)} mode(s)\nB: {name_b}: {len(mb)} mode(s)")
+    print(f"MAC on {n} common coordinate(s)" if n else
+          "no common coordinates: modes paired by order, no MAC")
+    print(f"{'mode A':>6} {'f_A (Hz)':>12} {'mode B':>6} {'f_B (Hz)':>12} {'diff':>9} "
+          f"{'MAC':>6}")
+    for r in data["rows"]:
+        mac = f"{r['mac']:6.3f}" if r["mac"] is not None else f"{'-':>6}"
+        if r["mode_b"] is None:
+            print(f"{r['mode_a']:>6} {r['freq_a_hz']:12.6g} {'-':>6}")
+            continue
+        diff = f"{100 * r['difference']:8.3f}%" if r["difference"] is not None else f"{'-':>9}"
+        print(f"{r['mode_a']:>6} {r['freq_a_hz']:12.6g} {r['mode_b']:>6} "
+              f"{r['freq_b_hz']:12.6g} {diff} {mac}")
+    if data["mac"] is not None and len(ma) <= 12 and len(mb) <= 12:
+        print("MAC matrix (rows: A, columns: B):")
+        for row in data["mac"]:
+            print("  " + " ".join(f"{v:5.3f}" for v in row))
+    if args.image is not None:
+        print(f"written: {args.image}")
+    return 0
