@@ -332,12 +332,14 @@ NONHOMOGENEOUS = CASES / "three_dof_frf_nonhomogeneous.yaml"
 
 
 def test_inconsistent_constraints_are_refused_before_computing():
-    # eq41 reads q1 + 2 q3 = F1 + F2 + 3 F3; twice its left side with another right side
+    # eq41 reads q1 + 2 q3 = F1 + F2 + 3 F3; twice its left side with another right side.
+    # The misfit is measured on the equilibrated rows (both left sides become [.5, 0, 1]):
+    # R of eq41 becomes [.5, .5, 1.5], that of 'again' [.25, 0, 0]; 1.5 apart, relative to 1.5
     case = load_case(NONHOMOGENEOUS, [
         "constraints[1]={name: again, terms: {P@q1: 2, P@q3: 4}, rhs_force: {P@q1: 1}}"])
     with pytest.raises(CaseError, match=r"constraints.again.rhs_force: inconsistent constraints: "
                                         r"the left-hand side of 'again' is 2 x \(eq41\), but its "
-                                        r"rhs_force is not the same combination \(differs by 2, "
+                                        r"rhs_force is not the same combination \(differs by 1, "
                                         r"relative\), got \{\"P@q1\": 1.0\}"):
         build_model(case)
     # constant right-hand sides too

@@ -181,15 +181,15 @@ def run_chain(capsys, tmp_path, c: str) -> dict:
 
 
 def test_cli_modes_equal_those_of_the_unit_coefficient(capsys, tmp_path):
-    """``substruct run``: the constraint ``1e-8 q1 = 0`` (and ``1e-25 q1 = 0``, the smallest
-    magnitude a case file takes is ``1e-30``) gives the modes of ``q1 = 0``, and every check
-    agrees; before, ``1e-8`` gave 1.26 and 1.78 rad/s with the checks off by 0.51 and
-    ``1e-25`` lost the constraint."""
+    """``substruct run``: the constraint ``1e-8 q1 = 0`` (and ``1e-25``, ``1e-300`` and
+    ``1e300``: constraint coefficients take any finite magnitude) gives the modes of
+    ``q1 = 0``, and every check agrees; before, ``1e-8`` gave 1.26 and 1.78 rad/s with the
+    checks off by 0.51 and ``1e-25`` lost the constraint."""
     ref = run_chain(capsys, tmp_path, "1")
     lam = exact_roots()
     np.testing.assert_allclose(ref["omega"], np.abs(lam), rtol=1e-10)
     np.testing.assert_allclose(ref["damping_ratio"], -lam.real / np.abs(lam), rtol=1e-8)
-    for c in ("1e-8", "1e-25"):
+    for c in ("1e-8", "1e-25", "1e-300", "1e300"):
         got = run_chain(capsys, tmp_path, c)
         np.testing.assert_allclose(got["omega"], ref["omega"], rtol=1e-12)
         np.testing.assert_allclose(got["damping_ratio"], ref["damping_ratio"], rtol=1e-10)

@@ -17,6 +17,7 @@ from substruct.case.transient import TransientAnalysis
 from substruct.case.fields import (
     MAX_FREQUENCIES,
     MEMORY_LIMIT,
+    Coefficient,
     Count,
     Name,
     NonNegative,
@@ -41,9 +42,9 @@ class ConstraintSpec(StrictModel):
     """``sum_k c_k u(p_k) = rhs + sum_j d_j F(p_j)`` (eqs 41, 52)."""
 
     name: Name | None = None
-    terms: dict[Point, Number]
-    rhs: Number = 0.0
-    rhs_force: dict[Point, Number] = Field(default_factory=dict)
+    terms: dict[Point, Coefficient]
+    rhs: Coefficient = 0.0
+    rhs_force: dict[Point, Coefficient] = Field(default_factory=dict)
     active: bool = True
 
     @model_validator(mode="after")

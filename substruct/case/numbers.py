@@ -31,7 +31,8 @@ import numpy as np
 
 __all__ = [
     "MAX_MAGNITUDE", "MIN_MAGNITUDE", "MAX_DIGITS", "MAX_DAMPING_RATIO", "RANGE",
-    "BigNumber", "number_problem", "array_problem", "digits_problem", "find_problem",
+    "BigNumber", "number_problem", "coefficient_problem", "array_problem", "digits_problem",
+    "find_problem", "is_coefficient",
 ]
 
 #: Largest magnitude of any number in a case.
@@ -114,6 +115,28 @@ def number_problem(value: Any) -> str | None:
     return None
 
 
+def coefficient_problem(value: Any) -> str | None:
+    """What is wrong with a constraint coefficient (``terms``, ``rhs``, ``rhs_force``), or
+    ``None``: finite and not a big integer, at any magnitude.
+
+    A constraint row means the same whatever its scale (``1e-300 q1 = 0`` is ``q1 = 0``): every
+    analysis equilibrates the rows ``D A q = D b + D R F`` before it decides on rank or
+    consistency (:mod:`substruct.linalg.scaling`), so the range of :func:`number_problem`,
+    which keeps physical quantities and their products finite, does not apply here.
+    """
+    problem = number_problem(value)
+    if problem is None or not problem.startswith("out of range: too"):
+        return problem
+    return None
+
+
+def is_coefficient(loc: tuple) -> bool:
+    """Whether a location of raw case data holds a constraint coefficient
+    (``constraints[i].terms.*``, ``constraints[i].rhs``, ``constraints[i].rhs_force.*``)."""
+    return (len(loc) >= 3 and loc[0] == "constraints" and
+            loc[2] in ("terms", "rhs", "rhs_force"))
+
+
 def array_problem(values: Any) -> str | None:
     """What is wrong with an array of numbers (a matrix file, mesh coordinates), or ``None``.
 
@@ -189,7 +212,8 @@ def find_problem(data: Any) -> tuple[tuple, Any, str, bool] | None:
     for loc, value, is_key in _walk(data, (), set()):
         if isinstance(value, bool):
             continue
-        problem = number_problem(value)
+        problem = (coefficient_problem(value) if not is_key and is_coefficient(loc)
+                   else number_problem(value))
         if problem is not None:
             return loc, value, problem, is_key
     return None
