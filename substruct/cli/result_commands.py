@@ -94,7 +94,7 @@ def export_command(args: argparse.Namespace) -> int:
 
     result = load_result(args.result)
     export = optional_module("io.export")
-    out = args.out if args.out is not None else str(Path(args.result).resolve().parent)
+    out = args.out if args.out is not None else str(Path(args.result).parent)
     try:
         paths = export.export_paths(result, Path(out) if out else Path("."), args.format,
                                     args.modes, variant=args.variant)

@@ -124,8 +124,12 @@ OTHERS_INTRO = """## Other refusals of `substruct run`
 
 `case.yaml` is a copy of `cases/three_dof_frf.yaml`, `somefile` is a file, `results/` holds
 an earlier result of the case, `pipe.yaml` is a FIFO, `null.yaml` a link to the null device
-and `big.yaml` a file of 1 GB. An `--out` directory that cannot be written gives
-`substruct: error: --out DIR is not writable (Permission denied)`.
+and `big.yaml` a file of 1 GB, `gone` a symbolic link to nothing, `busy/` a directory another
+run is writing into. An `--out` directory that cannot be written gives
+`substruct: error: --out DIR is not writable (Permission denied)`. Every output path is
+checked before anything is computed. `info` and `export` refuse a result file that breaks
+the layout of `docs/results.md` in one line naming the file and the dataset
+(`tests/test_hostile_results.py` holds 28 such files).
 """
 
 CORPUS_INTRO = """\
@@ -150,6 +154,18 @@ OTHERS = [
     ("a case file that is a FIFO (it would block)", ["run", "pipe.yaml"]),
     ("a case file that is a link to a device (`/dev/null`)", ["run", "null.yaml"]),
     ("a case file over the size limit", ["run", "big.yaml"]),
+    ("`--out ''` (it would write into the working directory)",
+     ["run", "case.yaml", "--out", ""]),
+    ("`--out` with a component over the file system's name limit",
+     ["run", "case.yaml", "--out", "o" * 300]),
+    ("`--out` is a dangling symbolic link", ["run", "case.yaml", "--out", "gone"]),
+    ("another run writes into `--out`", ["run", "case.yaml", "--out", "busy"]),
+    ("export of modes that do not exist",
+     ["export", "results/three_dof_frf.h5", "--format", "vtu", "--modes", "1-99999999999999"]),
+    ("an export over an existing file (no `--force`)",
+     ["export", "results/three_dof_frf.h5", "--format", "vtu"]),
+    ("an export over its own input (even with `--force`)",
+     ["export", "three_dof_frf_modes.h5", "--format", "xdmf", "--force"]),
 ]
 
 
@@ -173,12 +189,21 @@ def other_messages() -> list[tuple[str, str]]:
                                   "--set", "output.pictures=false"])
             if first != 0:
                 raise RuntimeError("cases/three_dof_frf.yaml does not run")
-            for situation, args in OTHERS:
-                stderr = io.StringIO()
-                with contextlib.redirect_stdout(io.StringIO()), \
-                        contextlib.redirect_stderr(stderr):
-                    code = cli.main(args)
-                rows.append((situation, " ".join(args), code, stderr.getvalue().rstrip("\n")))
+            os.symlink("nowhere", "gone")
+            Path("results/three_dof_frf_modes.vtu").write_text("someone's file\n")
+            Path("three_dof_frf_modes.h5").write_bytes(Path("results/three_dof_frf.h5")
+                                                       .read_bytes())
+            from substruct.io.file_set import OutputDir
+
+            with OutputDir("busy"):
+                for situation, args in OTHERS:
+                    stderr = io.StringIO()
+                    with contextlib.redirect_stdout(io.StringIO()), \
+                            contextlib.redirect_stderr(stderr):
+                        code = cli.main(args)
+                    shown = " ".join(shlex.quote(a) if not a or len(a) < 40 else
+                                     a[:10] + "...(300 characters)" for a in args)
+                    rows.append((situation, shown, code, stderr.getvalue().rstrip("\n")))
         finally:
             os.chdir(cwd)
     return rows
@@ -200,6 +225,7 @@ def limits() -> str:
     from substruct.case import expressions, fields, loader, matrices, mesh_files, numbers
     from substruct.case import solids, yaml_io
     from substruct.case.fields import gigabytes
+    from substruct.io import export, result_reader
 
     def code(module, name):
         return f"`{name}` in `{module.__name__.replace('.', '/')}.py`"
@@ -263,6 +289,19 @@ def limits() -> str:
         ("terminal", "control and format characters of a value or a key shown in a message "
          "are escaped (`\\x1b`, `\\u202e`): an error line cannot retitle, clear or reorder "
          "the terminal", "-"),
+        ("output paths", "`--out` not empty, no dangling link, every component and every file "
+         "name (with room for its temporary name) within the file system's `NAME_MAX`, the "
+         "whole path within `PATH_MAX`, writable; one run at a time writes into a directory "
+         "(another gets `another run is writing DIR`)", "`TEMP_NAME_EXTRA` in "
+         "`substruct/cli/files.py`"),
+        ("result files", f"read through hard links only; all datasets together declare at "
+         f"most {gigabytes(result_reader.MAX_RESULT_BYTES)}, a group holds at most "
+         f"{_n(result_reader.MAX_MEMBERS)} members; lengths that agree, cells of a known type "
+         "inside their points (checked before anything is read or exported); `info` escapes "
+         "control characters", code(result_reader, "MAX_RESULT_BYTES") + ", `MAX_MEMBERS`"),
+        ("`--modes`", f"mode numbers of at most 20 digits, checked against the result's modes "
+         f"(at most {_n(export.MAX_MODE_NUMBER)}) before any list is built",
+         code(export, "MAX_MODE_NUMBER")),
     ]
     import textwrap
 
