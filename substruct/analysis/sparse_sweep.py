@@ -49,14 +49,25 @@ class Gather:
         self.single = np.flatnonzero(counts == 1)
         self.cols = O.indices[O.indptr[self.single]]
         self.vals = O.data[O.indptr[self.single]][:, None]
+        self.ones = bool(np.all(self.vals == 1.0))
+        self.prefix = bool(np.array_equal(self.single, np.arange(self.single.size)))
         self.other = np.flatnonzero(counts != 1)
         self.rest = sp.csr_array(O[self.other])
+        # a few such rows (constraint rows, interpolated points): dense, one BLAS product
+        self.rest_dense = self.rest.toarray() if self.other.size <= 64 else None
 
     def __call__(self, X: np.ndarray, out: np.ndarray) -> None:
         """Write ``O X`` into ``out``."""
-        out[self.single] = self.vals * X[self.cols]
+        if self.prefix:  # the single-entry rows first (outputs, then constraint rows)
+            block = out[:self.single.size]
+            block[...] = X[self.cols]  # (np.take(..., out=block) of a column-major X: 30x
+            if not self.ones:          # slower)
+                block *= self.vals
+        else:
+            out[self.single] = self.vals * X[self.cols]
         if self.other.size:
-            out[self.other] = self.rest @ X
+            out[self.other] = self.rest_dense @ X if self.rest_dense is not None else \
+                self.rest @ X
 
 
 def null_space_sparse_sweep(K: sp.sparray, M: sp.sparray, C: sp.sparray | None,
@@ -114,7 +125,7 @@ def null_space_sparse_sweep(K: sp.sparray, M: sp.sparray, C: sp.sparray | None,
         try:
             if banded:
                 Zb = Kb - wk**2 * Mb + (0.0 if Cb is None else 1j * wk * Cb)
-                X = band_solve(Zb.astype(complex), width, Bp)
+                X = band_solve(np.asarray(Zb, dtype=complex), width, Bp)
             else:
                 Z = Kp.astype(complex) - wk**2 * Mp + (0.0 if Cp is None else 1j * wk * Cp)
                 X = complex_symmetric(Z, ordered=True)(Bp)

@@ -37,20 +37,28 @@ def band_ordering(pattern: sp.sparray | sp.spmatrix) -> tuple[np.ndarray, int]:
 
 
 def band_storage(A: sp.sparray | sp.spmatrix, b: int) -> np.ndarray:
-    r"""LAPACK band storage of the square ``A`` (already ordered) with ``b`` sub- and
-    super-diagonals: ``ab[b + i - j, j] = a_ij``, shape ``(2 b + 1, n)``."""
+    r"""LAPACK ``gbsv`` band storage of the square ``A`` (already ordered) with ``b`` sub- and
+    super-diagonals and ``b`` more rows for the fill of pivoting:
+    ``ab[2 b + i - j, j] = a_ij``, shape ``(3 b + 1, n)``."""
     coo = sp.coo_matrix(A)
     n = A.shape[0]
-    ab = np.zeros((2 * b + 1, n), dtype=np.result_type(coo.data.dtype, float))
+    ab = np.zeros((3 * b + 1, n), dtype=np.result_type(coo.data.dtype, float))
     keep = np.abs(coo.row - coo.col) <= b
-    np.add.at(ab, (b + coo.row[keep] - coo.col[keep], coo.col[keep]), coo.data[keep])
+    np.add.at(ab, (2 * b + coo.row[keep] - coo.col[keep], coo.col[keep]), coo.data[keep])
     return ab
 
 
 def band_solve(ab: np.ndarray, b: int, rhs: np.ndarray) -> np.ndarray:
-    """``A^{-1} rhs`` from the band storage ``ab`` (:func:`band_storage`) by LAPACK ``gbsv``.
+    """``A^{-1} rhs`` from the band storage ``ab`` (:func:`band_storage`; overwritten) by
+    LAPACK ``gbsv``; the solution is column-major (Fortran order) like ``rhs``.
 
     Raises:
         numpy.linalg.LinAlgError: ``A`` is singular.
     """
-    return sla.solve_banded((b, b), ab, rhs, overwrite_ab=True, check_finite=False)
+    gbsv, = sla.get_lapack_funcs(("gbsv",), (ab, rhs))
+    _, _, x, info = gbsv(b, b, ab, rhs, overwrite_ab=True)
+    if info > 0:
+        raise np.linalg.LinAlgError(f"singular matrix: zero pivot {info}")
+    if info < 0:
+        raise ValueError(f"gbsv: illegal argument {-info}")
+    return x
