@@ -13,7 +13,6 @@ import numpy as np
 from pydantic import Field, model_validator
 
 from substruct.case.errors import FieldError
-from substruct.case.transient import TransientAnalysis
 from substruct.case.fields import (
     MAX_FREQUENCIES,
     MEMORY_LIMIT,
@@ -27,6 +26,8 @@ from substruct.case.fields import (
     StrictModel,
     gigabytes,
 )
+from substruct.case.numbers import MAX_MAGNITUDE, RANGE
+from substruct.case.transient import TransientAnalysis
 
 __all__ = ["METHODS", "TOLERANCE", "Method", "ConstraintSpec", "Variant", "ModesAnalysis",
            "Omega", "ModalFrf", "FrfAnalysis", "Analysis", "Output"]
@@ -52,6 +53,12 @@ class ConstraintSpec(StrictModel):
         if not self.terms or all(c == 0 for c in self.terms.values()):
             raise FieldError("terms", "a constraint needs at least one term with a nonzero "
                              "coefficient", self.terms)
+        # the row may have any scale; the displacement it prescribes may not
+        implied = abs(self.rhs) / max(abs(c) for c in self.terms.values())
+        if implied > MAX_MAGNITUDE:
+            raise FieldError("rhs", f"out of range: the displacement it prescribes, "
+                             f"|rhs| / max |terms| = {implied:.3g}, is too large ({RANGE})",
+                             self.rhs)
         return self
 
 
