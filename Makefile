@@ -5,7 +5,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: run test bench clean
+.PHONY: run test bench fast clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -23,6 +23,14 @@ test: $(STAMP)
 	$(BIN)/lint-imports
 	$(BIN)/mypy substruct
 	OMP_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python -m pytest -q
+
+# CHOLMOD for the sparse eigensolvers: Debian's SuiteSparse headers (apt-get, as root: sudo
+# when not root), then scikit-sparse through the [cholmod] extra. Without it the code falls
+# back to SuperLU.
+fast: $(STAMP)
+	if [ "$$(id -u)" = 0 ]; then apt-get install -y libsuitesparse-dev; \
+	else sudo apt-get install -y libsuitesparse-dev; fi
+	$(BIN)/pip install -e '.[test,cholmod]'
 
 bench: $(STAMP)
 	OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 $(BIN)/python benchmarks/modes.py

@@ -24,6 +24,7 @@ import scipy.sparse as sp
 
 from substruct.analysis.results import DEFAULT_TOLERANCE, Modes, Receptance
 from substruct.builder.drawing import Drawing
+from substruct.io.transient_hdf5 import read_transient
 from substruct.run.result import ModelInfo, Result
 
 __all__ = ["load", "FORMAT", "FORMAT_VERSION", "RESERVED_ATTRS", "MAX_RESULT_BYTES",
@@ -249,8 +250,14 @@ def _read(f: h5py.File) -> Result:
         for gname, g in rd.members(f, "variants"):
             variants[_text(g.attrs.get("name", gname))] = _modes(rd, g, n)
     frf = _frf(rd, rd.node(f, "frf", h5py.Group)) if "frf" in f else None
+    transient = None
+    if "transient" in f:
+        try:
+            transient = read_transient(rd, rd.node(f, "transient", h5py.Group), n)
+        except ValueError as exc:
+            raise _Bad(str(exc)) from None
     return Result(case_name=_text(root["case_name"]), case_yaml=_text(root["case_yaml"]),
-                  model=model, modes=modes, frf=frf, variants=variants,
+                  model=model, modes=modes, frf=frf, transient=transient, variants=variants,
                   attrs={k: v for k, v in root.items() if k not in RESERVED_ATTRS})
 
 

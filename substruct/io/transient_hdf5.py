@@ -13,21 +13,27 @@ dataset                       contents                                          
 ``constraint_labels``         the constraint rows
 ``constraint_residual``       largest equilibrated :math:`|A q - b|` per sample
 ``energy``                    ``n_samples x 4``; ``energy_labels``                    ``energy``
-``snapshot_t``, ``snapshots`` the full displacement every k steps (if asked)
+``snapshot_t``, ``snapshots`` the full displacement every k steps (empty if not asked)
 ============================  ======================================================  =========
 
 Attributes: ``method``, ``integrator``, ``rho_inf``, ``dt``, ``drift``, ``tolerance``,
 ``solver``, ``agreement_<form>``.  Units are those of the case (``units`` of the file root).
+
+:func:`read_transient` reads the group back (through the checks of
+:mod:`substruct.io.result_reader`), so that a result read back equals the one written.
 """
 
 from __future__ import annotations
 
+from typing import Protocol
+
 import h5py
 import numpy as np
 
+from substruct.analysis.results import DEFAULT_TOLERANCE
 from substruct.analysis.transient_results import ENERGY_LABELS, Transient
 
-__all__ = ["write_transient"]
+__all__ = ["write_transient", "read_transient", "ArrayReader"]
 
 
 def _strings(g: h5py.Group, name: str, values: list[str]) -> None:
@@ -52,6 +58,86 @@ def write_transient(g: h5py.Group, tr: Transient) -> None:
     _strings(g, "outputs", tr.outputs)
     _strings(g, "constraint_labels", tr.constraint_labels)
     _strings(g, "energy_labels", list(ENERGY_LABELS))
-    if tr.snapshots.size:
-        g.create_dataset("snapshot_t", data=np.asarray(tr.snapshot_t, dtype=float))
-        g.create_dataset("snapshots", data=np.asarray(tr.snapshots, dtype=float))
+    g.create_dataset("snapshot_t", data=np.asarray(tr.snapshot_t, dtype=float))
+    g.create_dataset("snapshots", data=np.asarray(tr.snapshots, dtype=float))
+
+
+class ArrayReader(Protocol):
+    """What :func:`read_transient` needs of the result reader
+    (:mod:`substruct.io.result_reader`): datasets checked for rank, kind, declared size and
+    shape before they are read, through hard links only."""
+
+    def array(self, g: h5py.Group, name: str, kinds: str, ndim: int,
+              shape: tuple[int | None, ...] | None = None) -> np.ndarray:
+        """The dataset ``g/name`` (``kinds``: numpy kind letters, ``s`` for strings)."""
+        ...
+
+    def strings(self, g: h5py.Group, name: str, count: int | None = None) -> list[str]:
+        """The 1-D string dataset ``g/name``."""
+        ...
+
+
+def _text(value: object) -> str:
+    return value.decode("utf-8", "replace") if isinstance(value, bytes) else str(value)
+
+
+def _finite(g: h5py.Group, name: str, a: np.ndarray) -> np.ndarray:
+    if not np.all(np.isfinite(a)):
+        raise ValueError(f"{g.name}/{name} holds values that are not finite")
+    return a
+
+
+def read_transient(rd: ArrayReader, g: h5py.Group, n: int) -> Transient:
+    """The :class:`Transient` written by :func:`write_transient` into ``g``, checked: every
+    history has one row per instant of ``t`` and one column per output, constraint row or
+    energy label; ``t`` strictly increasing; every value finite; snapshots of the model's
+    ``n`` coordinates.
+
+    Raises:
+        ValueError: one line naming the dataset or attribute that breaks the layout (the
+            reader's own refusals, e.g. a declared size past its budget, pass through).
+    """
+    attrs = {str(k): g.attrs[k] for k in g.attrs if g.attrs.get_id(k).shape == ()}
+    for key in ("method", "integrator", "dt"):
+        if key not in attrs:
+            raise ValueError(f"{g.name} has no attribute {key!r}")
+    num = {}
+    for key in ("rho_inf", "dt", "drift", "tolerance"):
+        try:
+            num[key] = float(attrs.get(key, DEFAULT_TOLERANCE if key == "tolerance" else 0.0))
+        except (TypeError, ValueError):
+            raise ValueError(f"{g.name} attribute {key} is not a number") from None
+        if not np.isfinite(num[key]):
+            raise ValueError(f"{g.name} attribute {key} is not finite")
+    if not num["dt"] > 0:
+        raise ValueError(f"{g.name} attribute dt is {num['dt']!r}, not > 0")
+    t = _finite(g, "t", rd.array(g, "t", "f", 1))
+    if np.any(np.diff(t) <= 0):
+        raise ValueError(f"{g.name}/t is not strictly increasing")
+    k = len(t)
+    outputs = rd.strings(g, "outputs")
+    labels = rd.strings(g, "constraint_labels")
+    hist = {name: _finite(g, name, rd.array(g, name, "f", 2, (k, len(outputs))))
+            for name in ("displacement", "velocity", "acceleration")}
+    lam = _finite(g, "constraint_forces", rd.array(g, "constraint_forces", "f", 2,
+                                                   (None, len(labels))))
+    if lam.shape[0] not in (0, k):
+        raise ValueError(f"{g.name}/constraint_forces has {lam.shape[0]} rows for {k} instants")
+    rd.strings(g, "energy_labels", len(ENERGY_LABELS))
+    snap_t, snaps = np.zeros(0), np.zeros((0, n))
+    if "snapshot_t" in g or "snapshots" in g:
+        snap_t = _finite(g, "snapshot_t", rd.array(g, "snapshot_t", "f", 1))
+        snaps = _finite(g, "snapshots", rd.array(g, "snapshots", "f", 2,
+                                                   (len(snap_t), n if len(snap_t) else None)))
+    agreement = {key[len("agreement_"):]: float(v) for key, v in attrs.items()
+                 if key.startswith("agreement_")}
+    return Transient(
+        method=_text(attrs["method"]), integrator=_text(attrs["integrator"]),
+        rho_inf=num["rho_inf"], dt=num["dt"], t=t, outputs=outputs, **hist,
+        constraint_labels=labels, constraint_forces=lam,
+        constraint_residual=_finite(g, "constraint_residual",
+                                    rd.array(g, "constraint_residual", "f", 1, (k,))),
+        drift=num["drift"],
+        energy=_finite(g, "energy", rd.array(g, "energy", "f", 2, (k, len(ENERGY_LABELS)))),
+        snapshot_t=snap_t, snapshots=snaps, agreement=agreement,
+        tolerance=num["tolerance"], solver=_text(attrs.get("solver", "")))
