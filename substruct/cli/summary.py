@@ -9,6 +9,8 @@ from typing import TYPE_CHECKING, Any, Sequence, TextIO
 
 import numpy as np
 
+from substruct.cli.transient_summary import print_transient, transient_json
+
 if TYPE_CHECKING:
     from substruct.run.result import Result
 
@@ -84,6 +86,8 @@ def summary_json(result: Result, files: Sequence[Path] = ()) -> dict[str, Any]:
                       "agreement": {k: json_number(v) for k, v in frf.agreement.items()}}
         if H.size <= 1000:
             out["frf"]["H"] = {"real": H.real.tolist(), "imag": H.imag.tolist()}
+    if result.transient is not None:
+        out["transient"] = transient_json(result.transient)
     return out
 
 
@@ -162,3 +166,5 @@ def print_summary(result: Result, out: TextIO, requested: int | None = None,
         print_modes(modes, out, requested)
     if result.frf is not None:
         print_frf(result.frf, out)
+    if result.transient is not None:
+        print_transient(result.transient, out, str(result.attrs.get("units", "")))
