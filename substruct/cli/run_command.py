@@ -117,12 +117,15 @@ def picture_paths(case: Any, out: Path) -> list[Path]:
         paths += [out / f"{name}_modes_{v.name}.png" for v in modes.variants]
     if case.analysis.frf is not None:
         paths.append(out / f"{name}_frf.png")
+    if case.analysis.transient is not None:
+        paths.append(out / f"{name}_transient.png")
     return paths
 
 
 def write_pictures(result: Result, out: Path, name: str) -> list[Path]:
-    """The mode pictures (main modes and each variant) and the receptance picture; the
-    plotting modules are imported here, only when a picture is drawn."""
+    """The mode pictures (main modes and each variant), the receptance picture and the
+    transient histories; the plotting modules are imported here, only when a picture is
+    drawn."""
     plotting = optional_module("viz.plotting")
     files = []
     if result.modes is not None and len(result.modes.omega) and result.model.drawings:
@@ -133,4 +136,8 @@ def write_pictures(result: Result, out: Path, name: str) -> list[Path]:
                     result, out / f"{name}_modes_{variant}.png", variant=variant)))
     if result.frf is not None:
         files.append(Path(plotting.plot_frf(result, out / f"{name}_frf.png")))
+    tr = result.transient
+    if tr is not None and tr.t.size and (tr.outputs or tr.constraint_forces.size):
+        picture = optional_module("viz.transient_picture")
+        files.append(Path(picture.plot_transient(result, out / f"{name}_transient.png")))
     return files
