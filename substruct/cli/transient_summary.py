@@ -12,7 +12,10 @@ import numpy as np
 if TYPE_CHECKING:
     from substruct.analysis.transient_results import Transient
 
-__all__ = ["peaks", "transient_json", "print_transient"]
+__all__ = ["peaks", "transient_json", "print_transient", "MAX_FORCES"]
+
+#: Constraint forces whose peak the table shows (the first rows).
+MAX_FORCES = 8
 
 #: The recorded histories and the unit of each (the case's units).
 HISTORIES = (("displacement", "length"), ("velocity", "length/time"),
@@ -84,5 +87,8 @@ def print_transient(tr: Transient, out: TextIO, units: str = "") -> None:
         for i, o in enumerate(tr.outputs):
             cells = "  ".join(f"{f'{c[i][0]:.4g} ({c[i][1]:.4g})':>22s}" for c in cols)
             out.write(f"    {o:<{width}s}  {cells}\n")
-    for label, (v, t) in list(zip(tr.constraint_labels, peaks(tr.constraint_forces, tr.t)))[:8]:
+    shown = list(zip(tr.constraint_labels, peaks(tr.constraint_forces, tr.t)))
+    for label, (v, t) in shown[:MAX_FORCES]:
         out.write(f"  peak constraint force {label}: {v:.4g} at t = {t:.4g}\n")
+    if len(shown) > MAX_FORCES:
+        out.write(f"  (+{len(shown) - MAX_FORCES} more constraint forces in the results file)\n")
