@@ -70,6 +70,7 @@ from substruct.case.frf_substructure import FrfSpec
 from substruct.case.matrices import MatrixSpec
 from substruct.case.numbers import find_problem
 from substruct.case.solids import InterfaceSpec, SolidSpec
+from substruct.case.study import StudySpec
 from substruct.case.substructures import (
     AssumedModes,
     DiscreteSpec,
@@ -148,6 +149,7 @@ class Case(StrictModel):
     interfaces: list[InterfaceSpec] = Field(default_factory=list)
     analysis: Analysis
     output: Output = Field(default_factory=Output)
+    study: StudySpec | None = None
 
     _source: str = PrivateAttr(default="<string>")
     _text: str = PrivateAttr(default="")
@@ -179,6 +181,8 @@ class Case(StrictModel):
             if len(counted) == len(sizes) and modes.count > sum(counted):
                 raise FieldError(("analysis", "modes", "count"), f"more modes than the "
                                  f"{sum(counted)} coordinates of the model", modes.count)
+        if self.study is not None:
+            self.study.check(self)
         return self
 
     @staticmethod

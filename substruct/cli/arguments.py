@@ -9,7 +9,7 @@ from typing import NoReturn
 __all__ = ["COMMANDS", "InputError", "build_parser"]
 
 #: The commands, in the order ``--help`` lists them.
-COMMANDS = ("run", "converge", "info", "export")
+COMMANDS = ("run", "converge", "study", "info", "export")
 
 
 class InputError(Exception):
@@ -97,4 +97,7 @@ def build_parser() -> argparse.ArgumentParser:
     from substruct.cli.compare_command import add_compare_parser
 
     add_compare_parser(sub)
+    from substruct.cli.study_command import add_study_parser
+
+    add_study_parser(sub)
     return parser

@@ -29,6 +29,7 @@ from substruct.cli.converge_command import converge_command
 from substruct.cli.compare_command import compare_command
 from substruct.cli.result_commands import info_command
 from substruct.cli.run_command import run_command
+from substruct.cli.study_command import study_command
 from substruct.cli.signals import Terminated, silence_stdout, terminate_on_sigterm
 from substruct.cli.uff_export import export_dispatch
 
@@ -41,7 +42,7 @@ FAILED = 1
 
 _RUN: dict[str, Callable[[argparse.Namespace], int]] = {
     "run": run_command, "converge": converge_command, "info": info_command,
-    "export": export_dispatch, "compare": compare_command}
+    "export": export_dispatch, "compare": compare_command, "study": study_command}
 
 
 def _one_line(text: object) -> str:

@@ -1,0 +1,136 @@
+"""``substruct study CASE.yaml``: the samples of the case's ``study:`` block
+(:mod:`substruct.studies.study_run`), in this process (default), on a LocalCluster
+(``--workers N``) or on an existing Dask cluster (``--scheduler tcp://host:port``); written as
+``DIR/<name>_study.h5`` (:mod:`substruct.io.study_file`) and pictures beside it.
+
+A progress bar (tqdm: samples done, elapsed, ETA) is drawn on stderr when it is a terminal and
+``--quiet`` is not given.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from substruct.cli.arguments import InputError
+from substruct.cli.files import writable_dir
+
+__all__ = ["study_command", "add_study_parser"]
+
+
+def add_study_parser(sub: Any) -> None:
+    """Register ``study`` on the subparsers ``sub`` of :func:`substruct.cli.arguments.
+    build_parser`."""
+    study = sub.add_parser("study", help="run the parameter study of a case file",
+                           description="Run every sample of the case's study: block (a grid "
+                           "or random samples of its parameters); write DIR/<name>_study.h5 "
+                           "and pictures; print a summary.")
+    study.add_argument("case", metavar="CASE.yaml", help="the case file (with a study: block)")
+    study.add_argument("--out", default="results", metavar="DIR",
+                       help="output directory (default: results)")
+    study.add_argument("--set", action="append", default=[], metavar="KEY.PATH=VALUE",
+                       help="override a case value (repeatable), as for run")
+    where = study.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, default=None, metavar="N",
+                       help="start a Dask LocalCluster of N worker processes (1 thread each)")
+    where.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
+                       help="run on an existing Dask cluster")
+    study.add_argument("--force", action="store_true", help="overwrite an existing study file")
+    study.add_argument("--no-pictures", action="store_true", help="write the study file only")
+    study.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
+    study.add_argument("--json", action="store_true",
+                       help="print a machine-readable summary instead of the table")
+
+
+def _tick(show: bool) -> Any:
+    if not show:
+        return None, None
+    from tqdm import tqdm
+
+    bar: dict[str, Any] = {}
+
+    def tick(done: int, total: int) -> None:
+        if "bar" not in bar:
+            bar["bar"] = tqdm(total=total, file=sys.stderr, unit="sample", desc="study")
+        bar["bar"].update(done - bar["bar"].n)
+
+    def close() -> None:
+        if "bar" in bar:
+            bar["bar"].close()
+    return tick, close
+
+
+def _summary(result: Any, seconds: float) -> dict[str, Any]:
+    out: dict[str, Any] = {"case": result.case_name, "backend": result.backend,
+                           "samples": len(result.errors), "failed": len(result.failed),
+                           "seconds": round(seconds, 3), "parameters": result.parameters}
+    if "frf_peak" in result.values and np.isfinite(result.values["frf_peak"][:, 0]).any():
+        k = int(np.nanargmin(result.values["frf_peak"][:, 0]))
+        out["smallest_peak"] = {"sample": k, "peak": float(result.values["frf_peak"][k, 0]),
+                                "at": dict(zip(result.parameters, map(float, result.table[k])))}
+    out["failures"] = [{"sample": k, "error": result.errors[k]} for k in result.failed[:20]]
+    return out
+
+
+def study_command(args: argparse.Namespace) -> int:
+    """Run the study of ``args.case``; return the exit code (0, also when samples failed:
+    they are recorded in the file and listed in the summary)."""
+    from substruct.case.loader import load_case
+    from substruct.io.study_file import save_study
+    from substruct.studies.study_backend import Backend, BackendError
+    from substruct.studies.study_run import run_study, study_of
+
+    if args.workers is not None and not 1 <= args.workers <= 1024:
+        raise InputError(f"--workers: between 1 and 1024, got {args.workers}")
+    if args.scheduler is not None and "://" not in args.scheduler:
+        raise InputError(f"--scheduler: an address such as tcp://host:8786, got "
+                         f"{args.scheduler!r}")
+    case = load_case(args.case, args.set)
+    study_of(case)
+    out = Path(args.out)
+    writable_dir(out, "--out")
+    target = out / f"{case.name}_study.h5"
+    if target.is_dir():
+        raise InputError(f"{target} is a directory")
+    if target.exists() and not args.force:
+        raise InputError(f"{target} exists; use --force to overwrite it")
+    show = not args.quiet and bool(getattr(sys.stderr, "isatty", lambda: False)())
+    tick, close = _tick(show)
+    start = time.perf_counter()
+    try:
+        result = run_study(case, Backend(workers=args.workers, scheduler=args.scheduler), tick)
+    except BackendError as err:
+        raise InputError(str(err)) from None
+    finally:
+        if close is not None:
+            close()
+    seconds = time.perf_counter() - start
+    save_study(result, target)
+    pictures = []
+    if not args.no_pictures and case.output.pictures:
+        from substruct.viz.study_picture import study_pictures
+
+        pictures = study_pictures(result, out)
+    summary = _summary(result, seconds)
+    summary["files"] = [str(p) for p in (target, *pictures)]
+    if args.json:
+        print(json.dumps(summary, indent=1))
+    elif not args.quiet:
+        print(f"{summary['case']}: {summary['samples']} samples of "
+              f"{', '.join(result.parameters)} on {summary['backend']} in {seconds:.1f} s, "
+              f"{summary['failed']} failed")
+        if "smallest_peak" in summary:
+            best = summary["smallest_peak"]
+            at = ", ".join(f"{k} = {v:.6g}" for k, v in best["at"].items())
+            print(f"smallest FRF peak {result.peaks[0]}: {best['peak']:.6g} at {at}")
+        for fail in summary["failures"]:
+            print(f"sample {fail['sample']} failed: {fail['error']}")
+        for f in summary["files"]:
+            print(f"wrote {f}")
+    return 0

@@ -1,0 +1,125 @@
+"""A whole study: the samples of a case's ``study:`` block run on a backend, gathered into one
+table (:class:`StudyResult`) that :mod:`substruct.io.study_file` writes.
+
+Data flow: :func:`study_tasks` turns the case into one
+:class:`~substruct.studies.study_task.SampleTask` per row of the parameter table
+(:func:`substruct.studies.study_plan.samples`); :func:`substruct.studies.study_backend.execute`
+runs them; :func:`gather` stacks the records.  A failed sample leaves NaN in its rows and its
+message in ``errors``; the others are unaffected.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from substruct.case.loader import Case
+from substruct.case.study import StudySpec
+from substruct.run.runner import run_case
+from substruct.studies.study_backend import Backend, Tick, execute
+from substruct.studies.study_plan import overrides_of, samples
+from substruct.studies.study_task import SampleRecord, SampleTask, collect, record_fields
+
+__all__ = ["StudyResult", "study_tasks", "gather", "run_study", "study_of"]
+
+
+@dataclass
+class StudyResult:
+    """Everything a study produced.
+
+    Attributes:
+        case_name: the case's name.
+        kind: ``"grid"`` or ``"random"``.
+        parameters: the names of the varied parameters.
+        table: ``(samples, parameters)`` values.
+        values: collected arrays by name, each ``(samples, k)`` (NaN for failed samples).
+        errors: one message per sample, ``""`` for a sample that ran.
+        seconds: time each sample took where it ran.
+        reference: the collected arrays of the case as written (no study values).
+        backend: where it ran.
+        case_yaml: the case text.
+        peaks: ``"output<-input"`` names of the FRF peaks.
+    """
+
+    case_name: str
+    kind: str
+    parameters: list[str]
+    table: np.ndarray
+    values: dict[str, np.ndarray]
+    errors: list[str]
+    seconds: np.ndarray
+    reference: dict[str, np.ndarray] = field(default_factory=dict)
+    backend: str = "in-process"
+    case_yaml: str = ""
+    peaks: list[str] = field(default_factory=list)
+
+    @property
+    def failed(self) -> list[int]:
+        """Indices of the samples that failed."""
+        return [k for k, e in enumerate(self.errors) if e]
+
+
+def study_of(case: Case) -> StudySpec:
+    """The case's ``study:`` block.
+
+    Raises:
+        CaseError: the case has none.
+    """
+    if case.study is None:
+        raise case.error(("study",), "the case has no study: block (see docs/studies.md)")
+    return case.study
+
+
+def study_tasks(case: Case, reference: np.ndarray | None = None) -> tuple[list[str], np.ndarray,
+                                                                          list[SampleTask]]:
+    """The parameter names, the table and one task per sample of the case's study."""
+    spec = study_of(case)
+    names, table = samples(spec)
+    tasks = [SampleTask(index=k, case_text=case.text, source=case.source,
+                        base_dir=str(case.base_dir), overrides=tuple(overrides_of(names, row)),
+                        collect=spec.collect, reference=reference)
+             for k, row in enumerate(table)]
+    return names, table, tasks
+
+
+def gather(records: list[SampleRecord], spec: StudySpec) -> tuple[dict[str, np.ndarray],
+                                                                   list[str], np.ndarray]:
+    """Stack the records: arrays ``(samples, k)``, errors, seconds."""
+    lengths = record_fields(spec.collect)
+    values = {name: np.full((len(records), n), np.nan) for name, n in lengths.items()}
+    errors = []
+    for s, record in enumerate(records):
+        errors.append(record.error)
+        for name, array in record.values.items():
+            values[name][s, :] = array
+    return values, errors, np.array([r.seconds for r in records])
+
+
+def run_study(case: Case, backend: Backend = Backend(), tick: Tick | None = None
+              ) -> StudyResult:
+    """Run the study of ``case`` on ``backend`` (default: in-process, serial).
+
+    The case as written is run first, here, when the MAC is collected: its mode shapes are the
+    reference set, sent with every task.
+
+    Raises:
+        CaseError: no study block, or the case as written cannot be run for the reference.
+        BackendError: the backend cannot be used.
+    """
+    spec = study_of(case)
+    reference: dict[str, np.ndarray] = {}
+    shapes = None
+    if spec.collect.mac:
+        base = run_case(case)
+        shapes = base.modes.shapes if base.modes is not None else None
+        reference = collect(base, spec.collect, shapes)
+    names, table, tasks = study_tasks(case, shapes)
+    records = execute(tasks, backend, tick)
+    values, errors, seconds = gather(records, spec)
+    peaks = [f"{p.output}<-{p.input or (case.analysis.frf.inputs[0] if case.analysis.frf else '')}"
+             for p in spec.collect.frf_peaks]
+    return StudyResult(case_name=case.name, kind="grid" if spec.grid is not None else "random",
+                       parameters=names, table=table, values=values, errors=errors,
+                       seconds=seconds, reference=reference, backend=backend.describe(),
+                       case_yaml=case.text, peaks=peaks)
