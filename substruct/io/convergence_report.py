@@ -244,7 +244,7 @@ def plot(result: ConvergenceResult, png: str | os.PathLike[str], tol: float | No
     import matplotlib.pyplot as plt
 
     vs = list(result.variants.values())
-    fig, axes = plt.subplots(len(vs), 2, figsize=(15, 3.9 * len(vs)), squeeze=False,
+    fig, axes = plt.subplots(len(vs), 2, figsize=(16, 4.2 * len(vs)), squeeze=False,
                              layout="constrained")
     for row, v in zip(axes, vs):
         for col, (ax, which) in enumerate(zip(row, ("mode 1", "worst mode"))):
@@ -267,7 +267,9 @@ def plot(result: ConvergenceResult, png: str | os.PathLike[str], tol: float | No
                 sel = ok & fitted
                 ax.loglog(s.dofs[sel], err[sel], "none", color=color, marker=marker)
             if tol:
-                ax.axhline(tol, color="0.5", ls=":", lw=1)
+                ax.axhline(tol, color="0.5", ls=":", lw=1, label=f"tolerance {tol:g} (--tol)")
+            ax.plot([], [], "o", color="0.35", label="filled: levels of the order fit")
+            ax.plot([], [], "o", color="0.35", mfc="white", label="open: the other levels")
             if not drawn:  # e.g. mode 1 a rigid-body mode: no relative error to show
                 ax.set_ylim(1e-12, 1.0)
                 ax.text(0.5, 0.5, "no finite nonzero errors\n(rigid-body mode?)",
@@ -276,8 +278,8 @@ def plot(result: ConvergenceResult, png: str | os.PathLike[str], tol: float | No
             ax.set_xlabel("rod DOFs (Ritz functions / FE unknowns)")
             ax.set_ylabel("relative error of the root")
             ax.grid(True, which="major", alpha=0.3)
-            ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5))
-    fig.suptitle(f"{result.name}: convergence to the FE limit", fontsize=11)
+            ax.legend(fontsize=9, loc="center left", bbox_to_anchor=(1.01, 0.5))
+    fig.suptitle(f"{result.name}: convergence to the FE limit", fontsize=12)
     path = Path(png)
     try:
         with atomic_path(path, suffix=".png.part") as tmp:

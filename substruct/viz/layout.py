@@ -18,13 +18,15 @@ import numpy as np
 from substruct.builder.drawing import Drawing
 from substruct.io.export import CombinedMesh, combined_mesh
 
-__all__ = ["SCALE_FRACTION", "MIN_SPRING", "Layout", "layout", "deformed", "aligned",
-           "is_line_drawing", "is_spring", "view_normal"]
+__all__ = ["SCALE_FRACTION", "MIN_SPRING", "WARP_SPRING", "Layout", "layout", "deformed",
+           "aligned", "is_line_drawing", "is_spring", "view_normal"]
 
 #: The largest displayed displacement as a fraction of the model size.
 SCALE_FRACTION = 0.15
 #: Shortest displayed spring of an attachment in the axial view, as a fraction of model size.
 MIN_SPRING = 0.2
+#: In a warped view, attachments end this fraction of the model size outside the body.
+WARP_SPRING = 0.12
 
 
 def is_line_drawing(d: Drawing) -> bool:
@@ -84,7 +86,46 @@ def layout(drawings: list[Drawing]) -> Layout:
             axial, transverse = e, (1 if e != 1 else 0)
             axis_t = float(np.median(np.asarray(longest.points)[:, transverse]))
             _stretch_springs(drawings, mesh, pts, transverse, axis_t, size)
+    else:
+        _off_the_body(drawings, mesh, pts, size)
     return Layout(mesh, drawings, pts, size, axial, transverse)
+
+
+def _exit_length(p0: np.ndarray, direction: np.ndarray, lo: np.ndarray, hi: np.ndarray
+                 ) -> float:
+    """How far a ray from ``p0`` along the unit ``direction`` runs inside the box [lo, hi]."""
+    if np.any(p0 < lo) or np.any(p0 > hi):
+        return 0.0
+    ts = [((hi[k] if direction[k] > 0 else lo[k]) - p0[k]) / direction[k]
+          for k in range(3) if abs(direction[k]) > 1e-12]
+    return float(min(ts)) if ts else 0.0
+
+
+def _off_the_body(drawings: list[Drawing], mesh: CombinedMesh, pts: np.ndarray,
+                  size: float) -> None:
+    """In a warped (solid) view, hang each attachment (spring-mass, absorber) from its point
+    out of the body, on the side where it leaves the body soonest, and long enough to end
+    :data:`WARP_SPRING` of the model size outside it (schematic only: the direction of motion
+    is that of the drawing's rows, unchanged)."""
+    body = [i for i, d in enumerate(drawings) if not is_line_drawing(d)]
+    if not body:
+        return
+    inside = np.vstack([pts[mesh.point_offsets[i]:mesh.point_offsets[i + 1]] for i in body])
+    tol = 1e-6 * size
+    lo, hi = inside.min(axis=0) - tol, inside.max(axis=0) + tol
+    for i, d in enumerate(drawings):
+        if not is_spring(d) or d.kind == "spring":
+            continue
+        p = pts[mesh.point_offsets[i]:mesh.point_offsets[i + 1]]
+        offset = p[1:] - p[0]
+        reach = float(np.max(np.linalg.norm(offset, axis=1))) if len(offset) else 0.0
+        if reach == 0:
+            continue
+        direction = offset[-1] / max(float(np.linalg.norm(offset[-1])), 1e-300)
+        down, up = _exit_length(p[0], direction, lo, hi), _exit_length(p[0], -direction, lo, hi)
+        sign = -1.0 if up < down else 1.0
+        length = max(reach, min(down, up) + WARP_SPRING * size)
+        p[1:] = p[0] + sign * offset * (length / reach)
 
 
 def _stretch_springs(drawings: list[Drawing], mesh: CombinedMesh, pts: np.ndarray, t: int,

@@ -120,8 +120,21 @@ def draw_mode(pv: Any, plotter: Any, lay: Layout, pos: np.ndarray, mag: np.ndarr
                                         orient=False), scalars="|u|", **kw)
         for name, node in d.glyphs.items():
             plotter.add_mesh(pv.Sphere(radius=0.014 * size, center=p[node]), color=INK)
+        if d.kind == "matrices" and lay.axial is not None and d.glyphs:
+            _label_coordinates(plotter, d, p0, lay)
         if lay.axial is not None:
             _draw_supports(pv, plotter, d, p0, lay, lay.axial)
+
+
+def _label_coordinates(plotter: Any, d: Drawing, p0: np.ndarray, lay: Layout) -> None:
+    """The coordinate names of a lumped model (``P@q1``, ...) under its rest positions."""
+    names = sorted(d.glyphs, key=d.glyphs.__getitem__)
+    spots = np.array([p0[d.glyphs[n]] for n in names], dtype=float)
+    spots[:, lay.transverse] -= 0.06 * lay.size
+    plotter.add_point_labels(spots, [vtk_text(f"{d.name}@{n}") for n in names], font_size=12,
+                             text_color="#333333", shape=None, show_points=False,
+                             always_visible=True, justification_horizontal="center",
+                             justification_vertical="top")
 
 
 def _fixed(d: Drawing, node: int) -> bool:
@@ -193,6 +206,12 @@ def _draw_spring(pv: Any, plotter: Any, d: Drawing, p0: np.ndarray, p: np.ndarra
                                  text_color="#444444",
                                  shape=None, show_points=False, always_visible=True,
                                  justification_horizontal="left",
+                                 justification_vertical="center")
+    elif len(p0) > 1:  # a warped view: the name beside the far end (the mass or the ground)
+        far = p0[-1] + 0.05 * size * np.array([0.0, 1.0, 0.0])  # to the right of it
+        plotter.add_point_labels(far[None, :], [vtk_text(d.name)], font_size=12,
+                                 text_color="#222222", shape=None, show_points=False,
+                                 always_visible=True, justification_horizontal="left",
                                  justification_vertical="center")
     boundary = d.glyphs.get("boundary")
     if boundary is not None and boundary != mass:

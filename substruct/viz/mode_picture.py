@@ -23,7 +23,11 @@ from substruct.viz.mode_drawing import CMAP, INK, draw_mode, vtk_text
 if TYPE_CHECKING:
     from substruct.analysis.results import Modes
 
-__all__ = ["plot_modes", "render_modes", "grid_shape", "mode_title", "modes_to_draw", "save_png"]
+#: A mode shape more complex than this (:func:`complex_part`) says how it is drawn.
+COMPLEX_NOTE = 1e-2
+
+__all__ = ["plot_modes", "render_modes", "complex_part", "mapping_note", "COMPLEX_NOTE",
+           "grid_shape", "mode_title", "modes_to_draw", "save_png"]
 
 #: Height of the header row of a mode picture, in pixels.
 HEADER = 100
@@ -44,6 +48,39 @@ def mode_title(modes: Modes, j: int) -> str:
     z = 0.0 if abs(z) < 1e-9 else z  # round-off of an undamped mode
     return (f"mode {j + 1}:  \u03c9 = {w:.4g} rad/s ({w / (2 * np.pi):.4g} Hz),  "
             f"\u03b6 = {z:.2g}")
+
+
+def complex_part(shape: np.ndarray) -> float:
+    r"""How complex a mode shape is: the imaginary part left at its most real phase,
+
+    .. math::  \frac{\lVert \operatorname{Im}(e^{-i\theta} u) \rVert}{\lVert u \rVert},
+               \qquad \theta = \tfrac12 \arg \textstyle\sum_k u_k^2
+
+    (0 for a real mode, at most 1/sqrt(2), reached by a travelling wave)."""
+    u = np.asarray(shape, dtype=complex).ravel()
+    norm = float(np.linalg.norm(u))
+    if norm == 0:
+        return 0.0
+    theta = 0.5 * np.angle(np.sum(u * u))
+    return float(np.linalg.norm((u * np.exp(-1j * theta)).imag) / norm)
+
+
+def mapping_note(result: Result) -> str:
+    """A caption for shapes of a rod with the paper-literal mapping (empty otherwise)."""
+    import yaml
+
+    try:
+        case = yaml.safe_load(result.case_yaml) or {}
+    except yaml.YAMLError:
+        return ""
+    subs = case.get("substructures") if isinstance(case, dict) else None
+    literal = [s.get("name", "?") for s in subs or [] if isinstance(s, dict) and
+               isinstance(s.get("discretization"), dict) and
+               s["discretization"].get("mapping") == "paper-literal"]
+    if not literal:
+        return ""
+    return (f"{', '.join(literal)}: paper-literal mapping, as Table 1 was computed: NOT\n"
+            f"physical shapes (assumed-mode amplitudes drawn as displacements at x = jL/n)")
 
 
 def modes_to_draw(result: Result, variant: str | None) -> tuple[Modes, str]:
@@ -161,26 +198,43 @@ def render_modes(result: Result, n_modes: int = 6, variant: str | None = None, *
                          position=(0.012, 0.58), viewport=True, font_size=13, color=INK,
                          **text_kw)
         plotter.add_text(f"{how};\nlargest displacement drawn as {SCALE_FRACTION:.0%} of the "
-                         f"model size; colour: displacement magnitude over the mode's largest",
+                         f"model size; a damped mode at its most real phase (marked if its "
+                         f"shape is complex)",
                          position=(0.012, 0.08), viewport=True, font_size=8,
                          color="#555555", **text_kw)
+        note = mapping_note(result)
+        if note:
+            plotter.add_text(vtk_text(note), position=(0.47, 0.42), viewport=True,
+                             font_size=9, color="#a01010", **text_kw)
         for j, (pos, mag) in enumerate(frames):
             plotter.subplot(1 + j // cols, j % cols)
             draw_mode(pv, plotter, lay, pos, mag)
             label = plotter.add_text(mode_title(modes, j), position=(0.5, 0.89), viewport=True,
                                      font_size=9, color=INK, **text_kw)
             label.prop.justification_horizontal = "center"
+            if complex_part(modes.shapes[:, j]) > COMPLEX_NOTE:
+                extra = plotter.add_text("complex (damped) shape: drawn at its most real phase, "
+                                         "Re(exp(-i\u03b8) u)", position=(0.5, 0.80),
+                                         viewport=True, font_size=7, color="#a01010",
+                                         **text_kw)
+                extra.prop.justification_horizontal = "center"
             _camera(plotter, lay, bounds)
         plotter.subplot(0, 0)
         bar = pv.PolyData(np.zeros((2, 3)))
         bar.point_data["|u| / max |u|"] = [0.0, 1.0]
         actor = plotter.add_mesh(bar, scalars="|u| / max |u|", cmap=CMAP, clim=(0, 1),
                                  show_scalar_bar=False, opacity=0.0)
-        plotter.add_scalar_bar("normalised displacement", mapper=actor.mapper,
-                               vertical=False, position_x=0.8, position_y=0.08, width=0.18,
-                               height=0.55,
-                               color=INK, n_labels=3, fmt="%.1f", title_font_size=14,
-                               label_font_size=12)
+        # the title as its own text above the bar, the tick labels under it: nothing overlaps
+        plotter.add_scalar_bar(" ", mapper=actor.mapper, vertical=False, position_x=0.8,
+                               position_y=0.30, width=0.18, height=0.22, color=INK,
+                               n_labels=0, title_font_size=1)
+        bar_title = plotter.add_text("colour: displacement / mode's largest",
+                                     position=(0.98, 0.62), viewport=True, font_size=9,
+                                     color=INK, **text_kw)
+        bar_title.prop.justification_horizontal = "right"
+        for x, tick in ((0.8, "0"), (0.973, "1")):
+            plotter.add_text(tick, position=(x, 0.06), viewport=True, font_size=9,
+                             color=INK, **text_kw)
         image = plotter.screenshot(return_img=True)
     finally:
         plotter.close()
