@@ -41,6 +41,7 @@ from substruct.case.fields import (
     StrictModel,
     gigabytes,
 )
+from substruct.case.machine import available_memory
 from substruct.case.mesh_files import MAX_MESH_FILE, mesh_file_problem
 from substruct.case.substructures import ModalDamping
 
@@ -298,11 +299,13 @@ class SolidSpec(StrictModel):
         elements = shape.n_elements()
         nodes = math.prod(int(self.order) * d + 1 for d in shape.divisions)
         need = solid_memory(dim * nodes, dim, self.order)
-        if elements > MAX_ELEMENTS or need > MEMORY_LIMIT:
+        # the machine's memory, not a fixed figure: a model that fits runs (issue 13)
+        limit = max(MEMORY_LIMIT, available_memory() or 0.0)
+        if elements > MAX_ELEMENTS or need > limit:
             raise FieldError((key, "divisions"), f"{elements} elements ({dim * nodes} "
                              f"coordinates) would need about {gigabytes(need)} of memory; at "
-                             f"most {MAX_ELEMENTS} elements and {gigabytes(MEMORY_LIMIT)} are "
-                             f"accepted", list(shape.divisions))
+                             f"most {MAX_ELEMENTS} elements and the memory available on this "
+                             f"machine are accepted", list(shape.divisions))
 
     def dim(self) -> int | None:
         """2 or 3; ``None`` for a mesh file not read yet."""

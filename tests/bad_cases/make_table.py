@@ -247,8 +247,10 @@ def limits() -> str:
          f"{_n(fields.MAX_ASSUMED_MODES)} assumed modes, {_n(fields.MAX_FREQUENCIES)} "
          f"frequencies", code(fields, "MAX_COUNT") + ", `MAX_ELEMENTS`, `MAX_ASSUMED_MODES`, "
          "`MAX_FREQUENCIES`"),
-        ("memory", f"an estimate of the memory a discretization, a solid, a matrix file or "
-         f"the receptances need: at most {gigabytes(fields.MEMORY_LIMIT)}",
+        ("memory", f"an estimate of the memory a discretization, a matrix file or "
+         f"the receptances need: at most {gigabytes(fields.MEMORY_LIMIT)}; a generated solid "
+         f"(its assembly and sparse solve): at most the memory available on the machine "
+         f"(`MemAvailable`), and never less than {gigabytes(fields.MEMORY_LIMIT)}",
          code(fields, "MEMORY_LIMIT")),
         ("names", f"at most {fields.MAX_NAME_LENGTH} characters (they name files)",
          code(fields, "MAX_NAME_LENGTH")),
