@@ -36,12 +36,13 @@ class DenHartog:
 def den_hartog(omega_p: float, modal_mass: float, absorber_mass: float) -> DenHartog:
     """Den Hartog's tuning of an absorber of ``absorber_mass`` on a mode of ``omega_p`` (rad/s)
     and equivalent ``modal_mass`` at the absorber's point."""
-    mu = absorber_mass / modal_mass
+    mu = float(absorber_mass) / float(modal_mass)
     f = 1.0 / (1.0 + mu)
     zeta = math.sqrt(3.0 * mu / (8.0 * (1.0 + mu) ** 3))
-    w = f * omega_p
-    return DenHartog(mu=mu, f_opt=f, zeta_opt=zeta, k_opt=absorber_mass * w * w,
-                     c_opt=2.0 * zeta * absorber_mass * w)
+    w = f * float(omega_p)
+    m = float(absorber_mass)
+    return DenHartog(mu=mu, f_opt=f, zeta_opt=zeta, k_opt=m * w * w,
+                     c_opt=2.0 * zeta * m * w)
 
 
 def grid_optimum(peaks: Sequence[float]) -> tuple[int, float]:
