@@ -15,7 +15,8 @@ The fenced code blocks of each page are extracted and, by kind:
 Each page runs in a fresh directory holding ``cases/`` and ``meshes/`` of the project and the
 result files that ``make run`` leaves in ``results/``, so relative paths work and nothing is
 written into the project.  ``substruct run`` commands get ``--set output.pictures=false``
-(pictures are not what they show).  A block preceded by ``<!-- docs-test: skip ... -->`` is
+(pictures are not what they show), ``substruct converge`` commands ``--levels quick`` (the
+default study is run by ``tests/test_converge_cli.py``).  A block preceded by ``<!-- docs-test: skip ... -->`` is
 illustrative only (a synopsis, a schema with elided values); such exceptions are few and
 counted here.
 """
@@ -107,6 +108,8 @@ def run_command(line: str, capsys) -> str:
     args = words[1:]
     if args and args[0] == "run":
         args += ["--set", "output.pictures=false"]
+    if args and args[0] == "converge" and "--levels" not in args:
+        args += ["--levels", "quick"]  # the default study itself: tests/test_converge_cli.py
     capsys.readouterr()
     code = cli.main(args)
     out, err = capsys.readouterr()

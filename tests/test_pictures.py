@@ -93,3 +93,20 @@ def test_plate_attachment_at_its_point_moving_along_y():
     d = lay.drawings[k]
     moved = (d.interp @ np.ones(d.interp.shape[1])).reshape(-1, 3)
     assert np.all(moved[:, 0] == 0) and np.any(moved[:, 1] != 0)
+
+
+def test_frf_axes_in_the_case_units():
+    from substruct.viz.units import frf_axis_label
+
+    assert frf_axis_label("N, mm, t, s") == "|H|  (displacement / force, mm/N)"
+    assert frf_axis_label("N, m, kg, s", "mobility") == "|H|  (velocity / force, m/(N s))"
+    assert frf_axis_label("lbf, in, slinch, s", "accelerance") == \
+        "|H|  (acceleration / force, in/(lbf s\u00b2))"
+    assert frf_axis_label("SI") == "|H|  (displacement / force; case units: SI)"
+    assert frf_axis_label(None) == "|H|  (displacement / force)"
+    rod = substruct.run_case(substruct.load_case(CASES / "tapered_rod.yaml"))
+    assert substruct.frf_figure(rod).axes[0].get_ylabel() == \
+        "|H|  (displacement / force, mm/N)"
+    three = substruct.run_case(substruct.load_case(CASES / "three_dof_frf.yaml"))
+    fig = substruct.frf_figure(three)   # one frequency: matrices, the colour bar says it
+    assert "|H|  (displacement / force, m/N)" in [a.get_ylabel() for a in fig.axes]

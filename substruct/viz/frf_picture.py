@@ -12,6 +12,7 @@ import numpy as np
 
 from substruct.io.hdf5 import atomic_path
 from substruct.run.result import Result
+from substruct.viz.units import frf_axis_label
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -43,7 +44,9 @@ def frf_figure(result: Result, *, max_curves: int = MAX_CURVES) -> Figure:
     sub = ("agreement " + ", ".join(notes) + "; " if notes else "") + \
         f"constraint residual {frf.constraint_residual:.1e}"
     if omega.size == 1:
-        _frf_matrix(fig, frf, H[0], float(omega[0]))
+        _frf_matrix(fig, frf, H[0], float(omega[0]),
+                    frf_axis_label(result.attrs.get("units"),
+                                   getattr(frf, "quantity", "receptance")))
     else:
         _frf_curves(fig, result, frf, H, omega, max_curves)
     fig.suptitle(f"{title}\n{sub}", fontsize=12)
@@ -87,7 +90,8 @@ def _frf_curves(fig: Figure, result: Result, frf: Any, H: np.ndarray, omega: np.
         ax_mag.set_yscale("log")
     if omega.min() > 0 and omega.max() / omega.min() > 100:
         ax_mag.set_xscale("log")
-    ax_mag.set_ylabel("|H|  (displacement / force)")
+    ax_mag.set_ylabel(frf_axis_label(result.attrs.get("units"),
+                                     getattr(frf, "quantity", "receptance")))
     ax_ph.set_ylabel("phase (deg)")
     ax_ph.set_xlabel("\u03c9 (rad/s)")
     ax_ph.set_ylim(-185, 185)
@@ -112,7 +116,7 @@ def _frf_curves(fig: Figure, result: Result, frf: Any, H: np.ndarray, omega: np.
                   "output \u2190 input", title_fontsize=8.5)
 
 
-def _frf_matrix(fig: Figure, frf: Any, H: np.ndarray, w: float) -> None:
+def _frf_matrix(fig: Figure, frf: Any, H: np.ndarray, w: float, unit: str) -> None:
     from matplotlib.colors import LogNorm
 
     ax_mag, ax_ph = fig.subplots(1, 2)
@@ -122,7 +126,7 @@ def _frf_matrix(fig: Figure, frf: Any, H: np.ndarray, w: float) -> None:
         positive.max() > positive.min() else None
     im = ax_mag.imshow(np.where(mag > 0, mag, np.nan), cmap="viridis", norm=norm,
                        aspect="auto")
-    fig.colorbar(im, ax=ax_mag, shrink=0.8, label="|H|")
+    fig.colorbar(im, ax=ax_mag, shrink=0.8, label=unit)
     ph = ax_ph.imshow(np.degrees(np.angle(H)), cmap="twilight_shifted", vmin=-180, vmax=180,
                       aspect="auto")
     fig.colorbar(ph, ax=ax_ph, shrink=0.8, label="phase (deg)", ticks=[-180, -90, 0, 90, 180])
