@@ -73,7 +73,7 @@ def _client(backend: Backend) -> tuple[Any, Any]:
             raise BackendError(f"cannot reach the Dask scheduler {backend.scheduler} "
                                f"({detail})") from None
     cluster = LocalCluster(n_workers=int(backend.workers or 1), threads_per_worker=1,
-                           processes=True, host="127.0.0.1", dashboard_address=None,
+                           processes=True, host="127.0.0.1", dashboard_address=":0",
                            silence_logs=logging.ERROR, env={"OMP_NUM_THREADS": "1"})
     return Client(cluster), cluster
 
