@@ -211,3 +211,5 @@ class Output(StrictModel):
     """What ``substruct run`` writes besides the results file."""
 
     pictures: bool = True
+    #: store the assembly's M, K, C (sparse) in the result file (``model/M``, ...)
+    matrices: bool = False

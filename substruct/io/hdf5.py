@@ -211,6 +211,8 @@ def _write_model(g: h5py.Group, model: ModelInfo) -> None:
     _array(g, "b", np.asarray(model.b))
     _csr(g, "R", model.R)
     _strings(g, "constraint_labels", model.constraint_labels)
+    for key, matrix in model.matrices.items():  # output: {matrices: true}
+        _csr(g, key, matrix)
     drawings = g.create_group("drawings", track_order=True)
     for i, d in enumerate(model.drawings):
         dg = drawings.create_group(str(i), track_order=True)

@@ -227,7 +227,8 @@ def _model(rd: _Reader, g: h5py.Group) -> ModelInfo:
         dof_labels=labels, substructure_names=names, substructure_kinds=kinds,
         offsets=offsets, A=A, b=rd.array(g, "b", "fiu", 1, (m,)), R=rd.csr(g, "R", m, n),
         constraint_labels=rd.strings(g, "constraint_labels", m),
-        drawings=[_drawing(rd, dg, n) for dg in drawings])
+        drawings=[_drawing(rd, dg, n) for dg in drawings],
+        matrices={k: rd.csr(g, k, n, n) for k in ("M", "K", "C") if k in g})
 
 
 def _read(f: h5py.File) -> Result:

@@ -35,6 +35,9 @@ class ModelInfo:
     R: sp.csr_array
     constraint_labels: list[str]
     drawings: list[Drawing] = field(default_factory=list)
+    #: the assembly's ``"M"``, ``"K"``, ``"C"`` (stacked coordinates, eq 23) when the case
+    #: asks for them (``output: {matrices: true}``), else empty
+    matrices: dict[str, sp.csr_array] = field(default_factory=dict)
 
 
 @dataclass

@@ -92,6 +92,9 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
              "case_file": case.source, "overrides": "\n".join(case.overrides)}
     result = Result(case_name=case.name, case_yaml=case.text, model=model_info(model),
                     attrs={k: v for k, v in attrs.items() if v})
+    if case.output.matrices:
+        result.model.matrices = {"M": sp.csr_array(asm.M), "K": sp.csr_array(asm.K),
+                                 "C": sp.csr_array(asm.C)}
     spec = case.analysis.modes
     if spec is not None:
         result.modes = modes_result(case, asm, asm.A, ("analysis", "modes"), events=events)
