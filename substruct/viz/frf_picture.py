@@ -21,6 +21,8 @@ __all__ = ["plot_frf", "frf_figure", "MAX_CURVES"]
 
 #: Output/input pairs drawn by default (the first ones, outputs varying slowest).
 MAX_CURVES = 9
+#: Grids of at most this many frequencies are drawn with a marker at each.
+SPARSE_GRID = 60
 
 
 def frf_figure(result: Result, *, max_curves: int = MAX_CURVES) -> Figure:
@@ -82,13 +84,17 @@ def _frf_curves(fig: Figure, result: Result, frf: Any, H: np.ndarray, omega: np.
         h = H[:, i, j]
         mag = np.where(abs(h) > 0, abs(h), np.nan)
         label = f"{frf.outputs[i]} \u2190 {frf.inputs[j]}"
-        ax_mag.plot(omega, mag, color=colors[c % 10], lw=1.4, label=label)
+        marker = "o" if omega.size <= SPARSE_GRID else None  # a sparse grid shows its points
+        ax_mag.plot(omega, mag, color=colors[c % 10], lw=1.4, label=label, marker=marker,
+                    ms=3)
         phase = np.degrees(np.angle(h))
         phase[phase < -179.9999] = 180.0  # one side for real negative values (+-0 imaginary)
         ax_ph.plot(omega, phase, color=colors[c % 10], lw=1.2)
     if np.any(abs(H[:, [i for i, _ in shown], [j for _, j in shown]]) > 0):
         ax_mag.set_yscale("log")
-    if omega.min() > 0 and omega.max() / omega.min() > 100:
+    steps = np.diff(np.log(omega)) if omega.min() > 0 else np.zeros(0)
+    geometric = steps.size > 1 and np.allclose(steps, steps[0], rtol=1e-6)  # a log grid
+    if omega.min() > 0 and (geometric or omega.max() / omega.min() > 100):
         ax_mag.set_xscale("log")
     ax_mag.set_ylabel(frf_axis_label(result.attrs.get("units"),
                                      getattr(frf, "quantity", "receptance")))
