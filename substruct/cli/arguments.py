@@ -9,7 +9,7 @@ from typing import NoReturn
 __all__ = ["COMMANDS", "InputError", "build_parser"]
 
 #: The commands, in the order ``--help`` lists them.
-COMMANDS = ("run", "converge", "study", "info", "export")
+COMMANDS = ("run", "converge", "info", "export")
 
 
 class InputError(Exception):
