@@ -150,12 +150,17 @@ def complex_symmetric(A: sp.sparray | sp.spmatrix, order: np.ndarray | None = No
 
 
 def cholmod(A: sp.sparray | sp.spmatrix) -> Solve:
-    """CHOLMOD supernodal Cholesky (scikit-sparse), for symmetric positive definite ``A``."""
+    """CHOLMOD supernodal Cholesky (scikit-sparse), for symmetric positive definite ``A``; a
+    complex right-hand side is solved as its real and imaginary parts."""
     from sksparse.cholmod import cholesky  # optional dependency
 
     factor = cholesky(sp.csc_matrix(A))
 
     def solve(b: np.ndarray) -> np.ndarray:
+        b = np.asarray(b)
+        if np.iscomplexobj(b):  # real factors: CHOLMOD refuses a complex right-hand side
+            return factor(np.ascontiguousarray(b.real)) + \
+                1j * factor(np.ascontiguousarray(b.imag))
         return factor(b)
 
     return solve
