@@ -4,13 +4,26 @@ samples, the study file and a sample checked against ``substruct run --set``."""
 
 from __future__ import annotations
 
+import itertools
+import os
+import signal
+import subprocess
+import sys
+import time
 from pathlib import Path
 
+import h5py
 import numpy as np
 import pytest
 
-from substruct.case.loader import CaseError, parse_case
+from substruct import cli
+from substruct.case.loader import CaseError, load_case, parse_case
+from substruct.io.study_file import load_study, save_study
 from substruct.run.runner import run_case
+from substruct.studies.study_backend import Backend, BackendError
+from substruct.studies.study_plan import number_text, samples
+from substruct.studies.study_run import run_study
+from substruct.studies.study_tuning import den_hartog, grid_optimum
 
 CASES = Path(__file__).resolve().parent.parent / "cases"
 ROD = CASES / "tapered_rod.yaml"
@@ -70,23 +83,6 @@ def test_bad_parameter_values_are_one_line_naming_the_field(overrides, fragment)
 
 
 # ----------------------------------------------------------------- the plan of samples
-
-import itertools  # noqa: E402
-import os  # noqa: E402
-import signal  # noqa: E402
-import subprocess  # noqa: E402
-import sys  # noqa: E402
-import time  # noqa: E402
-
-import h5py  # noqa: E402
-
-from substruct import cli  # noqa: E402
-from substruct.case.loader import load_case  # noqa: E402
-from substruct.io.study_file import load_study, save_study  # noqa: E402
-from substruct.studies.study_backend import Backend, BackendError  # noqa: E402
-from substruct.studies.study_plan import number_text, samples  # noqa: E402
-from substruct.studies.study_run import run_study  # noqa: E402
-from substruct.studies.study_tuning import den_hartog, grid_optimum  # noqa: E402
 
 TUNING = CASES / "tapered_rod_tuning.yaml"
 #: A 2 x 2 grid of the shipped study with a short sweep (quick on any backend).
@@ -152,11 +148,6 @@ def test_bad_study_blocks_are_one_line(block, fragment):
 
 
 # ----------------------------------------------------------------- backends
-
-
-def table_of(result):
-    return (result.table, result.errors,
-            {k: v for k, v in sorted(result.values.items())})
 
 
 def assert_same(a, b):

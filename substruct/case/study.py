@@ -37,7 +37,15 @@ from typing import TYPE_CHECKING, Annotated, Any, Literal, Union
 from pydantic import BeforeValidator, Field, model_validator
 
 from substruct.case.errors import FieldError
-from substruct.case.fields import Count, Name, NonNegative, Number, Point, Positive, StrictModel
+from substruct.case.fields import (
+    Count,
+    Name,
+    NonNegative,
+    Number,
+    Point,
+    Positive,
+    StrictModel,
+)
 
 if TYPE_CHECKING:  # pragma: no cover
     from substruct.case.loader import Case

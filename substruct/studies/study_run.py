@@ -19,7 +19,12 @@ from substruct.case.study import StudySpec
 from substruct.run.runner import run_case
 from substruct.studies.study_backend import Backend, Tick, execute
 from substruct.studies.study_plan import overrides_of, samples
-from substruct.studies.study_task import SampleRecord, SampleTask, collect, record_fields
+from substruct.studies.study_task import (
+    SampleRecord,
+    SampleTask,
+    collect,
+    record_fields,
+)
 
 __all__ = ["StudyResult", "study_tasks", "gather", "run_study", "study_of"]
 
