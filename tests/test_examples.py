@@ -5,25 +5,41 @@ notebooks assert their own numbers (eq 40, Table 1's printed digits, the converg
 the absorbers' effect), so a notebook that runs is one whose claims hold.
 """
 
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 
 nbformat = pytest.importorskip("nbformat")
-nbclient = pytest.importorskip("nbclient")
+pytest.importorskip("nbclient")
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
 FAST = ["section5_frf.ipynb", "table1_both_ways.ipynb", "convergence.ipynb"]
 SLOW = ["solid_absorbers.ipynb"]
 
 
-def execute(name: str) -> list:
-    """Run the notebook; return its executed cells."""
-    book = nbformat.read(EXAMPLES / name, as_version=4)
-    client = nbclient.NotebookClient(book, timeout=180, kernel_name="python3",
-                                     resources={"metadata": {"path": str(EXAMPLES)}})
-    client.execute()
-    return book.cells
+#: Executes one notebook and writes it back executed.  It runs in a child process: the kernel
+#: client's threads (zmq, its event loop) must not live in the test process, whose later
+#: tests fork (``substruct run`` computes in a forked child, which would inherit their locks).
+RUNNER = """
+import sys, nbclient, nbformat
+book = nbformat.read(sys.argv[1], as_version=4)
+nbclient.NotebookClient(book, timeout=180, kernel_name="python3",
+                        resources={"metadata": {"path": sys.argv[2]}}).execute()
+nbformat.write(book, sys.argv[3])
+"""
+
+
+def execute(name: str, tmp_path: Path) -> list:
+    """Run the notebook (in a child process); return its executed cells."""
+    out = tmp_path / name
+    done = subprocess.run([sys.executable, "-c", RUNNER, str(EXAMPLES / name), str(EXAMPLES),
+                           str(out)], capture_output=True, text=True,
+                          env={**os.environ, "MPLBACKEND": "Agg"})
+    assert done.returncode == 0, done.stderr[-3000:]
+    return nbformat.read(out, as_version=4).cells
 
 
 def test_every_notebook_is_listed():
@@ -31,9 +47,8 @@ def test_every_notebook_is_listed():
 
 
 @pytest.mark.parametrize("name", FAST)
-def test_notebook_runs(name, monkeypatch):
-    monkeypatch.setenv("MPLBACKEND", "Agg")
-    cells = execute(name)
+def test_notebook_runs(name, tmp_path):
+    cells = execute(name, tmp_path)
     code = [c for c in cells if c.cell_type == "code"]
     assert code and all(c.execution_count for c in code)
     assert not any(o.get("output_type") == "error" for c in code for o in c.outputs)
@@ -41,8 +56,7 @@ def test_notebook_runs(name, monkeypatch):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", SLOW)
-def test_slow_notebook_runs(name, monkeypatch):
-    monkeypatch.setenv("MPLBACKEND", "Agg")
-    cells = execute(name)
+def test_slow_notebook_runs(name, tmp_path):
+    cells = execute(name, tmp_path)
     assert any("times less" in o.get("text", "") for c in cells if c.cell_type == "code"
                for o in c.outputs)

@@ -126,6 +126,7 @@ class ProgressBar:
         self.last = filled
         from tqdm import tqdm
 
+        tqdm.monitor_interval = 0  # no monitor thread: a run may fork (cli.isolated) later
         if self.bar is None or self.bar.total != total:
             # drawn only by refresh() below (delay: never by itself), one redraw per step
             self.bar = tqdm(total=total, file=self.stream, ascii=".#", mininterval=0,
