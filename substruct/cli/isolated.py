@@ -10,7 +10,11 @@ and unwinds as usual (temporary files removed, exit code 130 or 143).
 The child writes where the parent would: to the same file descriptors, or, when the parent's
 ``sys.stdout``/``sys.stderr`` are in-memory streams (tests), through pipes the parent copies
 into them.  Its answer (the return value, or the exception with its traceback) comes back
-pickled.  Without ``os.fork`` (not POSIX) the function runs in-process.
+pickled.  Without ``os.fork`` (not POSIX) the function runs in-process, and so it does in a
+process that has loaded CHOLMOD (scikit-sparse): a forked child of a process whose CHOLMOD has
+run hangs in its next factorization (its thread pool does not survive the fork).  The command
+line never loads it before forking; a program (or a test session) that has used CHOLMOD and
+then calls the command in-process loses only the prompt reaction to signals.
 """
 
 from __future__ import annotations
@@ -141,7 +145,7 @@ def call_isolated(fn: Callable[[], T]) -> T:
     child at once (it is gone when this returns or raises), so ``fn`` may write only where the
     caller removes what is left on an error (a staging folder).
     """
-    if not hasattr(os, "fork"):  # pragma: no cover
+    if not hasattr(os, "fork") or "sksparse.cholmod" in sys.modules:
         return fn()
     from substruct.analysis.errors import CheckError
 
