@@ -20,7 +20,7 @@ from substruct import cli
 from substruct.case.loader import CaseError, load_case, parse_case
 from substruct.io.study_file import load_study, save_study
 from substruct.run.runner import run_case
-from substruct.studies.study_backend import Backend, BackendError
+from substruct.studies.study_backend import BackendError
 from substruct.studies.study_plan import number_text, samples
 from substruct.studies.study_run import run_study
 from substruct.studies.study_tuning import den_hartog, grid_optimum
@@ -158,6 +158,40 @@ def assert_same(a, b):
         assert np.array_equal(a.values[name], b.values[name], equal_nan=True), name
 
 
+#: Runs a study in a fresh interpreter and writes its file: Dask leaves threads in the process
+#: that uses it, and a later test that forks (``substruct run`` analyses in a forked child)
+#: could inherit one of their locks held and hang, so no test starts Dask in pytest itself.
+DASK_SCRIPT = """
+import sys, json
+from substruct.case.loader import load_case
+from substruct.io.study_file import save_study
+from substruct.studies.study_backend import Backend, BackendError
+from substruct.studies.study_run import run_study
+args = json.loads(sys.argv[1])
+try:
+    result = run_study(load_case(args["case"], args["overrides"]), Backend(**args["backend"]))
+except BackendError as err:
+    print(err)
+    sys.exit(3)
+save_study(result, args["out"])
+"""
+
+
+def dask_study(tmp_path, overrides, **backend):
+    """The study run on ``Backend(**backend)`` in a subprocess, read back from its file."""
+    import json
+
+    out = tmp_path / f"dask_{len(list(tmp_path.iterdir()))}.h5"
+    done = subprocess.run([sys.executable, "-c", DASK_SCRIPT, json.dumps(
+        {"case": str(TUNING), "overrides": overrides, "backend": backend, "out": str(out)})],
+        capture_output=True, text=True, env={**os.environ, "OMP_NUM_THREADS": "1"},
+        timeout=600)
+    if done.returncode == 3:
+        raise BackendError(done.stdout.strip())
+    assert done.returncode == 0, done.stderr[-2000:]
+    return load_study(out)
+
+
 @pytest.fixture(scope="module")
 def serial():
     return run_study(load_case(TUNING, SMALL))
@@ -192,8 +226,10 @@ def test_a_grid_sample_equals_a_direct_run_with_set(serial, tmp_path, capsys):
     assert serial.values["mac"][k, 0] < 1 - 1e-4  # the absorber's mode changed with kc
 
 
-def test_same_table_on_a_two_worker_local_cluster(serial):
-    assert_same(serial, run_study(load_case(TUNING, SMALL), Backend(workers=2)))
+def test_same_table_on_a_two_worker_local_cluster(serial, tmp_path):
+    result = dask_study(tmp_path, SMALL, workers=2)
+    assert result.backend == "LocalCluster (2 workers)"
+    assert_same(serial, result)
 
 
 def _spawn(args, log):
@@ -237,14 +273,14 @@ def test_same_table_on_a_scheduler_and_worker_in_separate_processes(serial, tmp_
     worker = _worker(dask, file, log)
     try:
         assert address.startswith("tcp://127.0.0.1:")
-        result = run_study(load_case(TUNING, SMALL), Backend(scheduler=address))
+        result = dask_study(tmp_path, SMALL, scheduler=address)
         assert result.backend == f"scheduler {address}"
         assert_same(serial, result)
     finally:
         _stop(worker, sched)
 
 
-def test_a_failed_sample_is_recorded_and_the_others_complete(serial):
+def test_a_failed_sample_is_recorded_and_the_others_complete(serial, tmp_path):
     bad = SMALL[:1] + ["study.grid.parameters[1]={parameter: cc, values: [3.5, -1.0, 4.0]}"] \
         + SMALL[2:]
     result = run_study(load_case(TUNING, bad))
@@ -254,7 +290,7 @@ def test_a_failed_sample_is_recorded_and_the_others_complete(serial):
         assert np.isnan(result.values["frequency"][k]).all()
     good = [0, 2, 3, 5]
     assert np.array_equal(result.values["frequency"][good], serial.values["frequency"])
-    on_dask = run_study(load_case(TUNING, bad), Backend(workers=1))
+    on_dask = dask_study(tmp_path, bad, workers=1)
     assert_same(result, on_dask)
 
 
@@ -287,8 +323,7 @@ def test_the_command_writes_the_file_and_refuses_bad_input(tmp_path, capsys):
     assert cli.main(args + ["--force", "--scheduler", "127.0.0.1:9"]) == 2
     assert "--scheduler: an address such as tcp://host:8786" in capsys.readouterr().err
     with pytest.raises(BackendError, match="cannot reach the Dask scheduler tcp://127.0.0.1:9"):
-        run_study(load_case(TUNING, SMALL), Backend(scheduler="tcp://127.0.0.1:9",
-                                                    connect_timeout=2))
+        dask_study(tmp_path, SMALL, scheduler="tcp://127.0.0.1:9", connect_timeout=2)
 
 
 # ----------------------------------------------------------------- the shipped study
@@ -342,15 +377,26 @@ def test_killing_a_worker_mid_study_still_completes(tmp_path):
         more = ["study.grid.parameters[0]={parameter: kc, start: 1140, stop: 1160, num: 15}",
                 "study.grid.parameters[1]={parameter: cc, values: [3.5, 4.0]}",
                 "analysis.frf.omega={start: 30, stop: 39, num: 181, spacing: linear}"]
-        from distributed import Client
-
-        with Client(address, timeout=30) as client:  # both workers up before the study
-            client.wait_for_workers(2, timeout=60)
-
-        def tick(done, total):
-            if done == 3:
-                workers[0].send_signal(signal.SIGKILL)
-        result = run_study(load_case(TUNING, more), Backend(scheduler=address), tick)
+        script = ("import sys, os, signal\n"
+                  "from distributed import Client\n"
+                  "from substruct.case.loader import load_case\n"
+                  "from substruct.io.study_file import save_study\n"
+                  "from substruct.studies.study_backend import Backend\n"
+                  "from substruct.studies.study_run import run_study\n"
+                  "address, case, out, pid = sys.argv[1:5]\n"
+                  "with Client(address, timeout=30) as c:\n"
+                  "    c.wait_for_workers(2, timeout=60)\n"
+                  "def tick(done, total):\n"
+                  "    if done == 3:\n"
+                  "        os.kill(int(pid), signal.SIGKILL)\n"
+                  "save_study(run_study(load_case(case, sys.argv[5:]), "
+                  "Backend(scheduler=address), tick), out)\n")
+        out = tmp_path / "killed.h5"
+        done = subprocess.run([sys.executable, "-c", script, address, str(TUNING), str(out),
+                               str(workers[0].pid), *more], capture_output=True, text=True,
+                              timeout=600)
+        assert done.returncode == 0, done.stderr[-2000:]
+        result = load_study(out)
         assert workers[0].wait(10) == -signal.SIGKILL
         assert result.failed == [] and len(result.errors) == 30
         assert_same(run_study(load_case(TUNING, more)), result)
