@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-import substruct.analysis.krylov as krylov
+import substruct.linalg.lanczos as lanczos
 from substruct.assembly.stack import Connection, LinearConstraint, PointRef, assemble
 from substruct.assembly.interfaces import InterfaceError, node_dofs, tie_nodes, tie_nonmatching
 from substruct.models.discrete import free_free
@@ -126,14 +126,14 @@ def test_redundant_rows_and_rigid_body_modes():
 def test_factorizations_and_eigsh_never_factorizes(coupled, monkeypatch):
     asm = coupled
     calls = []
-    real = krylov.spla.eigsh
+    real = lanczos.spla.eigsh
 
     def spy(*args, **kwargs):
         assert kwargs.get("OPinv") is not None, "eigsh must not factorize by itself"
         calls.append(kwargs["sigma"])
         return real(*args, **kwargs)
 
-    monkeypatch.setattr(krylov.spla, "eigsh", spy)
+    monkeypatch.setattr(lanczos.spla, "eigsh", spy)
     ref = null_space_modes(asm.M, asm.K, asm.A, 6)
     gi = generalized_inverse_modes(asm.M, asm.K, asm.A, 6)
     assert len(calls) == 2 and all(s < 0 for s in calls)

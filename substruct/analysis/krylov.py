@@ -17,9 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
-from substruct.linalg.factorize import Solve
 from substruct.linalg.nullspace import Elimination, master_slave
 from substruct.linalg.scaling import (
     equilibrate,
@@ -36,7 +34,6 @@ __all__ = [
     "eliminate",
     "free_coordinates",
     "krylov_size",
-    "shift_invert_lanczos",
     "stiffness_over_mass",
 ]
 
@@ -115,16 +112,6 @@ def krylov_size(k: int, free: int, ncv: int | None = None, *, margin: int = 1) -
                          f"(n - rank(A)): too few for a Krylov basis (use the dense "
                          f"coupled_modes)")
     return size
-
-
-def shift_invert_lanczos(K: sp.sparray, M: sp.sparray, k: int, sigma: float, solve: Solve,
-                         v0: np.ndarray, ncv: int) -> tuple[np.ndarray, np.ndarray]:
-    r"""The ``k`` eigenpairs of :math:`K u = \omega^2 M u` nearest ``sigma`` by ``eigsh`` in
-    shift-invert mode, with ``OPinv`` the given solve :math:`(K - \sigma M)^{-1}` (or an
-    equivalent operator on the constrained space), never a factorization ``eigsh`` makes."""
-    n = K.shape[0]
-    op = spla.LinearOperator((n, n), matvec=solve, dtype=float)
-    return spla.eigsh(K, k=k, M=M, sigma=sigma, which="LM", OPinv=op, v0=v0, ncv=ncv)
 
 
 def constraint_residuals(A: sp.sparray, U: np.ndarray) -> np.ndarray:

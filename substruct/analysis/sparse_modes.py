@@ -57,12 +57,12 @@ from substruct.analysis.krylov import (
     eliminate,
     free_coordinates,
     krylov_size,
-    shift_invert_lanczos,
     stiffness_over_mass,
 )
 from substruct.analysis.results import Modes
 from substruct.analysis.sparse_damped import damped_sparse_modes
 from substruct.linalg.factorize import Factorize, Solve, factorizer
+from substruct.linalg.lanczos import shift_invert_lanczos
 from substruct.linalg.nullspace import Elimination
 from substruct.linalg.scaling import massless_coordinates
 

@@ -32,9 +32,9 @@ from typing import Any, Sequence
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from substruct.linalg.factorize import Factorize, factorizer
+from substruct.linalg.lanczos import rayleigh_ritz, shift_invert_lanczos
 from substruct.substructure import Substructure, as_csr
 
 __all__ = ["craig_bampton"]
@@ -120,13 +120,9 @@ def craig_bampton(sub: Substructure, boundary_dofs: Sequence[int] | np.ndarray, 
                              "coordinates and the supports do not hold the interior") from None
         Psi = -np.asarray(solve(Kib)).reshape(ni, b.size)
         if g:
-            op = spla.LinearOperator((ni, ni), matvec=solve, dtype=float)
             v0 = np.random.default_rng(0).standard_normal(ni)
-            _, vecs = spla.eigsh(Kii, k=g, M=Mii, sigma=0.0, which="LM", OPinv=op, v0=v0,
-                                 ncv=ncv)
-            kr, mr = vecs.T @ (Kii @ vecs), vecs.T @ (Mii @ vecs)
-            lam, rot = sla.eigh((kr + kr.T) / 2, (mr + mr.T) / 2)
-            Phi = vecs @ rot
+            _, vecs = shift_invert_lanczos(Kii, Mii, g, 0.0, solve, v0, ncv)
+            lam, Phi = rayleigh_ritz(Kii, Mii, vecs)
         else:
             lam, Phi = np.zeros(0), np.zeros((ni, 0))
     if g and lam[0] <= 1e-10 * max(abs(lam).max(), 1e-300):

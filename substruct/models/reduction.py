@@ -21,9 +21,9 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from substruct.linalg.factorize import Factorize, factorizer
+from substruct.linalg.lanczos import rayleigh_ritz, shift_invert_lanczos
 from substruct.substructure import Substructure, as_csr
 
 __all__ = ["modal_truncation", "undamped_modes"]
@@ -104,11 +104,8 @@ def undamped_modes(sub: Substructure, n_modes: int, *, dense_limit: int = 2000,
     else:
         shift = -1e-9 * scale if sigma is None else float(sigma)
         solve = factorizer(factorization, spd=True)(sp.csc_array(K - shift * M))
-        op = spla.LinearOperator((n, n), matvec=solve, dtype=float)
-        _, vecs = spla.eigsh(K, k=g, M=M, sigma=shift, which="LM", OPinv=op)
-        kr, mr = vecs.T @ (K @ vecs), vecs.T @ (M @ vecs)
-        lam, rot = sla.eigh((kr + kr.T) / 2, (mr + mr.T) / 2)
-        Phi = vecs @ rot
+        _, vecs = shift_invert_lanczos(K, M, g, shift, solve)
+        lam, Phi = rayleigh_ritz(K, M, vecs)
     if lam[0] < -1e-8 * scale:
         raise ValueError(f"{sub.name}: K has a negative eigenvalue {lam[0]:.6g} "
                          f"(relative to {scale:.6g}); it must be positive semidefinite")

@@ -1,0 +1,59 @@
+r"""The one shift-invert Lanczos eigensolver of the package.
+
+Every sparse eigen solve (the coupled modes of :mod:`substruct.analysis.sparse_modes`, modal
+truncation and the fixed-interface modes of Craig-Bampton in :mod:`substruct.models`) is
+
+.. math::  K u = \omega^2 M u, \qquad (K - \sigma M)^{-1} M u = \frac{1}{\omega^2 - \sigma} u,
+
+solved by ARPACK's Lanczos iteration (``scipy.sparse.linalg.eigsh``) in shift-invert mode with
+``OPinv`` a solve chosen from the factorization registry (:mod:`substruct.linalg.factorize`),
+never one that ``eigsh`` makes for itself (DESIGN.md section 6), then a Rayleigh-Ritz step on
+the vectors it returns.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from substruct.linalg.factorize import Solve
+
+__all__ = ["shift_invert_lanczos", "rayleigh_ritz"]
+
+
+def shift_invert_lanczos(K: sp.sparray, M: sp.sparray, k: int, sigma: float, solve: Solve,
+                         v0: np.ndarray | None = None, ncv: int | None = None
+                         ) -> tuple[np.ndarray, np.ndarray]:
+    r"""The ``k`` eigenpairs of :math:`K u = \omega^2 M u` nearest ``sigma`` by ``eigsh`` in
+    shift-invert mode, with ``OPinv`` the given solve :math:`(K - \sigma M)^{-1}` (or an
+    equivalent operator on a constrained space), never a factorization ``eigsh`` makes.
+
+    Args:
+        K, M: ``n x n`` sparse stiffness and mass.
+        k: number of eigenpairs.
+        sigma: the shift.
+        solve: ``b -> (K - sigma M)^{-1} b``.
+        v0: starting vector (seeded by the caller for repeatable results), or ``None``.
+        ncv: Krylov basis size, or ``None`` for ARPACK's default.
+
+    Returns:
+        ``(lam, U)``: eigenvalues :math:`\omega^2` and vectors as ARPACK returns them.
+    """
+    n = K.shape[0]
+    op = spla.LinearOperator((n, n), matvec=solve, dtype=float)
+    return spla.eigsh(K, k=k, M=M, sigma=sigma, which="LM", OPinv=op, v0=v0, ncv=ncv)
+
+
+def rayleigh_ritz(K: sp.sparray, M: sp.sparray, V: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    r"""Eigenpairs of the projected problem on the columns of ``V``, ascending.
+
+    .. math::  (V^T K V)\, y = \lambda\, (V^T M V)\, y, \qquad \Phi = V y
+
+    (symmetrized: ARPACK's vectors are ``M``-orthogonal only to its tolerance).
+    """
+    kr, mr = V.T @ (K @ V), V.T @ (M @ V)
+    lam, rot = sla.eigh((kr + kr.T) / 2, (mr + mr.T) / 2)
+    return lam, V @ rot
