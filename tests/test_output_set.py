@@ -16,10 +16,10 @@ from pathlib import Path
 
 import h5py
 import pytest
+from cli_helpers import run
 
 import substruct.run.runner
-from cli_helpers import run
-from substruct.cli.arguments import InputError
+from substruct.cli.errors import InputError
 from substruct.cli.files import check_out_dir
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -32,8 +32,6 @@ and with ``ValueError`` on input they cannot analyse.
 
 from __future__ import annotations
 
-import dataclasses
-from dataclasses import dataclass
 from typing import Protocol, Sequence
 
 import numpy as np
@@ -41,26 +39,29 @@ import scipy.sparse as sp
 
 from substruct.analysis.checks import (
     check_methods,
-    modes_agreement,
     receptance_difference,
     require_agreement,
 )
 from substruct.analysis.coupling import receptance
-from substruct.analysis.dense_modes import MODE_METHODS, coupled_modes
-from substruct.analysis.events import Phase
-from substruct.analysis.krylov import check_inputs, eliminate, free_coordinates, krylov_size
-from substruct.analysis.modal_frf import ModalOptions, frf_method, modal_receptance_sweep
-from substruct.analysis.production import production_modes
+from substruct.analysis.eigen import (
+    SOLVERS,
+    SPARSE_ABOVE,
+    SolverChoice,
+    choose_solver,
+    modes,
+)
+from substruct.analysis.modal_frf import (
+    ModalOptions,
+    frf_method,
+    modal_receptance_sweep,
+)
 from substruct.analysis.production_sweep import (
     PRODUCTION_SWEEP,
     production_sweep,
     production_sweep_applies,
     sweep_checks,
 )
-from substruct.analysis.results import DEFAULT_TOLERANCE, Modes, Receptance
-from substruct.analysis.sparse_modes import has_damping, sparse_coupled_modes
-from substruct.linalg.nullspace import Elimination
-from substruct.linalg.scaling import massless_coordinates
+from substruct.analysis.results import DEFAULT_TOLERANCE, Receptance
 
 __all__ = [
     "Progress",
@@ -80,185 +81,9 @@ class Progress(Protocol):
     def __call__(self, done: int, total: int, label: str, /) -> None: ...
 
 
-#: What ``solver`` may ask for.
-SOLVERS = ("auto", "dense", "sparse")
-#: ``solver="auto"`` takes the sparse path above this many coordinates, damped or not: the dense
-#: state-space pencil (eqs 28-34) of a 605-coordinate free-free rod took 62 s on two busy
-#: cores, the sparse path 1 s with the same frequencies to 1e-13.
-SPARSE_ABOVE = 400
 #: Frequencies per receptance call in a sweep (progress is reported between calls).
 CHUNK = 10
 
-
-@dataclass(frozen=True)
-class SolverChoice:
-    """The strategy :func:`choose_solver` picked.
-
-    Attributes:
-        strategy: ``"dense"``, ``"sparse"`` or ``"sparse-damped"``.
-        note: why it is not the one asked for (empty if it is).
-        elimination: the master-slave elimination of ``A`` computed to decide (reused by the
-            sparse solvers), or ``None``.
-    """
-
-    strategy: str
-    note: str = ""
-    elimination: Elimination | None = None
-
-    @property
-    def label(self) -> str:
-        """``strategy``, with the note in parentheses if there is one."""
-        return f"{self.strategy} ({self.note})" if self.note else self.strategy
-
-
-def choose_solver(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
-                  A: sp.sparray | np.ndarray | None, count: int | None,
-                  solver: str = "auto") -> SolverChoice:
-    """The strategy for the lowest ``count`` modes of a model: the one place where it is chosen.
-
-    ``solver``: ``"dense"`` always dense; ``"sparse"`` sparse (``"sparse-damped"`` if ``C`` has
-    nonzeros); ``"auto"`` dense up to :data:`SPARSE_ABOVE` coordinates and sparse above.  An
-    undamped sparse choice falls back to dense, with a note saying so, when the constraints
-    leave too few free coordinates for ``count`` roots and a Krylov basis around them
-    (:func:`substruct.analysis.krylov.krylov_size`; ARPACK fails there), and when every mode
-    is asked for (``count`` ``None``).  (The damped sparse solver takes pencils that small
-    densely itself.)
-
-    Raises:
-        ValueError: an unknown ``solver``; bad shapes or an empty constraint row.
-    """
-    if solver not in SOLVERS:
-        raise ValueError(f"unknown solver {solver!r}; expected one of {', '.join(SOLVERS)}")
-    n = M.shape[0]
-    if solver == "dense" or (solver == "auto" and n <= SPARSE_ABOVE):
-        return SolverChoice("dense")
-    if count is None:
-        return SolverChoice("dense", "sparse solvers compute the lowest count modes; all asked")
-    if has_damping(C):
-        return SolverChoice("sparse-damped")
-    Ms, _, As, k = check_inputs(M, M, A, count)
-    el = eliminate(Ms, As)
-    free = free_coordinates(el, massless_coordinates(Ms))
-    try:
-        krylov_size(k, free)
-    except ValueError:
-        return SolverChoice("dense", f"sparse asked, but {free} free coordinates are too few "
-                                     f"for {k} modes and a Krylov basis")
-    return SolverChoice("sparse", "", el)
-
-
-def _sparse(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
-            K: sp.sparray | np.ndarray, A: sp.sparray | np.ndarray | None, count: int,
-            method: str, choice: SolverChoice) -> Modes:
-    n = K.shape[0]
-    As = sp.csr_array((0, n)) if A is None or np.size(A) == 0 else sp.csr_array(A, dtype=float)
-    Cs = None if C is None else sp.csr_array(C, dtype=float)
-    try:
-        return sparse_coupled_modes(sp.csr_array(M, dtype=float), sp.csr_array(K, dtype=float),
-                                    As, count, method=method, C=Cs,
-                                    elimination=choice.elimination)
-    except ValueError as err:
-        text = " ".join(str(err).split()).replace("(use the dense coupled_modes)",
-                                                   "(use solver: dense)")
-        raise ValueError(f"sparse eigensolver: {text}") from None
-
-
-def modes(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
-          K: sp.sparray | np.ndarray, A: sp.sparray | np.ndarray | None,
-          count: int | None = None, *, method: str = "generalized-inverse",
-          checks: Sequence[str] = (), solver: str = "auto",
-          tolerance: float = DEFAULT_TOLERANCE, what: str = "modes",
-          full_checks: bool = False, events: Phase | None = None) -> Modes:
-    r"""Coupled modes of ``M u'' + C u' + K u = 0`` under ``A u = 0``, with their cross-checks.
-
-    .. math::  (\lambda^2 M + \lambda C + K)\, u = A^T \mu, \qquad A u = 0
-               \qquad \text{(eqs 23-34)}
-
-    The strategy (dense, sparse, sparse-damped) is :func:`choose_solver`'s.  Dense and
-    sparse-damped: the main formulation is ``method``, each check formulation is solved by the
-    same strategy and compared with it (:func:`substruct.analysis.checks.modes_agreement`).
-    Sparse (undamped): the production path (:func:`substruct.analysis.production.production_modes`),
-    whatever ``method`` names: the numbers from the null-space form (``method`` of the result
-    ``"null-space/sparse"``), the KKT and generalized-inverse forms as residual checks
-    (``agreement`` keys ``"kkt-residual"`` and ``"generalized-inverse-residual"``; a check
-    skipped as too costly is named in ``solver``); ``full_checks`` solves the named method and
-    checks in full instead (the sparse eigensolves of each formulation, compared).  On a
-    damped model the sparse
-    ``"null-space"`` and ``"generalized-inverse"`` are one pencil, so neither is reported as a
-    check of the other (``"kkt"`` is an independent one).
-
-    Args:
-        M, C, K: ``n x n`` (``M`` may be singular on massless coordinates, eq 6; ``C`` may be
-            ``None``).
-        A: ``m x n`` constraint rows of any rank (``None`` for none).
-        count: the lowest ``count`` modes (all if ``None``; the sparse solvers need a count).
-        method: the main formulation, one of :data:`substruct.analysis.dense_modes.MODE_METHODS`.
-        checks: check formulations (the main one and repeats are skipped).
-        solver: ``"auto"``, ``"dense"`` or ``"sparse"`` (:func:`choose_solver`).
-        tolerance: the largest relative eigenvalue disagreement a check may have.
-        what: how the analysis is named in error messages.
-        full_checks: on the sparse path, solve ``method`` and each check in full.
-        events: called as each eigen solve starts (:class:`substruct.analysis.events.Phase`).
-
-    Returns:
-        The main formulation's :class:`~substruct.analysis.results.Modes`, with ``agreement``
-        (check -> figure), ``solver`` (the strategy, and why if it fell back) and
-        ``tolerance`` filled in; eigenvalues and shapes complex, whatever the strategy.
-
-    Raises:
-        CheckError: a check disagrees by more than ``tolerance``.
-        ValueError: an unknown method or solver; a model the solver cannot take (a motion with
-            no mass, stiffness or constraint; more modes than a sparse solver can give).
-    """
-    for name in (method, *checks):
-        if name not in MODE_METHODS:
-            raise ValueError(f"unknown method {name!r}; expected one of "
-                             f"{', '.join(MODE_METHODS)}")
-    choice = choose_solver(M, C, A, count, solver)
-    others = check_methods(method, checks)
-    if choice.strategy == "sparse-damped":  # one pencil for both: no check of one by the other
-        same = {"null-space", "generalized-inverse"}
-        others = [m for m in others if not (m in same and method in same)]
-
-    def solve(formulation: str) -> Modes:
-        if events is not None:
-            kind = "dense-eigen" if choice.strategy == "dense" else "sparse-eigen"
-            events(kind, f"{what} ({formulation}): {choice.strategy} eigen solve", M.shape[0])
-        if choice.strategy == "dense":
-            return coupled_modes(M, C, K, A, formulation, count)
-        assert count is not None  # choose_solver is dense when every mode is asked
-        return _sparse(M, C, K, A, count, formulation, choice)
-
-    if choice.strategy == "sparse" and not full_checks:
-        assert count is not None
-        if events is not None:
-            events("sparse-eigen", f"{what}: sparse factorization and shift-invert eigen solve",
-                   M.shape[0])
-        try:
-            main, agreement, note = production_modes(M, K, A, count,
-                                                     elimination=choice.elimination)
-        except ValueError as err:
-            raise ValueError(f"sparse eigensolver: {' '.join(str(err).split())}") from None
-        require_agreement(what, main.method, agreement, tolerance)
-        solver_label = f"sparse ({note})" if note else "sparse"
-    else:
-        main = solve(method)
-        agreement = {m: modes_agreement(solve(m), main) for m in others}
-        require_agreement(what, method, agreement, tolerance)
-        solver_label = main.solver
-        if choice.note or not main.solver or main.solver == choice.strategy:
-            solver_label = choice.label
-    # one type, one set of scalar types whatever the strategy: complex roots and shapes (the
-    # undamped sparse solvers compute real ones), real frequencies, ratios and residuals
-    return dataclasses.replace(
-        main, eigenvalues=np.asarray(main.eigenvalues, dtype=complex),
-        omega=np.asarray(main.omega, dtype=float),
-        damping_ratio=np.asarray(main.damping_ratio, dtype=float),
-        shapes=np.asarray(main.shapes, dtype=complex),
-        residual=np.asarray(main.residual, dtype=float),
-        spurious=np.asarray(main.spurious, dtype=complex),
-        spurious_reason=list(main.spurious_reason), agreement=agreement, solver=solver_label,
-        tolerance=float(tolerance))
 
 
 def _sweep(K: sp.sparray, M: sp.sparray, C: sp.sparray | None, A: sp.sparray,

@@ -36,7 +36,11 @@ from substruct.analysis.receptance_forms import (
     kkt_sweep,
     null_space_sweep,
 )
-from substruct.linalg.constraints import ConstraintError, check_consistent, independent_rows
+from substruct.linalg.constraints import (
+    ConstraintError,
+    check_consistent,
+    independent_rows,
+)
 from substruct.linalg.dense import dense
 from substruct.linalg.scaling import equilibrate, mass_column_scale
 

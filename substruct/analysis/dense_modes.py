@@ -33,7 +33,12 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from substruct.analysis.coupling import MassSplit, constraint_gain, projected_inverse, split_mass
+from substruct.analysis.coupling import (
+    MassSplit,
+    constraint_gain,
+    projected_inverse,
+    split_mass,
+)
 from substruct.analysis.pencil import (
     Refine,
     fan_lin_van_dooren,

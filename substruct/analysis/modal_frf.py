@@ -44,8 +44,13 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from substruct.analysis.checks import check_methods, receptance_difference, require_agreement
+from substruct.analysis.checks import (
+    check_methods,
+    receptance_difference,
+    require_agreement,
+)
 from substruct.analysis.coupling import receptance
+from substruct.analysis.eigen import modes
 from substruct.analysis.results import DEFAULT_TOLERANCE, Modes, Receptance
 from substruct.analysis.sparse_modes import has_damping
 from substruct.linalg.constraints import independent_rows
@@ -124,8 +129,6 @@ class ModalBasis:
 
 def _modes(M: sp.csr_array, C: sp.csr_array | None, K: sp.csr_array, A: sp.csr_array,
            count: int | None, solver: str) -> Modes:
-    from substruct.analysis.api import modes  # the one entry point of the eigensolvers
-
     return modes(M, C, K, A, count, solver=solver, what="frf (modal)")
 
 

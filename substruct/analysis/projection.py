@@ -27,7 +27,11 @@ import scipy.sparse as sp
 from substruct.linalg.constraints import independent_rows, pinv_sym
 from substruct.linalg.dense import dense
 from substruct.linalg.factorize import Solve, factorizer
-from substruct.linalg.scaling import equilibrate, mass_column_scale, massless_coordinates
+from substruct.linalg.scaling import (
+    equilibrate,
+    mass_column_scale,
+    massless_coordinates,
+)
 
 __all__ = [
     "MassSplit",

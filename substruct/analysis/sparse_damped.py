@@ -19,7 +19,12 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from substruct.analysis.krylov import check_inputs, constraint_residuals, eliminate, krylov_size
+from substruct.analysis.krylov import (
+    check_inputs,
+    constraint_residuals,
+    eliminate,
+    krylov_size,
+)
 from substruct.analysis.pencil import rayleigh_root
 from substruct.analysis.results import Modes
 from substruct.analysis.roots import REAL_TOL

@@ -27,13 +27,16 @@ computed as well and their agreement held to ``tolerance``
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Callable, Sequence
 
 import numpy as np
 import scipy.sparse as sp
 
-from substruct.analysis.checks import check_methods, receptance_difference, require_agreement
+from substruct.analysis.checks import (
+    check_methods,
+    receptance_difference,
+    require_agreement,
+)
 from substruct.analysis.integrators import (
     Correction,
     Scheme,
@@ -46,11 +49,19 @@ from substruct.analysis.krylov import eliminate
 from substruct.analysis.projection import constrained_acceleration
 from substruct.analysis.results import DEFAULT_TOLERANCE
 from substruct.analysis.transient_modal import modal_run
-from substruct.analysis.transient_record import Physical, Recorder, constraint_force_solver
-from substruct.analysis.transient_results import Transient
+from substruct.analysis.transient_record import (
+    Physical,
+    Recorder,
+    constraint_force_solver,
+)
+from substruct.analysis.transient_results import Transient, TransientOptions
 from substruct.linalg.constraints import independent_rows, particular_solution, pinv_sym
 from substruct.linalg.factorize import Solve, factorizer
-from substruct.linalg.scaling import equilibrate, mass_column_scale, massless_coordinates
+from substruct.linalg.scaling import (
+    equilibrate,
+    mass_column_scale,
+    massless_coordinates,
+)
 
 __all__ = ["TRANSIENT_METHODS", "DENSE_STEP", "TransientOptions", "transient", "direct_run",
            "initial_state"]
@@ -59,30 +70,6 @@ __all__ = ["TRANSIENT_METHODS", "DENSE_STEP", "TransientOptions", "transient", "
 TRANSIENT_METHODS = ("generalized-inverse", "null-space", "modal")
 #: Up to this many coordinates the step runs on dense arrays (an explicit inverse of S).
 DENSE_STEP = 200
-
-
-@dataclass(frozen=True)
-class TransientOptions:
-    """How a transient run is made.
-
-    Attributes:
-        integrator, rho_inf: :func:`substruct.analysis.integrators.scheme`.
-        every: record every this many steps; ``field_every``: keep the full field every this
-            many steps (0: never).
-        forces: compute the constraint forces.
-        factorization: of the effective matrix (:func:`substruct.linalg.factorize.factorizer`).
-        modal_count: the modes of the modal form (``None``: all of a dense model).
-        modal_solver: their eigensolver strategy (:func:`substruct.analysis.api.choose_solver`).
-    """
-
-    integrator: str = "newmark"
-    rho_inf: float = 1.0
-    every: int = 1
-    field_every: int = 0
-    forces: bool = True
-    factorization: str = "auto"
-    modal_count: int | None = None
-    modal_solver: str = "auto"
 
 
 def _spd_solver(S: sp.sparray | np.ndarray, kind: str) -> Solve:

@@ -20,18 +20,15 @@ equations are integrated by the same scheme and step as the direct forms.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
+from substruct.analysis.eigen import SPARSE_ABOVE, modes
 from substruct.analysis.integrators import Scheme, Work, effective_matrix, integrate
 from substruct.analysis.modal_frf import RIGID_TOL, static_solver
 from substruct.analysis.transient_record import Physical, Recorder
-
-if TYPE_CHECKING:
-    from substruct.analysis.transient import TransientOptions
+from substruct.analysis.transient_results import TransientOptions
 
 __all__ = ["MODAL_DEFAULT_COUNT", "coupled_basis", "modal_run"]
 
@@ -44,8 +41,6 @@ def coupled_basis(phys: Physical, count: int | None, solver: str
     r"""``(Phi, omega)``: undamped coupled modes, :math:`\Phi^T M \Phi = I`,
     :math:`\Phi^T K \Phi = \operatorname{diag}(\omega^2)` (re-orthonormalized by a small
     Rayleigh-Ritz, so repeated frequencies are orthogonal too)."""
-    from substruct.analysis.api import SPARSE_ABOVE, modes  # the one entry of the eigensolvers
-
     n = phys.M.shape[0]
     if count is None and n > SPARSE_ABOVE:
         count = MODAL_DEFAULT_COUNT
@@ -60,7 +55,7 @@ def coupled_basis(phys: Physical, count: int | None, solver: str
 
 
 def modal_run(phys: Physical, s: Scheme, h: float, n_steps: int, d0: np.ndarray,
-              v0: np.ndarray, opts: "TransientOptions") -> Recorder:
+              v0: np.ndarray, opts: TransientOptions) -> Recorder:
     """The modal form (module docstring), recorded like the direct forms."""
     Phi, omega = coupled_basis(phys, opts.modal_count, opts.modal_solver)
     M, K, B, f = phys.M, phys.K, phys.B, phys.f

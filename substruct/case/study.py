@@ -32,7 +32,7 @@ gives the same table bit for bit on any backend.  A lognormal parameter is
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Annotated, Any, Literal, Union
+from typing import Annotated, Any, Literal, Union
 
 from pydantic import BeforeValidator, Field, model_validator
 
@@ -46,9 +46,6 @@ from substruct.case.fields import (
     Positive,
     StrictModel,
 )
-
-if TYPE_CHECKING:  # pragma: no cover
-    from substruct.case.loader import Case
 
 __all__ = ["GridAxis", "Grid", "RandomParameter", "RandomSamples", "Collect", "StudySpec",
            "PeakSpec", "MAX_SAMPLES"]
@@ -170,7 +167,7 @@ class StudySpec(StrictModel):
             self.random.parameters if self.random is not None else [])
         return [a.parameter for a in axes]
 
-    def check(self, case: "Case") -> None:
+    def check(self, case: Any) -> None:
         """Cross-checks against the case: known, distinct parameters; frequencies and MAC need
         ``analysis.modes``, peaks ``analysis.frf`` and its points.
 

@@ -1,19 +1,18 @@
 """The command line's arguments: one parser for ``run``, ``converge``, ``info`` and ``export``,
-whose errors are :class:`InputError` (one line, exit code 2) instead of argparse's exit."""
+whose errors are :class:`~substruct.cli.errors.InputError` (one line, exit code 2) instead of
+argparse's exit."""
 
 from __future__ import annotations
 
 import argparse
 from typing import NoReturn
 
-__all__ = ["COMMANDS", "InputError", "build_parser"]
+from substruct.cli.errors import InputError
+
+__all__ = ["COMMANDS", "build_parser"]
 
 #: The commands, in the order ``--help`` lists them.
 COMMANDS = ("run", "converge", "info", "export")
-
-
-class InputError(Exception):
-    """Bad input found by the command line itself (exit code 2)."""
 
 
 class ArgumentParser(argparse.ArgumentParser):

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from substruct.analysis.mac import mac_matrix, pair_modes
-from substruct.cli.arguments import InputError
+from substruct.cli.errors import InputError
 from substruct.cli.files import load_result, optional_module
 
 __all__ = ["add_compare_parser", "compare_command", "compare_modes"]

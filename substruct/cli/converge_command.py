@@ -9,7 +9,7 @@ import math
 import sys
 from pathlib import Path
 
-from substruct.cli.arguments import InputError
+from substruct.cli.errors import InputError
 from substruct.cli.files import optional_module, writable_dir
 from substruct.cli.progress import ProgressBar
 

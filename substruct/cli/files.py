@@ -15,7 +15,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any, Sequence
 
-from substruct.cli.arguments import InputError
+from substruct.cli.errors import InputError
 
 __all__ = ["writable_dir", "check_out_dir", "optional_module", "load_result",
            "TEMP_NAME_EXTRA"]

@@ -27,7 +27,7 @@ import sys
 import traceback
 from typing import Any, Callable, TypeVar
 
-from substruct.cli.arguments import InputError
+from substruct.cli.errors import InputError
 from substruct.cli.signals import Terminated
 
 __all__ = ["call_isolated"]

@@ -6,7 +6,7 @@ code   meaning
 =====  ======================================================================================
 0      success
 2      bad input: a case file, an argument, an output path (:class:`~substruct.case.errors.
-       CaseError`, :class:`~substruct.cli.arguments.InputError`); one line
+       CaseError`, :class:`~substruct.cli.errors.InputError`); one line
        ``substruct: error: <message>``, no traceback, nothing written
 1      the result failed its cross-checks (:class:`~substruct.analysis.errors.CheckError`):
        one line ``substruct: error: <message>``, nothing written
@@ -24,13 +24,14 @@ import sys
 import traceback
 from typing import Callable, Sequence
 
-from substruct.cli.arguments import COMMANDS, InputError, build_parser
-from substruct.cli.converge_command import converge_command
+from substruct.cli.arguments import COMMANDS, build_parser
 from substruct.cli.compare_command import compare_command
+from substruct.cli.converge_command import converge_command
+from substruct.cli.errors import InputError
 from substruct.cli.result_commands import info_command
 from substruct.cli.run_command import run_command
-from substruct.cli.study_command import study_command
 from substruct.cli.signals import Terminated, silence_stdout, terminate_on_sigterm
+from substruct.cli.study_command import study_command
 from substruct.cli.uff_export import export_dispatch
 
 __all__ = ["main", "BAD_INPUT", "FAILED"]

@@ -17,7 +17,7 @@ import sys
 from pathlib import Path
 from typing import TextIO
 
-from substruct.cli.arguments import InputError
+from substruct.cli.errors import InputError
 from substruct.cli.files import check_out_dir, load_result, optional_module
 from substruct.cli.summary import print_summary, summary_json
 

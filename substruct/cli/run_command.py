@@ -23,7 +23,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from substruct.cli.arguments import InputError
+from substruct.cli.errors import InputError
 from substruct.cli.files import check_out_dir, optional_module
 from substruct.cli.isolated import call_isolated
 from substruct.cli.progress import PhaseLog, ProgressBar, phases_wanted

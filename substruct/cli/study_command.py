@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from substruct.cli.arguments import InputError
+from substruct.cli.errors import InputError
 from substruct.cli.files import writable_dir
 
 __all__ = ["study_command", "add_study_parser"]

@@ -8,7 +8,7 @@ import argparse
 import os
 from pathlib import Path
 
-from substruct.cli.arguments import InputError
+from substruct.cli.errors import InputError
 from substruct.cli.files import check_out_dir, load_result, optional_module
 from substruct.cli.result_commands import export_command
 
