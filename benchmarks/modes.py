@@ -100,8 +100,9 @@ def substruct_model(target: int):
     return subs, cons, [mpc]
 
 
-def monolithic_model(target: int) -> tuple[sp.csr_array, sp.csr_array]:
-    """The same constrained model eliminated by hand: ``(T^T K T, T^T M T)``."""
+def monolithic_system(target: int) -> dict:
+    """The same constrained model over the monolithic mesh and the two absorber masses, with
+    the constraint eliminated by hand, ``q = T x``: ``{"box", "n", "K", "M", "T"}``."""
     from substruct.models.solid import solid_box
     nxh, m = divisions(target)
     box = solid_box("box", (LX, LY, LZ), (2 * nxh, m, m), E, NU, RHO,
@@ -130,7 +131,14 @@ def monolithic_model(target: int) -> tuple[sp.csr_array, sp.csr_array]:
                       (np.concatenate([keep, np.full(others.sum(), s)]),
                        np.concatenate([col[keep], col[row.col[others]]]))),
                      shape=(n + 2, keep.size))
-    return sp.csr_array(T.T @ K @ T), sp.csr_array(T.T @ M @ T)
+    return {"box": box, "n": n, "K": K, "M": M, "T": T}
+
+
+def monolithic_model(target: int) -> tuple[sp.csr_array, sp.csr_array]:
+    """The same constrained model eliminated by hand: ``(T^T K T, T^T M T)``."""
+    s = monolithic_system(target)
+    T = s["T"]
+    return sp.csr_array(T.T @ s["K"] @ T), sp.csr_array(T.T @ s["M"] @ T)
 
 
 # ------------------------------------------------------------------------------- measurement

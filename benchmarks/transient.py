@@ -44,11 +44,9 @@ from modes import (  # noqa: E402  (the model of the modal benchmark)
     LX,
     LY,
     LZ,
-    MPC,
-    absorber_params,
     best_factorization,
-    divisions,
     machine,
+    monolithic_system,
     substruct_model,
 )
 
@@ -60,30 +58,8 @@ TIP = (LX, LY, LZ)
 def monolithic(target: int) -> dict:
     """The constrained model eliminated by hand: ``q = T x`` over the monolithic mesh and the
     two absorber masses; ``K_t, M_t = T^T K T, T^T M T``; load and output rows."""
-    from substruct.models.solid import solid_box
-    nxh, m = divisions(target)
-    box = solid_box("box", (LX, LY, LZ), (2 * nxh, m, m), 2.1e11, 0.3, 7850.0,
-                    fixed=[{"box": [[0, 0, 0], [0, LY, LZ]]}])
-    n = box.n_dof
-    K = sp.csr_array(sp.block_diag([box.K, sp.csr_array((2, 2))]))
-    M = sp.lil_array(sp.block_diag([box.M, sp.csr_array((2, 2))]))
-    for j, (_, mass, k, xyz, comp) in enumerate(absorber_params()):
-        g = sp.csr_array(sp.hstack([box.row((xyz, comp)), sp.csr_array((1, 2))])).tolil()
-        g[0, n + j] = -1.0
-        K = sp.csr_array(K + k * (sp.csr_array(g).T @ sp.csr_array(g)))
-        M[n + j, n + j] = mass
-    row = sp.csr_array(sp.hstack([sum(c * box.row((x, "z")) for x, c in MPC),
-                                  sp.csr_array((1, 2))])).tocoo()
-    s = int(row.col[np.argmax(abs(row.data))])
-    a_s = row.toarray()[0, s]
-    keep = np.setdiff1d(np.arange(n + 2), [s])
-    col = np.full(n + 2, -1)
-    col[keep] = np.arange(keep.size)
-    others = row.col != s
-    T = sp.csr_array((np.concatenate([np.ones(keep.size), -row.data[others] / a_s]),
-                      (np.concatenate([keep, np.full(others.sum(), s)]),
-                       np.concatenate([col[keep], col[row.col[others]]]))),
-                     shape=(n + 2, keep.size))
+    s = monolithic_system(target)
+    box, n, K, M, T = s["box"], s["n"], s["K"], s["M"], s["T"]
     tip = sp.csr_array(sp.hstack([box.row((TIP, "z")), sp.csr_array((1, 2))]))
     mass = sp.csr_array(([1.0], ([0], [n])), shape=(1, n + 2))
     O = sp.csr_array(sp.vstack([tip, mass]))

@@ -1,21 +1,9 @@
-r"""The one way from an assembled model to results: coupled modes and receptances, each with its
-cross-checks.
+r"""The front door from an assembled model to results: coupled modes and receptances, each with
+its cross-checks.
 
-:func:`modes` solves the constrained free vibration (eqs 23-34)
-
-.. math::  (\lambda^2 M + \lambda C + K)\, u = A^T \mu, \qquad A u = 0,
-
-by a main formulation and the check formulations, and returns one
-:class:`~substruct.analysis.results.Modes`.  How it is solved is a strategy chosen here, in
-:func:`choose_solver`, and nowhere else:
-
-* ``"dense"``: every root of the balanced pencils
-  (:func:`substruct.analysis.dense_modes.coupled_modes`; the generalized-inverse one is the
-  paper's eqs 28-34);
-* ``"sparse"``: the lowest roots of an undamped model by shift-invert Lanczos
-  (:func:`substruct.analysis.sparse_modes.sparse_coupled_modes`);
-* ``"sparse-damped"``: the lowest roots of a damped model by shift-invert Arnoldi on a
-  first-order pencil (:func:`substruct.analysis.sparse_damped.damped_sparse_modes`).
+:func:`modes` (eqs 23-34) and the one choice of its strategy, :func:`choose_solver`, live in
+:mod:`substruct.analysis.eigen` and are named here so that every analysis is reached from one
+module.
 
 :func:`receptance_sweep` computes the receptances (eq 15)
 

@@ -41,9 +41,9 @@ from substruct.case.fields import (
     StrictModel,
     gigabytes,
 )
-from substruct.case.machine import available_memory
 from substruct.case.mesh_files import MAX_MESH_FILE, mesh_file_problem
 from substruct.case.substructures import ModalDamping
+from substruct.machine import available_memory
 
 __all__ = ["Component", "Selector", "BoxShape", "RectangleShape", "SolidDamping",
            "SolidReduce", "SolidSpec", "InterfaceSpec", "solid_memory", "MAX_MESH_FILE",

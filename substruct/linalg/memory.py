@@ -21,15 +21,14 @@ the factorization's working memory as :data:`WORK_FACTOR` times the factor.
 
 from __future__ import annotations
 
-import os
-
 import scipy.sparse as sp
+
+from substruct.machine import available_memory
 
 __all__ = [
     "CHOLMOD_FILL",
     "SUPERLU_FILL",
     "WORK_FACTOR",
-    "available_memory",
     "factor_entries",
     "factor_memory",
     "gigabytes",
@@ -42,22 +41,6 @@ CHOLMOD_FILL = 0.25
 SUPERLU_FILL = 0.022
 #: Peak memory of a factorization as a multiple of its factor's bytes.
 WORK_FACTOR = 1.2
-
-
-def available_memory() -> float | None:
-    """Bytes the machine can give a process now without swapping (``MemAvailable`` of
-    ``/proc/meminfo``), or ``None`` where that is not known."""
-    try:
-        with open("/proc/meminfo", encoding="ascii") as fh:
-            for line in fh:
-                if line.startswith("MemAvailable:"):
-                    return float(line.split()[1]) * 1024.0
-    except OSError:
-        pass
-    try:
-        return float(os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
-    except (ValueError, OSError, AttributeError):
-        return None
 
 
 def factor_entries(A: sp.sparray | sp.spmatrix, kind: str) -> float:
