@@ -165,6 +165,8 @@ class FrfAnalysis(StrictModel):
     units: Literal["rad/s", "Hz"] = "rad/s"
     #: what the results are reported as: u / F, velocity / F or acceleration / F
     quantity: Literal["receptance", "mobility", "accelerance"] = "receptance"
+    #: how the pictures draw |H|: on a log axis, or in decibels, 20 log10 (|H| / 1 unit)
+    magnitude: Literal["log", "db"] = "log"
     #: largest max |H_check - H| / max |H| a check may have; a larger one fails the run
     tolerance: Positive = TOLERANCE
 
