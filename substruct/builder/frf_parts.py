@@ -8,9 +8,11 @@ split (:func:`split_frf_case`) into
 * the finite-element case: every other substructure, the connections among them, and an
   ``analysis.frf`` whose inputs and outputs are the points of those substructures that the
   case uses (its own inputs and outputs and the points joined to FRF substructures), so that
-  the model's receptance is square on them;
-* the FRF parts (:class:`FrfPart`, one per ``type: frf`` substructure) and the interface pairs
-  of point names, each joining two coordinates.
+  the model's receptance is square on them; none if every substructure is ``type: frf``
+  (an FRF-only assembly: :func:`assemble_frf_case` gives an empty model);
+* the FRF parts (:class:`FrfPart`, one per ``type: frf`` substructure; one with
+  ``decouple: true`` enters with its receptance negated, so that coupling removes it) and
+  the interface pairs of point names, each joining two coordinates.
 
 :mod:`substruct.run.frf_route` computes the model's receptances, couples everything by
 LM-FBS (:mod:`substruct.analysis.frf_coupling`) and reports the case's inputs and outputs.
@@ -19,15 +21,20 @@ LM-FBS (:mod:`substruct.analysis.frf_coupling`) and reports the case's inputs an
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Mapping
 
 import numpy as np
+import scipy.sparse as sp
 
+from substruct.assembly.stack import Assembly
+from substruct.builder.model import Model, assemble_case
 from substruct.case.fields import parse_point
 from substruct.case.frf_substructure import FrfSpec
 from substruct.case.loader import Case
+from substruct.substructure import Substructure
 
 __all__ = ["FrfPart", "FrfSplit", "MODEL_PART", "has_frf_parts", "split_frf_case",
-           "frf_case_points"]
+           "frf_case_points", "assemble_frf_case", "empty_model"]
 
 #: The name of the part that stands for the assembled finite-element model.
 MODEL_PART = "model"
@@ -43,6 +50,7 @@ class FrfPart:
         labels: one label per coordinate (``"3:z"``, a point name, ...), distinct.
         Y: complex ``(n_omega, n, n)`` receptances, ``Y[k, i, j] = u_i / F_j``.
         interpolate: ``"none"`` or ``"linear"``: how it is put on another grid.
+        decouple: a part removed from the assembly (``Y`` is then its receptance negated).
     """
 
     name: str
@@ -50,6 +58,7 @@ class FrfPart:
     labels: list[str]
     Y: np.ndarray
     interpolate: str = "none"
+    decouple: bool = False
 
     def __post_init__(self) -> None:
         k, n = len(self.omega), len(self.labels)
@@ -79,13 +88,13 @@ class FrfSplit:
 
     Attributes:
         model_case: the case of the other substructures (``analysis.frf`` square on
-            ``model_points``).
+            ``model_points``); ``None`` if every substructure is ``type: frf``.
         model_points: the points of the model the coupling needs, in order.
         parts: the FRF parts, in case order.
         pairs: interface pairs of point names (each joins two coordinates).
     """
 
-    model_case: Case
+    model_case: Case | None
     model_points: list[str]
     parts: list[FrfPart]
     pairs: list[tuple[str, str]]
@@ -108,7 +117,7 @@ def split_frf_case(case: Case) -> FrfSplit:
     Raises:
         CaseError: modes asked of an assembly with FRF substructures; no ``analysis.frf``;
             a constraint on a point of an FRF substructure; a point of one that is not among
-            its labels; no substructure with matrices.
+            its labels; a model none of whose points is joined or asked for.
     """
     frf_specs = {s.name: s for s in case.substructures if isinstance(s, FrfSpec)}
     if case.analysis.modes is not None:
@@ -120,9 +129,6 @@ def split_frf_case(case: Case) -> FrfSplit:
         raise case.error(("analysis",), "an assembly with FRF substructures needs "
                          "analysis.frf")
     others = [s for s in case.substructures if not isinstance(s, FrfSpec)]
-    if not others:
-        raise case.error(("substructures",), "at least one substructure must have matrices "
-                         "(FRF-only assemblies are coupled by substruct.analysis.frf_coupling)")
 
     def is_frf(point: str) -> bool:
         return parse_point(point)[0] in frf_specs
@@ -155,16 +161,41 @@ def split_frf_case(case: Case) -> FrfSplit:
                                  f"{lab!r}", p)
     needed = [p for pair in pairs for p in pair] + list(spec.inputs) + list(spec.outputs)
     model_points = list(dict.fromkeys(p for p in needed if not is_frf(p)))
-    if not model_points:
-        raise case.error(("connections",), "no point of the model is joined to the FRF "
-                         "substructures or asked for")
-    frf = spec.model_copy(update={"inputs": model_points, "outputs": model_points,
-                                  "quantity": "receptance"})
-    analysis = case.analysis.model_copy(update={"frf": frf})
-    model_case = case.model_copy(update={"substructures": others, "connections": fe_chains,
-                                         "analysis": analysis})
+    model_case = None
+    if others:
+        if not model_points:
+            raise case.error(("connections",), "no point of the model is joined to the FRF "
+                             "substructures or asked for")
+        frf = spec.model_copy(update={"inputs": model_points, "outputs": model_points,
+                                      "quantity": "receptance"})
+        analysis = case.analysis.model_copy(update={"frf": frf})
+        model_case = case.model_copy(update={"substructures": others,
+                                             "connections": fe_chains, "analysis": analysis})
     parts = []
     for s in frf_specs.values():
         omega, labels, H = s.data()
-        parts.append(FrfPart(s.name, omega, labels, H, s.interpolate))
+        parts.append(FrfPart(s.name, omega, labels, -H if s.decouple else H, s.interpolate,
+                             s.decouple))
     return FrfSplit(model_case, model_points, parts, pairs)
+
+
+def empty_model() -> Model:
+    """The finite-element model of an FRF-only assembly: no coordinates, no constraints."""
+    empty = sp.csr_array((0, 0))
+    asm = Assembly(substructures=[], offsets=np.zeros(1, dtype=int), M=empty, C=empty, K=empty,
+                   A=empty, b=np.zeros(0), R=empty, constraint_labels=[], dof_labels=[])
+    return Model(asm, [], [], {})
+
+
+def assemble_frf_case(case: Case, prebuilt: Mapping[str, Substructure] | None = None
+                      ) -> Model:
+    """The finite-element part of a case with FRF substructures, assembled
+    (:func:`substruct.builder.model.assemble_case` of :func:`split_frf_case`'s
+    ``model_case``, with the ``prebuilt`` parts), or :func:`empty_model` if every
+    substructure is ``type: frf``.
+
+    Raises:
+        CaseError: as :func:`split_frf_case` and :func:`~substruct.builder.model.assemble_case`.
+    """
+    model_case = split_frf_case(case).model_case
+    return empty_model() if model_case is None else assemble_case(model_case, prebuilt)

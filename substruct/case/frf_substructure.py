@@ -1,4 +1,4 @@
-"""A substructure known only by its receptances: ``type: frf``.
+r"""A substructure known only by its receptances: ``type: frf``.
 
 .. code-block:: yaml
 
@@ -6,11 +6,14 @@
       type: frf
       file: measured.uff        # UFF 58 (pyuff) or .npz (H, labels, omega | freq_hz)
       interpolate: none         # or linear: onto the grid of analysis.frf
+      decouple: false           # true: a known part removed from the assembly it is joined to
 
 Its points are its labels, ``meas@3:z``.  It has no mass, damping or stiffness matrices: the
 case is coupled by frequency-based substructuring (:mod:`substruct.analysis.frf_coupling`) on
 the grid of ``analysis.frf``, after the other substructures' receptances are computed at the
-coordinates joined to it (``docs/frf.md``).
+coordinates joined to it (``docs/frf.md``).  With ``decouple: true`` its receptance enters
+negated, :math:`Y = \operatorname{diag}(\dots, -Y_R)`: coupling it to a measured assembly at
+all of its coordinates (the extended interface) removes it (decoupling).
 """
 
 from __future__ import annotations
@@ -36,6 +39,8 @@ class FrfSpec(StrictModel):
     file: str
     #: frequency grids that differ from the analysis' are refused unless interpolated
     interpolate: Literal["none", "linear"] = "none"
+    #: a known part to remove: its receptance enters the coupling negated
+    decouple: bool = False
     _data: tuple[np.ndarray, list[str], np.ndarray] | None = PrivateAttr(default=None)
 
     @model_validator(mode="after")

@@ -6,7 +6,9 @@ receptances at the coordinates the coupling needs, then LM-FBS with the FRF part
 
 ``Y_model`` is :func:`substruct.run.analyses.frf_result` of the finite-element part of the case
 (:func:`substruct.builder.frf_parts.split_frf_case`: direct or modal, with its own checks),
-square on the model's points joined to the FRF parts and asked for.  The coupled receptance is
+square on the model's points joined to the FRF parts and asked for; an assembly of FRF parts
+only has none, and its parts are put on the grid of ``analysis.frf`` (equal, or interpolated
+with ``interpolate: linear``).  A part with ``decouple: true`` enters as ``-Y_R`` (decoupling).  The coupled receptance is
 checked by the generalized-inverse form (:func:`substruct.analysis.frf_coupling.couple`); its
 ``constraint_residual`` is the interface compatibility :math:`\max |B Y_c| / \max |Y_c|`.
 """
@@ -18,7 +20,13 @@ import numpy as np
 from substruct.analysis.api import Progress
 from substruct.analysis.checks import require_agreement
 from substruct.analysis.errors import CheckError
-from substruct.analysis.frf_coupling import boolean_rows, couple
+from substruct.analysis.frf_coupling import (
+    boolean_rows,
+    common_grid,
+    couple,
+    generalized_inverse_fbs,
+    stack,
+)
 from substruct.analysis.frf_quantity import as_quantity
 from substruct.analysis.results import Receptance
 from substruct.builder.frf_parts import MODEL_PART, FrfPart, split_frf_case
@@ -27,7 +35,27 @@ from substruct.case.fields import parse_point
 from substruct.case.loader import Case
 from substruct.run.analyses import frf_result
 
-__all__ = ["coupled_frf_result"]
+__all__ = ["coupled_frf_result", "decouple_parts", "ANALYSIS_GRID"]
+
+#: The name of the empty part that carries the analysis grid of an FRF-only assembly (the
+#: grid the FRF parts are compared with, or interpolated onto).
+ANALYSIS_GRID = "analysis.frf.omega"
+
+
+def decouple_parts(parts: list[FrfPart], pairs: list[tuple[str, str]]
+                   ) -> tuple[np.ndarray, np.ndarray, list[str]]:
+    r"""Coupling with a removed part (``decouple: true``, its receptance already negated):
+
+    .. math::  Y_c = Y - Y B^T (B Y B^T)^{+} B Y, \qquad Y = \operatorname{diag}(\dots, -Y_R)
+
+    With the extended interface (every coordinate of ``R`` joined) ``B Y B^T`` has the rank
+    of the true interface only, so the generalized inverse is the method, not the check (the
+    LM-FBS solve of a rank-deficient matrix is not an answer); the compatibility residual is
+    what is reported.  Returns ``(omega, Y_c, labels)``.
+    """
+    w, same = common_grid(parts)
+    Y, labels = stack(same)
+    return w, generalized_inverse_fbs(Y, boolean_rows(labels, pairs)), labels
 
 
 def coupled_frf_result(case: Case, model: Model, progress: Progress | None = None
@@ -45,16 +73,28 @@ def coupled_frf_result(case: Case, model: Model, progress: Progress | None = Non
     if spec is None:
         raise TypeError(f"case {case.name!r} asks for no receptances")
     split = split_frf_case(case)
-    fe = frf_result(split.model_case, model, progress)
-    fe_part = FrfPart(MODEL_PART, fe.omega, list(split.model_points), fe.H)
+    checks: dict[str, float] = {}
+    if split.model_case is None:  # FRF parts only: the analysis grid is the reference
+        w = spec.omegas()
+        first = FrfPart(ANALYSIS_GRID, w, [], np.zeros((len(w), 0, 0), dtype=complex))
+        fe_method = ""
+    else:
+        fe = frf_result(split.model_case, model, progress)
+        first = FrfPart(MODEL_PART, fe.omega, list(split.model_points), fe.H)
+        checks.update({f"{MODEL_PART} {k}": v for k, v in fe.agreement.items()})
+        fe_method = f" ({MODEL_PART}: {fe.method})"
     frf_names = {p.name for p in split.parts}
 
     def stacked(point: str) -> str:
         return point if parse_point(point)[0] in frf_names else f"{MODEL_PART}@{point}"
 
     pairs = [(stacked(a), stacked(b)) for a, b in split.pairs]
+    decoupling = any(p.decouple for p in split.parts)
     try:
-        w, Yc, labels, agreement = couple([fe_part, *split.parts], pairs)
+        if decoupling:
+            w, Yc, labels = decouple_parts([first, *split.parts], pairs)
+        else:
+            w, Yc, labels, agreement = couple([first, *split.parts], pairs)
     except ValueError as err:
         raise case.error(("substructures",), " ".join(str(err).split())) from None
     where = {lab: i for i, lab in enumerate(labels)}
@@ -63,14 +103,15 @@ def coupled_frf_result(case: Case, model: Model, progress: Progress | None = Non
     B = boolean_rows(labels, pairs)
     scale = max(float(np.abs(Yc).max(initial=0.0)), 1e-300)
     residual = float(np.abs(B @ Yc).max(initial=0.0) / scale) if len(pairs) else 0.0
-    checks = {"generalized-inverse": agreement}
-    checks.update({f"{MODEL_PART} {k}": v for k, v in fe.agreement.items()})
-    try:
-        require_agreement("frf (lm-fbs)", "lm-fbs", {"generalized-inverse": agreement},
-                          spec.tolerance)
-    except CheckError as err:
-        raise CheckError(f"{err}; to accept it, raise analysis.frf.tolerance") from None
-    coupled = Receptance(method=f"lm-fbs ({MODEL_PART}: {fe.method})", omega=w,
+    if not decoupling:
+        checks = {"generalized-inverse": agreement, **checks}
+        try:
+            require_agreement("frf (lm-fbs)", "lm-fbs", {"generalized-inverse": agreement},
+                              spec.tolerance)
+        except CheckError as err:
+            raise CheckError(f"{err}; to accept it, raise analysis.frf.tolerance") from None
+    how = "generalized-inverse decoupling" if decoupling else "lm-fbs"
+    coupled = Receptance(method=f"{how}{fe_method}", omega=w,
                          H=Yc[:, outs][:, :, ins], inputs=list(spec.inputs),
                          outputs=list(spec.outputs), agreement=checks,
                          constraint_residual=residual, tolerance=spec.tolerance)

@@ -9,11 +9,12 @@ constraint rows dropped) and the receptances (:mod:`substruct.run.analyses`).
 from __future__ import annotations
 
 from datetime import datetime, timezone
+from typing import Mapping
 
 import scipy.sparse as sp
 
 from substruct.analysis.events import Phase
-from substruct.builder.frf_parts import has_frf_parts, split_frf_case
+from substruct.builder.frf_parts import assemble_frf_case, has_frf_parts
 from substruct.builder.model import Model, assemble_case
 from substruct.case.loader import Case
 from substruct.run.analyses import (
@@ -28,13 +29,16 @@ from substruct.run.analyses import (
 from substruct.run.frf_route import coupled_frf_result
 from substruct.run.transient_run import transient_result
 from substruct.run.result import Result
+from substruct.substructure import Substructure
 
 __all__ = ["Model", "build_model", "run_case", "Progress", "Phase"]
 
 
-def build_model(case: Case, events: Phase | None = None) -> Model:
+def build_model(case: Case, events: Phase | None = None,
+                prebuilt: Mapping[str, Substructure] | None = None) -> Model:
     """Refuse a model too large for the dense analyses it asks for, then assemble it
-    (:func:`substruct.builder.model.assemble_case`).
+    (:func:`substruct.builder.model.assemble_case`, with the ``prebuilt`` reduced parts used as
+    they are: :func:`substruct.builder.parts.reduced_part`).
 
     Raises:
         CaseError: a dense analysis too large; ``analysis.modes.count`` larger than the number
@@ -47,7 +51,8 @@ def build_model(case: Case, events: Phase | None = None) -> Model:
         events("assembly", f"assembling {case.name}: {len(case.substructures)} "
                f"substructure(s) ({names})", min_size(case))
     # FRF substructures are coupled after the model is built (substruct.run.frf_route)
-    model = assemble_case(split_frf_case(case).model_case if has_frf_parts(case) else case)
+    model = assemble_frf_case(case, prebuilt) if has_frf_parts(case) else \
+        assemble_case(case, prebuilt)
     spec = case.analysis.modes
     if spec is not None and spec.count > model.assembly.n_dof:
         raise case.error(("analysis", "modes", "count"), f"more modes than the "
