@@ -4,7 +4,7 @@ springs, point masses, matrices and meshed solids."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Collection, Mapping
 
 import numpy as np
 import scipy.sparse as sp
@@ -88,7 +88,9 @@ def _rod(case: Case, i: int, spec: RodSpec, nodes_at: list[float]) -> Substructu
     return sub
 
 
-def make_substructures(case: Case, positions: dict[str, list[float]]) -> list[Substructure]:
+def make_substructures(case: Case, positions: dict[str, list[float]],
+                       prebuilt: Mapping[str, Substructure] | None = None,
+                       only: Collection[str] | None = None) -> list[Substructure]:
     """The substructures of a case, in case order, as specified (solids unreduced: they are
     tied and reduced by :func:`substruct.builder.solids.tie_and_reduce`).
 
@@ -96,13 +98,22 @@ def make_substructures(case: Case, positions: dict[str, list[float]]) -> list[Su
         case: the validated case.
         positions: for each rod, the places its points use, which finite-element meshes put
             nodes at.
+        prebuilt: substructures already made (and reduced) from this same definition, by name,
+            used as they are; a solid tied by an ``interfaces:`` item is still made unreduced,
+            for its ties (``tie_and_reduce`` puts the prebuilt one in its place).
+        only: make these names only (``None``: all).
 
     Raises:
         CaseError: a substructure that cannot be made (naming its field).
     """
     subs = []
+    tied = {n for item in case.interfaces for n in item.between}
     for i, spec in enumerate(case.substructures):
-        if isinstance(spec, RodSpec):
+        if only is not None and spec.name not in only:
+            continue
+        if prebuilt and spec.name in prebuilt and spec.name not in tied:
+            subs.append(prebuilt[spec.name])
+        elif isinstance(spec, RodSpec):
             subs.append(_rod(case, i, spec, positions.get(spec.name, [])))
         elif isinstance(spec, DiscreteSpec):
             make = fixed_free if spec.type == "fixed-free" else free_free

@@ -13,7 +13,7 @@ naming the field of the case file.
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import Any, Mapping, NamedTuple
 
 from substruct.assembly.stack import (
     Assembly,
@@ -30,13 +30,13 @@ from substruct.builder.checks import (
 from substruct.builder.drawing import Drawing
 from substruct.builder.drawings import layout_drawings
 from substruct.builder.factory import make_substructures
-from substruct.builder.points import point_uses, resolve_point
+from substruct.builder.points import PointUse, point_uses, resolve_point
 from substruct.builder.solids import tie_and_reduce
 from substruct.case.loader import Case, RodSpec, parse_point
 from substruct.case.solids import SolidSpec
-from substruct.substructure import PointError
+from substruct.substructure import PointError, Substructure
 
-__all__ = ["Model", "assemble_case"]
+__all__ = ["Model", "assemble_case", "point_positions"]
 
 
 class Model(NamedTuple):
@@ -56,21 +56,19 @@ class Model(NamedTuple):
     points: dict[str, PointRef]
 
 
-
-
-
-def assemble_case(case: Case) -> Model:
-    """Make the substructures, resolve the points and assemble ``A u = b + R F``.
+def point_positions(case: Case) -> tuple[list[PointUse], dict[str, tuple[str, Any]],
+                                          dict[str, list[Any]]]:
+    """Every point the case uses, resolved: ``(uses, {text: (substructure, where)},
+    positions)``, ``positions[sub]`` the places used on each rod (distinct, in order of use:
+    finite-element meshes put nodes there) and each solid.
 
     Raises:
-        CaseError: a model too large for the dense eigenproblem (refused before building),
-            a point off its substructure or on an unknown one, a reduction that cannot be
-            made, constraints whose terms cancel, nonhomogeneous constraints that cannot hold.
+        CaseError: a point on an unknown substructure or off its substructure.
     """
     specs = {s.name: s for s in case.substructures}
     uses = point_uses(case)
     resolved: dict[str, tuple[str, Any]] = {}
-    positions: dict[str, list[float]] = {}
+    positions: dict[str, list[Any]] = {}
     for use in uses:
         sub, where = parse_point(use.text)
         if sub not in specs:
@@ -85,8 +83,26 @@ def assemble_case(case: Case) -> Model:
             positions.setdefault(sub, [])
             if all(abs(value - x) > 1e-12 * spec.length for x in positions[sub]):
                 positions[sub].append(value)
-    subs = make_substructures(case, positions)
-    subs, interface_ties = tie_and_reduce(case, subs, positions)
+    return uses, resolved, positions
+
+
+def assemble_case(case: Case, prebuilt: Mapping[str, Substructure] | None = None) -> Model:
+    """Make the substructures, resolve the points and assemble ``A u = b + R F``.
+
+    Args:
+        case: the validated case.
+        prebuilt: substructures already made and reduced from this same definition
+            (:func:`substruct.builder.parts.reduced_part`), by name: used instead of making
+            and reducing them again (a study shares the parts its parameters do not change).
+
+    Raises:
+        CaseError: a model too large for the dense eigenproblem (refused before building),
+            a point off its substructure or on an unknown one, a reduction that cannot be
+            made, constraints whose terms cancel, nonhomogeneous constraints that cannot hold.
+    """
+    uses, resolved, positions = point_positions(case)
+    subs = make_substructures(case, positions, prebuilt)
+    subs, interface_ties = tie_and_reduce(case, subs, positions, prebuilt)
     by_name = {s.name: s for s in subs}
     points: dict[str, PointRef] = {}
     for use in uses:

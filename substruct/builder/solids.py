@@ -22,7 +22,7 @@ Nodes, boxes and components are selected as everywhere else
 from __future__ import annotations
 
 import math
-from typing import Any, Sequence
+from typing import Any, Collection, Mapping, Sequence
 
 import numpy as np
 import scipy.sparse as sp
@@ -312,15 +312,21 @@ def _modal(case: Any, i: int, r: SolidReduce, sub: Substructure) -> Substructure
                          r.modes) from None
 
 
-def tie_and_reduce(case: Any, subs: list[Substructure], positions: dict[str, list[Any]]
+def tie_and_reduce(case: Any, subs: list[Substructure], positions: dict[str, list[Any]],
+                   prebuilt: Mapping[str, Substructure] | None = None,
+                   only: Collection[str] | None = None
                    ) -> tuple[list[Substructure], list[Connection]]:
     """Tie the solids of ``case.interfaces`` and reduce the solids that ask for it.
 
     Args:
         case: the case.
-        subs: the substructures, in case order (solids unreduced).
+        subs: the substructures, in case order (solids unreduced); those left out of ``subs``
+            are left out of the result.
         positions: the points (``where``) used on each solid by connections, constraints and
             the FRF.
+        prebuilt: reduced substructures made before from the same definition: put in place
+            instead of reducing again.
+        only: reduce these names only (``None``: every solid that asks for it).
 
     Returns:
         The substructures with the reduced solids in place, and the ties (one
@@ -345,8 +351,13 @@ def tie_and_reduce(case: Any, subs: list[Substructure], positions: dict[str, lis
             used[c.b.substructure].append(c.b.where)
     out = []
     for i, spec in enumerate(case.substructures):
+        if spec.name not in by_name:
+            continue
         sub = by_name[spec.name]
-        if isinstance(spec, SolidSpec) and spec.reduce is not None:
+        if prebuilt and spec.name in prebuilt:
+            sub = prebuilt[spec.name]
+        elif isinstance(spec, SolidSpec) and spec.reduce is not None and \
+                (only is None or spec.name in only):
             sub = _modal(case, i, spec.reduce, sub) if spec.reduce.method == "modal" else \
                 _craig_bampton(case, i, spec, spec.reduce, sub, used[spec.name])
         out.append(sub)

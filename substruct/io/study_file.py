@@ -3,7 +3,9 @@
 Layout::
 
     /                  attrs: format (substruct-study), format_version, substruct_version,
-                              case_name, kind (grid | random), backend, created, case_yaml
+                              case_name, kind (grid | random), backend, created, case_yaml,
+                              shared (the reduced parts made once for every sample),
+                              shared_seconds (the time it took)
     /parameters/       names (strings), table (samples x parameters)
     /samples/<name>    collected arrays, samples x k: frequency, damping_ratio, mac (per mode),
                        frf_peak, frf_peak_omega (per peak; attr ``peaks`` names them);
@@ -46,8 +48,10 @@ def save_study(result: StudyResult, path: str | os.PathLike) -> Path:
                      "substruct_version": __version__, "case_name": result.case_name,
                      "kind": result.kind, "backend": result.backend,
                      "created": dt.datetime.now(dt.timezone.utc).isoformat(timespec="seconds"),
-                     "case_yaml": result.case_yaml}
+                     "case_yaml": result.case_yaml, "shared_seconds": result.shared_seconds}
             f.attrs.update(attrs)
+            f.attrs["shared"] = np.array(result.shared, dtype=object).astype(_STR) \
+                if result.shared else np.array([], dtype=_STR)
             g = f.create_group("parameters")
             g.create_dataset("names", data=np.array(result.parameters, dtype=object), dtype=_STR)
             g.create_dataset("table", data=result.table)
@@ -90,4 +94,7 @@ def load_study(path: str | os.PathLike) -> StudyResult:
                            errors=_strings(s["error"]), seconds=np.asarray(s["seconds"][()]),
                            reference={k: np.asarray(v[()]) for k, v in f["reference"].items()},
                            backend=str(f.attrs["backend"]),
-                           case_yaml=str(f.attrs["case_yaml"]), peaks=peaks)
+                           case_yaml=str(f.attrs["case_yaml"]), peaks=peaks,
+                           shared=[p.decode() if isinstance(p, bytes) else str(p)
+                                   for p in f.attrs.get("shared", [])],
+                           shared_seconds=float(f.attrs.get("shared_seconds", 0.0)))

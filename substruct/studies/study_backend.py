@@ -8,17 +8,28 @@ of the tasks, so the study's table does not depend on the backend.  On Dask each
 submitted with ``retries``: a task whose worker dies is run again on another worker (the
 scheduler does that by itself for a lost worker, up to ``distributed.scheduler.allowed-failures``
 times); a task that still cannot finish becomes a failed sample with the message Dask gave.
+
+A :class:`Session` keeps one client for a whole study: the shared reduced parts are made first
+(one task each), scattered to every worker once (``client.scatter(..., broadcast=True)``) and
+handed to every sample task.
 """
 
 from __future__ import annotations
 
 import logging
 from dataclasses import dataclass
-from typing import Any, Callable, Sequence
+from typing import Any, Callable, Mapping, Sequence
 
-from substruct.studies.study_task import SampleRecord, SampleTask, run_sample
+from substruct.studies.study_task import (
+    PartJob,
+    SampleRecord,
+    SampleTask,
+    make_part,
+    run_sample,
+)
+from substruct.substructure import Substructure
 
-__all__ = ["Backend", "BackendError", "execute", "RETRIES"]
+__all__ = ["Backend", "BackendError", "Session", "execute", "RETRIES"]
 
 #: How many times Dask runs a task again after it failed (a killed worker included).
 RETRIES = 3
@@ -49,10 +60,11 @@ class Backend:
         return "in-process"
 
 
-def _serial(tasks: Sequence[SampleTask], tick: Tick | None) -> list[SampleRecord]:
+def _serial(tasks: Sequence[SampleTask], tick: Tick | None,
+            shared: Mapping[str, Substructure] | None = None) -> list[SampleRecord]:
     out = []
     for k, task in enumerate(tasks):
-        out.append(run_sample(task))
+        out.append(run_sample(task, shared))
         if tick is not None:
             tick(k + 1, len(tasks))
     return out
@@ -78,32 +90,79 @@ def _client(backend: Backend) -> tuple[Any, Any]:
     return Client(cluster), cluster
 
 
-def _on_dask(tasks: Sequence[SampleTask], backend: Backend,
-             tick: Tick | None) -> list[SampleRecord]:
+def _on_dask(client: Any, tasks: Sequence[SampleTask], tick: Tick | None,
+             shared: Any = None) -> list[SampleRecord]:
     from distributed import as_completed
 
-    client, cluster = _client(backend)
-    try:
-        futures = client.map(run_sample, list(tasks), pure=False, retries=RETRIES)
-        where = {f.key: k for k, f in enumerate(futures)}
-        out: list[SampleRecord | None] = [None] * len(tasks)
-        done = 0
-        for future in as_completed(futures):
-            k = where[future.key]
-            try:
-                out[k] = future.result()
-            except Exception as err:  # the task itself never raises: a lost worker did
-                text = " ".join(str(err).split())
-                out[k] = SampleRecord(index=tasks[k].index,
-                                      error=f"{type(err).__name__}: {text}")
-            done += 1
-            if tick is not None:
-                tick(done, len(tasks))
-        return [r for r in out if r is not None]
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
+    args: list[Any] = [list(tasks)]
+    if shared is not None:
+        args.append([shared] * len(tasks))
+    futures = client.map(run_sample, *args, pure=False, retries=RETRIES)
+    where = {f.key: k for k, f in enumerate(futures)}
+    out: list[SampleRecord | None] = [None] * len(tasks)
+    done = 0
+    for future in as_completed(futures):
+        k = where[future.key]
+        try:
+            out[k] = future.result()
+        except Exception as err:  # the task itself never raises: a lost worker did
+            text = " ".join(str(err).split())
+            out[k] = SampleRecord(index=tasks[k].index, error=f"{type(err).__name__}: {text}")
+        done += 1
+        if tick is not None:
+            tick(done, len(tasks))
+    return [r for r in out if r is not None]
+
+
+class Session:
+    """A backend in use (a context manager): the Dask client, if any, is opened once for the
+    shared reductions and the samples, and closed (with its LocalCluster) at the end.
+
+    Attributes:
+        backend: where the tasks run.
+        client: the ``distributed.Client`` (``None`` in-process).
+    """
+
+    def __init__(self, backend: Backend):
+        self.backend = backend
+        self.client: Any = None
+        self.cluster: Any = None
+
+    def __enter__(self) -> "Session":
+        if self.backend.workers is not None or self.backend.scheduler is not None:
+            self.client, self.cluster = _client(self.backend)
+        return self
+
+    def __exit__(self, *exc: Any) -> None:
+        if self.client is not None:
+            self.client.close()
+        if self.cluster is not None:
+            self.cluster.close()
+
+    def map(self, function: Callable[..., Any], *args: Sequence[Any]) -> list[Any]:
+        """``[function(*a) for a in zip(*args)]``, each call a task on Dask (in parallel,
+        results in order); an exception of a call is raised here."""
+        if self.client is None:
+            return [function(*a) for a in zip(*args)]
+        futures = self.client.map(function, *[list(a) for a in args], pure=False,
+                                  retries=RETRIES)
+        return list(self.client.gather(futures))
+
+    def parts(self, jobs: Sequence[PartJob]) -> dict[str, Substructure]:
+        """The shared reduced parts, each made once (one task each on Dask)."""
+        made = self.map(make_part, jobs)
+        return {job.name: sub for job, sub in zip(jobs, made)}
+
+    def samples(self, tasks: Sequence[SampleTask], tick: Tick | None = None,
+                shared: Mapping[str, Substructure] | None = None) -> list[SampleRecord]:
+        """Every sample (with the ``shared`` parts: scattered to every worker once, on Dask);
+        the records in the order of ``tasks``."""
+        if self.client is None:
+            return _serial(tasks, tick, shared)
+        future = None
+        if shared:
+            future = self.client.scatter([dict(shared)], broadcast=True, hash=False)[0]
+        return _on_dask(self.client, tasks, tick, future)
 
 
 def execute(tasks: Sequence[SampleTask], backend: Backend,
@@ -113,6 +172,5 @@ def execute(tasks: Sequence[SampleTask], backend: Backend,
     Raises:
         BackendError: Dask missing, or the scheduler not reachable.
     """
-    if backend.workers is None and backend.scheduler is None:
-        return _serial(tasks, tick)
-    return _on_dask(tasks, backend, tick)
+    with Session(backend) as session:
+        return session.samples(tasks, tick)

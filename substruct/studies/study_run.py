@@ -10,16 +10,19 @@ message in ``errors``; the others are unaffected.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import time
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from substruct.case.loader import Case
 from substruct.case.study import StudySpec
-from substruct.run.runner import run_case
-from substruct.studies.study_backend import Backend, Tick, execute
+from substruct.run.runner import build_model, run_case
+from substruct.studies.study_backend import Backend, Session, Tick
 from substruct.studies.study_plan import overrides_of, samples
+from substruct.studies.study_shared import shared_parts
 from substruct.studies.study_task import (
+    PartJob,
     SampleRecord,
     SampleTask,
     collect,
@@ -45,6 +48,8 @@ class StudyResult:
         backend: where it ran.
         case_yaml: the case text.
         peaks: ``"output<-input"`` names of the FRF peaks.
+        shared: the reduced parts made once and shared by every sample.
+        shared_seconds: the time it took to make them.
     """
 
     case_name: str
@@ -58,6 +63,8 @@ class StudyResult:
     backend: str = "in-process"
     case_yaml: str = ""
     peaks: list[str] = field(default_factory=list)
+    shared: list[str] = field(default_factory=list)
+    shared_seconds: float = 0.0
 
     @property
     def failed(self) -> list[int]:
@@ -101,30 +108,42 @@ def gather(records: list[SampleRecord], spec: StudySpec) -> tuple[dict[str, np.n
     return values, errors, np.array([r.seconds for r in records])
 
 
-def run_study(case: Case, backend: Backend = Backend(), tick: Tick | None = None
-              ) -> StudyResult:
+def run_study(case: Case, backend: Backend = Backend(), tick: Tick | None = None,
+              share: bool = True) -> StudyResult:
     """Run the study of ``case`` on ``backend`` (default: in-process, serial).
 
-    The case as written is run first, here, when the MAC is collected: its mode shapes are the
+    The reduced parts no study parameter changes (:func:`substruct.studies.study_shared.
+    shared_parts`) are made once (on Dask one task each, then scattered to every worker) and
+    used by every sample, unless ``share`` is false; the table is the same either way.  The
+    case as written is run first, here, when the MAC is collected: its mode shapes are the
     reference set, sent with every task.
 
     Raises:
-        CaseError: no study block, or the case as written cannot be run for the reference.
+        CaseError: no study block, or the case as written cannot be run for the reference,
+            or a shared part cannot be made.
         BackendError: the backend cannot be used.
     """
     spec = study_of(case)
-    reference: dict[str, np.ndarray] = {}
-    shapes = None
-    if spec.collect.mac:
-        base = run_case(case)
-        shapes = base.modes.shapes if base.modes is not None else None
-        reference = collect(base, spec.collect, shapes)
-    names, table, tasks = study_tasks(case, shapes)
-    records = execute(tasks, backend, tick)
+    names, table, tasks = study_tasks(case)
+    names_shared = shared_parts(case, names) if share else []
+    jobs = [PartJob(case.text, case.source, str(case.base_dir), n) for n in names_shared]
+    with Session(backend) as session:
+        start = time.perf_counter()
+        shared = session.parts(jobs) if jobs else {}
+        made = time.perf_counter() - start
+        reference: dict[str, np.ndarray] = {}
+        if spec.collect.mac:
+            model = build_model(case, prebuilt=shared) if shared else None
+            base = run_case(case, model=model)
+            shapes = base.modes.shapes if base.modes is not None else None
+            reference = collect(base, spec.collect, shapes)
+            tasks = [replace(t, reference=shapes) for t in tasks]
+        records = session.samples(tasks, tick, shared)
     values, errors, seconds = gather(records, spec)
     peaks = [f"{p.output}<-{p.input or (case.analysis.frf.inputs[0] if case.analysis.frf else '')}"
              for p in spec.collect.frf_peaks]
     return StudyResult(case_name=case.name, kind="grid" if spec.grid is not None else "random",
                        parameters=names, table=table, values=values, errors=errors,
                        seconds=seconds, reference=reference, backend=backend.describe(),
-                       case_yaml=case.text, peaks=peaks)
+                       case_yaml=case.text, peaks=peaks, shared=names_shared,
+                       shared_seconds=made)

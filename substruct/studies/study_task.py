@@ -23,13 +23,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from typing import Mapping
+
+from substruct.builder.parts import reduced_part
 from substruct.case.loader import parse_case
 from substruct.case.study import Collect
 from substruct.run.result import Result
-from substruct.run.runner import run_case
+from substruct.run.runner import build_model, run_case
+from substruct.substructure import Substructure
 
-__all__ = ["SampleTask", "SampleRecord", "run_sample", "collect", "mac_diagonal",
-           "record_fields"]
+__all__ = ["SampleTask", "SampleRecord", "PartJob", "make_part", "run_sample", "collect",
+           "mac_diagonal", "record_fields"]
 
 
 @dataclass(frozen=True)
@@ -52,6 +56,23 @@ class SampleTask:
     overrides: tuple[str, ...]
     collect: Collect
     reference: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class PartJob:
+    """One reduced part shared by the samples: the case as text (without sample overrides)
+    and the part's name."""
+
+    case_text: str
+    source: str
+    base_dir: str
+    name: str
+
+
+def make_part(job: PartJob) -> Substructure:
+    """The reduced part ``job.name`` of the case (:func:`substruct.builder.parts.reduced_part`)."""
+    case = parse_case(job.case_text, job.source, job.base_dir)
+    return reduced_part(case, job.name)
 
 
 @dataclass
@@ -127,8 +148,12 @@ def collect(result: Result, spec: Collect, reference: np.ndarray | None) -> dict
     return out
 
 
-def run_sample(task: SampleTask) -> SampleRecord:
+def run_sample(task: SampleTask, shared: Mapping[str, Substructure] | None = None
+               ) -> SampleRecord:
     """Parse the case with the sample's overrides, run it, keep what ``task.collect`` asks for.
+
+    ``shared``: reduced parts the sample's parameters do not change, made once for the study
+    (:mod:`substruct.studies.study_shared`), used instead of reducing them again.
 
     Never raises for a failing sample (``Exception``): its record holds the error, one line.
     """
@@ -136,7 +161,8 @@ def run_sample(task: SampleTask) -> SampleRecord:
     record = SampleRecord(index=task.index)
     try:
         case = parse_case(task.case_text, task.source, task.base_dir, list(task.overrides))
-        record.values = collect(run_case(case), task.collect, task.reference)
+        model = build_model(case, prebuilt=shared) if shared else None
+        record.values = collect(run_case(case, model=model), task.collect, task.reference)
     except Exception as err:  # a failed sample is a result of the study, not its end
         text = " ".join(str(err).split())
         name = type(err).__name__
