@@ -281,10 +281,24 @@ def test_out_must_be_a_writable_directory(tmp_path, capsys):
 
 
 def test_internal_error_is_exit_1_with_traceback(tmp_path, capsys, monkeypatch):
-    import substruct.io.convergence_report as report
+    import substruct.studies.convergence as convergence
 
     def broken(*args, **kwargs):
         raise RuntimeError("a bug")
-    monkeypatch.setattr(report, "run_convergence", broken)
+    monkeypatch.setattr(convergence, "convergence_study", broken)
     code, _, err = run(capsys, "converge", ROD, "--out", tmp_path, "--quiet")
     assert code == 1 and "Traceback" in err and "RuntimeError: a bug" in err
+
+
+def test_second_writer_into_one_out_is_refused(tmp_path, capsys):
+    from substruct.io.file_set import OutputDir
+
+    args = ["converge", ROD, "--levels", TINY, "--variants", "constrained", "--out", tmp_path,
+            "--quiet"]
+    with OutputDir(tmp_path):  # another writer holds the directory
+        code, out, err = run(capsys, *args)
+    assert (code, out, err) == (2, "", f"substruct: error: another run is writing {tmp_path}\n")
+    assert list(tmp_path.iterdir()) == []
+    assert run(capsys, *args)[0] == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["tapered_rod_convergence.h5",
+                                                         "tapered_rod_convergence.png"]

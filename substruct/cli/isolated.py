@@ -19,6 +19,7 @@ then calls the command in-process loses only the prompt reaction to signals.
 
 from __future__ import annotations
 
+import io
 import os
 import pickle
 import select
@@ -78,16 +79,32 @@ def _answer(fn: Callable[[], Any]) -> bytes:
             return pickle.dumps(("error", kind, plain, text))
 
 
+class _Relay(io.TextIOWrapper):
+    """The child's end of a relayed stream; a terminal if the parent's stream is one (a
+    progress bar draws the same in the child as it would in the parent)."""
+
+    terminal = False
+
+    def isatty(self) -> bool:
+        return self.terminal
+
+
+def _relay(fd: int, terminal: bool) -> _Relay:
+    stream = _Relay(open(fd, "wb", buffering=0), encoding="utf-8", errors="backslashreplace",
+                    line_buffering=True, write_through=True)
+    stream.terminal = terminal
+    return stream
+
+
 def _child(fn: Callable[[], Any], parent: int, answer: int, relays: dict) -> None:
     code = 0
     try:
         signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent decides what Ctrl-C does
         signal.signal(signal.SIGTERM, signal.SIG_DFL)
         _die_with_parent(parent)
-        for name, (r, w) in relays.items():
+        for name, (r, w, terminal) in relays.items():
             os.close(r)
-            setattr(sys, name, open(w, "w", buffering=1, encoding="utf-8",
-                                    errors="backslashreplace"))
+            setattr(sys, name, _relay(w, terminal))
         data = _answer(fn)
         view = memoryview(data)
         while view:
@@ -106,7 +123,7 @@ def _child(fn: Callable[[], Any], parent: int, answer: int, relays: dict) -> Non
 def _collect(pid: int, answer: int, relays: dict) -> bytes:
     """Read the child's answer and relay its output until it closes everything."""
     chunks: list[bytes] = []
-    streams = {r: getattr(sys, name) for name, (r, _) in relays.items()}
+    streams = {r: getattr(sys, name) for name, (r, _, _) in relays.items()}
     open_fds = [answer, *streams]
     while open_fds:
         ready, _, _ = select.select(open_fds, [], [])
@@ -154,7 +171,7 @@ def call_isolated(fn: Callable[[], T]) -> T:
         stream = getattr(sys, name)
         stream.flush()
         if not _has_fd(stream):
-            relays[name] = os.pipe()
+            relays[name] = (*os.pipe(), bool(getattr(stream, "isatty", lambda: False)()))
     answer_r, answer_w = os.pipe()
     parent = os.getpid()
     pid = os.fork()
@@ -162,7 +179,7 @@ def call_isolated(fn: Callable[[], T]) -> T:
         os.close(answer_r)
         _child(fn, parent, answer_w, relays)
     os.close(answer_w)
-    for _, w in relays.values():
+    for _, w, _ in relays.values():
         os.close(w)
     waited = False
     try:
@@ -174,7 +191,7 @@ def call_isolated(fn: Callable[[], T]) -> T:
             os.kill(pid, signal.SIGKILL)
             os.waitpid(pid, 0)
         os.close(answer_r)
-        for r, _ in relays.values():
+        for r, _, _ in relays.values():
             os.close(r)
     if not data:
         raise _failure(status)
