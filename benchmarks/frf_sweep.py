@@ -1,40 +1,69 @@
-"""FRF sweep benchmark: every receptance of two coupled chains, three routes, one process.
+"""FRF sweep benchmark: every receptance of two coupled chains, by substruct and by LM-FBS.
 
     OMP_NUM_THREADS=1 python benchmarks/frf_sweep.py [--frequencies 1000] [--repeat 3] [--quick]
+        [--no-command]
 
 The model: two fixed-free chains of 200 masses (``m = 1``, ``k = 1e4``, Rayleigh damping
 ``C = 1e-4 K + 0.5 M``), tied tip to tip (one constraint row): 400 coordinates.  All
 400 x 400 receptances at ``--frequencies`` frequencies from 1 to 150 rad/s (the first 60 or so
 coupled resonances), by
 
+(p) pyFBS LM-FBS, as pyFBS's coupling example does it: the uncoupled receptances of the two
+    chains stacked over the frequencies, ``Y`` (``F x 400 x 400``, block diagonal), the signed
+    Boolean ``B`` (dense), and ``Y_c = Y - Y B^T (B Y B^T)^+ B Y`` evaluated left to right on
+    the stacks (NumPy ``@``), the interface inverse by ``pyfbs.tpinv`` when pyFBS is importable
+    (pyFBS 1.0.7 ships no coupling function: its LM-FBS is this expression in its examples),
+    else ``numpy.linalg.pinv`` (the row then says "pyFBS-style").  The stacks are taken 100
+    frequencies at a time (the same products; it bounds the memory).  Two times: the whole
+    route (the uncoupled receptances by inversion of the stacked impedances included) and the
+    coupling alone (the receptances given, as a pyFBS user's measured FRFs are);
+(l) lean LM-FBS in NumPy: the same formula a frequency at a time, with the dense inverses of
+    the two 200 x 200 impedances and ``Y B^T`` formed first (no 400 x 400 x 400 product);
 (a) substruct: ``analysis.api.receptance_sweep`` (the production path: the null-space sweep on
-    the master-slave basis, one factorization of ``T^T Z(w) T`` a frequency, every input in
-    one solve; its checks at three frequencies included);
-(b) direct LU: ``scipy.sparse.linalg.splu`` (default options) of the same reduced impedance
-    ``T^T Z(w) T`` at each frequency, solved for all inputs, ``H = T X`` gathered densely;
-(c) LM-FBS, as pyFBS computes it: at each frequency the uncoupled receptances
-    ``Y = blockdiag(Z_1^-1, Z_2^-1)`` by dense inversion, then
-    ``Y_c = Y - Y B^T (B Y B^T)^+ B Y`` with the signed Boolean ``B`` (dense).
+    the master-slave basis, the band LU of ``T^T Z(w) T`` for a batch of frequencies at a time,
+    every input in one solve; its checks at three frequencies included);
+(b) ``scipy.sparse.linalg.splu`` of the same reduced impedance at each frequency, solved for
+    all inputs, ``H = T X``;
+(r) ``substruct run`` of the same model as a case file (two ``matrices`` substructures from
+    Matrix Market files, the tie, ``frf`` with the 400 inputs and outputs) in a subprocess,
+    ``--no-pictures``: start-up, case checks, the sweep, the HDF5 file of 2.6 GB;
+(w) the floor: writing the 400 x 400 complex outputs of every frequency into a new array (the
+    page faults of 2.6 GB of output at 1,000 frequencies, paid by every route).
 
-Each route writes all its receptances into its own array (the page faults of 2.6 GB of output
-at 1,000 frequencies are part of every route).  Time: median of ``--repeat`` runs (one run for
-a route that takes over 60 s), wall clock and CPU of the process.  The answers of (a) and (b)
-are compared with (c): ``max |H - H_c| / max |H_c|``.
+Time: median of ``--repeat`` runs (one run for a route that takes over 60 s), wall clock and
+CPU time (of the process, or of the child for (r)).  The answers are compared with (l):
+``max |H - H_l| / max |H_l|``.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import platform
+import resource
 import statistics
+import subprocess
+import sys
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 import scipy
+import scipy.io
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+try:  # optional: pip install pyFBS (not a dependency of substruct)
+    import pyfbs
+    from importlib.metadata import version
+    PYFBS = version("pyFBS")
+except ImportError:  # pragma: no cover - depends on the environment
+    pyfbs = None
+    PYFBS = ""
+
 N_CHAIN, K_SPRING, MASS = 200, 1e4, 1.0
+STACK = 100  # frequencies a stack of route (p)
 
 
 def chains() -> tuple[sp.csr_array, sp.csr_array, sp.csr_array, sp.csr_array]:
@@ -72,7 +101,7 @@ def route_direct_lu(K, M, C, B, w):
     return H, None
 
 
-def route_lmfbs(K, M, C, B, w):
+def route_lean_lmfbs(K, M, C, B, w):
     n = N_CHAIN
     Kd, Md, Cd, Bd = K.toarray(), M.toarray(), C.toarray(), B.toarray()
     H = np.empty((len(w), 2 * n, 2 * n), dtype=complex)
@@ -86,9 +115,78 @@ def route_lmfbs(K, M, C, B, w):
     return H, None
 
 
+def route_pyfbs(K, M, C, B, w):
+    """Route (p); returns ``H`` and the CPU seconds of the coupling step alone."""
+    n = N_CHAIN
+    Kd, Md, Cd = K.toarray(), M.toarray(), C.toarray()
+    Bu = Bf = B.toarray()
+    H = np.empty((len(w), 2 * n, 2 * n), dtype=complex)
+    coupling = 0.0
+    for s in range(0, len(w), STACK):
+        ws = w[s:s + STACK, None, None]
+        Z = Kd[None] - ws**2 * Md[None] + 1j * ws * Cd[None]
+        Y_A = np.linalg.inv(Z[:, :n, :n])  # the uncoupled receptances (a user's input)
+        Y_B = np.linalg.inv(Z[:, n:, n:])
+        del Z
+        c0 = time.process_time()
+        Y = np.zeros((len(ws), 2 * n, 2 * n), dtype=complex)
+        Y[:, :n, :n], Y[:, n:, n:] = Y_A, Y_B
+        Y_int = Bu @ Y @ Bf.T
+        inv = pyfbs.tpinv(Y_int, trunc=0) if pyfbs is not None else np.linalg.pinv(Y_int)
+        H[s:s + len(ws)] = Y - Y @ Bf.T @ inv @ Bu @ Y
+        coupling += time.process_time() - c0
+        del Y, Y_A, Y_B
+    return H, coupling
+
+
+def route_floor(K, M, C, B, w):
+    block = np.ones((K.shape[0], K.shape[0]), dtype=complex)
+    H = np.empty((len(w), K.shape[0], K.shape[0]), dtype=complex)
+    for k in range(len(w)):
+        H[k] = block
+    return H, None
+
+
+def case_text(n: int, w: np.ndarray, files: dict[str, str]) -> str:
+    points = ", ".join(f"{s}@q{i}" for s in "AB" for i in range(1, n + 1))
+    subs = "".join(
+        f"  - name: {s}\n    type: matrices\n    K: {{file: {files['K']}}}\n"
+        f"    M: {{file: {files['M']}}}\n    C: {{file: {files['C']}}}\n" for s in "AB")
+    return (f"name: two_chains\nunits: \"N, m, kg, s\"\nsubstructures:\n{subs}"
+            f"constraints:\n  - name: tie\n    terms: {{A@q{n}: 1, B@q{n}: -1}}\n"
+            f"analysis:\n  frf:\n    omega: {{start: {w[0]}, stop: {w[-1]}, num: {len(w)}}}\n"
+            f"    inputs: [{points}]\n    outputs: [{points}]\n"
+            f"output: {{pictures: false}}\n")
+
+
+def route_command(K, M, C, B, w, work: Path):
+    """``substruct run`` in a subprocess: (wall, child CPU, child peak RSS bytes)."""
+    n = N_CHAIN
+    files = {}
+    for name, X in (("K", K), ("M", M), ("C", C)):
+        path = work / f"chain_{name}.mtx"
+        scipy.io.mmwrite(path, sp.coo_matrix(X[:n, :n]), symmetry="symmetric")
+        files[name] = path.name
+    case = work / "two_chains.yaml"
+    case.write_text(case_text(n, w, files))
+    cmd = [sys.executable, "-m", "substruct.cli", "run", str(case), "--out", str(work / "out"),
+           "--force", "--quiet", "--no-pictures"]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    t0 = time.perf_counter()
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    out, err = proc.communicate()
+    wall = time.perf_counter() - t0
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if proc.returncode != 0:
+        raise RuntimeError(f"substruct run failed ({proc.returncode}): {err.decode()[-2000:]}")
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    size = sum(f.stat().st_size for f in (work / "out").glob("*.h5"))
+    return wall, cpu, after.ru_maxrss * 1024.0, size
+
+
 def timed(route, args, repeat: int):
     times, cpu, out = [], [], None
-    for i in range(repeat):
+    for _ in range(repeat):
         out = None  # free the previous answer before the next run
         t0, c0 = time.perf_counter(), time.process_time()
         out = route(*args)
@@ -99,40 +197,65 @@ def timed(route, args, repeat: int):
     return statistics.median(times), statistics.median(cpu), len(times), out
 
 
+def difference(H, H_ref, scale: float) -> float:
+    return max(float(np.abs(Hk - Rk).max()) for Hk, Rk in zip(H, H_ref)) / scale
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--frequencies", type=int, default=1000)
     parser.add_argument("--repeat", type=int, default=3)
-    parser.add_argument("--quick", action="store_true", help="200 frequencies (about 1 min)")
+    parser.add_argument("--quick", action="store_true", help="200 frequencies")
+    parser.add_argument("--no-command", action="store_true", help="leave out (r)")
     opts = parser.parse_args()
     nw = 200 if opts.quick else opts.frequencies
     K, M, C, B = chains()
     w = np.linspace(1.0, 150.0, nw)
     args = (K, M, C, B, w)
     print(f"# {platform.processor() or platform.machine()}, Python {platform.python_version()},"
-          f" NumPy {np.__version__}, SciPy {scipy.__version__}")
+          f" NumPy {np.__version__}, SciPy {scipy.__version__}, "
+          f"pyFBS {PYFBS or 'not importable'}")
     print(f"# two tied chains, {K.shape[0]} coordinates, {nw} frequencies x "
           f"{K.shape[0]} x {K.shape[0]} receptances")
-    t_c, cpu_c, runs_c, (H_c, _) = timed(route_lmfbs, args, opts.repeat)
-    rows = [("c LM-FBS (dense inverses)", t_c, cpu_c, runs_c, 0.0)]
-    scale = max(float(np.abs(Hk).max()) for Hk in H_c)
+    t_l, cpu_l, runs_l, (H_l, _) = timed(route_lean_lmfbs, args, opts.repeat)
+    scale = max(float(np.abs(Hk).max()) for Hk in H_l)
+    rows = [("l LM-FBS lean (NumPy)", t_l, cpu_l, runs_l, 0.0)]
+    label_p = f"p pyFBS {PYFBS} LM-FBS" if PYFBS else "p pyFBS-style LM-FBS (no pyFBS)"
+    t, cpu, runs, (H, coupling) = timed(route_pyfbs, args, 1)
+    rows.append((label_p, t, cpu, runs, difference(H, H_l, scale)))
+    rows.append(("p  its coupling step alone", float("nan"), coupling, runs,
+                 rows[-1][4]))
+    del H
     notes = ""
     for name, route in (("a substruct receptance_sweep", route_substruct),
-                        ("b direct LU per frequency", route_direct_lu)):
+                        ("b splu per frequency", route_direct_lu),
+                        ("w floor: write the outputs", route_floor)):
         t, cpu, runs, (H, res) = timed(route, args, opts.repeat)
-        diff = max(float(np.abs(Hk - Hc).max()) for Hk, Hc in zip(H, H_c)) / scale
+        diff = difference(H, H_l, scale) if route is not route_floor else float("nan")
         rows.append((name, t, cpu, runs, diff))
         if res is not None:
             notes = f"# (a) method {res.method}, checks {res.agreement}"
         del H
-    print(f"{'route':32s} {'time (s)':>9s} {'CPU (s)':>9s} {'runs':>5s} "
-          f"{'|H - H_c| / |H_c|':>18s} {'c / route':>10s}")
+    del H_l
+    if not opts.no_command:
+        with tempfile.TemporaryDirectory() as tmp:
+            runs = [route_command(K, M, C, B, w, Path(tmp)) for _ in range(opts.repeat)]
+        t, cpu = statistics.median(r[0] for r in runs), statistics.median(r[1] for r in runs)
+        rows.append(("r substruct run (command)", t, cpu, len(runs), float("nan")))
+        notes += (f"\n# (r) peak RSS {max(r[2] for r in runs) / 1e9:.2f} GB, result file "
+                  f"{runs[0][3] / 1e9:.2f} GB")
+    cpu_p, cpu_pc = rows[1][2], rows[2][2]
+    print(f"{'route':34s} {'wall (s)':>9s} {'CPU (s)':>9s} {'runs':>5s} "
+          f"{'|H - H_l|/|H_l|':>16s} {'p/route CPU':>12s} {'p-coupling/route':>17s}")
     for name, t, cpu, runs, diff in rows:
-        print(f"{name:32s} {t:9.2f} {cpu:9.2f} {runs:5d} {diff:18.1e} {t_c / t:10.1f}")
+        print(f"{name:34s} {t:9.2f} {cpu:9.2f} {runs:5d} {diff:16.1e} {cpu_p / cpu:12.1f} "
+              f"{cpu_pc / cpu:17.1f}")
     print(notes)
-    a, b = rows[1][1], rows[2][1]
-    print(f"# ratios: LM-FBS / substruct = {t_c / a:.1f}x, direct LU / substruct = "
-          f"{b / a:.2f}x")
+    a = next(r for r in rows if r[0].startswith("a "))
+    print(f"# CPU ratios: pyFBS route / substruct = {cpu_p / a[2]:.1f}x, pyFBS coupling step "
+          f"alone / substruct = {cpu_pc / a[2]:.1f}x, lean LM-FBS / substruct = "
+          f"{cpu_l / a[2]:.1f}x ({'pyFBS' if PYFBS else 'pyFBS-style, pyFBS not importable'})")
+    os.environ.get("OMP_NUM_THREADS") or print("# note: OMP_NUM_THREADS unset")
 
 
 if __name__ == "__main__":

@@ -17,7 +17,10 @@ ordering computed once for the sweep (:func:`substruct.linalg.factorize.fill_ord
 :func:`substruct.linalg.factorize.complex_symmetric`) and solved for all inputs in one call.
 Where a reverse Cuthill-McKee ordering makes :math:`Z_T` narrow (half-bandwidth at most
 :data:`substruct.linalg.banded.BAND_MAX`: chains, rods, beams) the factorization is LAPACK's band
-LU instead (:mod:`substruct.linalg.banded`), much faster for hundreds of inputs.  The outputs
+LU instead (:mod:`substruct.linalg.banded`): with many inputs, for a batch of frequencies at
+a time (:func:`~substruct.linalg.banded.band_solve_batch`: each row operation of the
+substitutions done for every frequency of the batch and every input at once), with few inputs
+``gbsv`` a frequency at a time.  The outputs
 are gathered by rows (:class:`Gather`).  The reduced system has ``n - rank(A)`` unknowns instead of the ``n + m`` of the KKT system and
 the ``n + m`` of the bordered generalized-inverse system, and needs one factorization a
 frequency instead of their two.
@@ -31,7 +34,15 @@ import numpy as np
 import scipy.sparse as sp
 
 from substruct.analysis.krylov import eliminate
-from substruct.linalg.banded import BAND_MAX, band_ordering, band_solve, band_storage
+from substruct.linalg.banded import (
+    BAND_MAX,
+    band_factor_batch,
+    band_ordering,
+    band_solve,
+    band_solve_batch,
+    band_storage,
+    batch_size,
+)
 from substruct.linalg.factorize import complex_symmetric, fill_ordering
 from substruct.linalg.memory import factor_memory, require_memory
 from substruct.linalg.scaling import equilibrate
@@ -41,33 +52,60 @@ __all__ = ["Gather", "null_space_sparse_sweep"]
 
 class Gather:
     r"""``out = O X`` for a sparse ``O`` whose rows are mostly single entries (outputs at
-    coordinates that the elimination kept): those rows by one scaled row gather of ``X``,
-    the others (outputs at eliminated coordinates, interpolated points) by a sparse product."""
+    coordinates that the elimination kept): those rows copied from rows of ``X`` (scaled
+    where the entry is not 1), runs of consecutive rows as one slice copy each, the others
+    (outputs at eliminated coordinates, interpolated points) by a product with their few
+    rows."""
 
     def __init__(self, O: sp.csr_array) -> None:
         counts = np.diff(O.indptr)
-        self.single = np.flatnonzero(counts == 1)
-        self.cols = O.indices[O.indptr[self.single]]
-        self.vals = O.data[O.indptr[self.single]][:, None]
-        self.ones = bool(np.all(self.vals == 1.0))
-        self.prefix = bool(np.array_equal(self.single, np.arange(self.single.size)))
+        single = np.flatnonzero(counts == 1)
+        cols = O.indices[O.indptr[single]]
+        vals = O.data[O.indptr[single]]
+        unit = vals == 1.0
+        self.scaled = (single[~unit], cols[~unit], vals[~unit][:, None])
+        rows, cols = single[unit], cols[unit]
+        # runs of unit rows: out[r0:r0+len] = X[c0:c0+len] (or reversed, step -1)
+        self.runs: list[tuple[slice, slice]] = []
+        k = 0
+        while k < rows.size:
+            step = int(cols[k + 1] - cols[k]) if k + 1 < rows.size else 1
+            step = step if step in (1, -1) else 1
+            e = k + 1
+            while e < rows.size and rows[e] == rows[e - 1] + 1 and \
+                    cols[e] == cols[e - 1] + step:
+                e += 1
+            stop = int(cols[e - 1]) + step
+            self.runs.append((slice(int(rows[k]), int(rows[e - 1]) + 1),
+                              slice(int(cols[k]), None if stop < 0 else stop, step)))
+            k = e
+        if len(self.runs) > max(8, rows.size // 8):  # scattered: one fancy copy
+            self.runs = []
+            self.unit: tuple[np.ndarray, np.ndarray] | None = (rows, cols)
+        else:
+            self.unit = None
         self.other = np.flatnonzero(counts != 1)
         self.rest = sp.csr_array(O[self.other])
         # a few such rows (constraint rows, interpolated points): dense, one BLAS product
         self.rest_dense = self.rest.toarray() if self.other.size <= 64 else None
 
     def __call__(self, X: np.ndarray, out: np.ndarray) -> None:
-        """Write ``O X`` into ``out``."""
-        if self.prefix:  # the single-entry rows first (outputs, then constraint rows)
-            block = out[:self.single.size]
-            block[...] = X[self.cols]  # (np.take(..., out=block) of a column-major X: 30x
-            if not self.ones:          # slower)
-                block *= self.vals
-        else:
-            out[self.single] = self.vals * X[self.cols]
+        """Write ``O X`` into ``out`` (``X`` with C-contiguous rows)."""
+        for r, c in self.runs:
+            out[r] = X[c]
+        if self.unit is not None:
+            out[self.unit[0]] = X[self.unit[1]]
+        rows, cols, vals = self.scaled
+        if rows.size:
+            out[rows] = vals * X[cols]
         if self.other.size:
             out[self.other] = self.rest_dense @ X if self.rest_dense is not None else \
                 self.rest @ X
+
+
+def _singular(omega: float) -> ValueError:
+    return ValueError(f"the receptance is singular at omega = {omega:g} rad/s (a resonance of "
+                      f"an undamped system, or a rigid-body motion at omega = 0)")
 
 
 def null_space_sparse_sweep(K: sp.sparray, M: sp.sparray, C: sp.sparray | None,
@@ -117,23 +155,41 @@ def null_space_sparse_sweep(K: sp.sparray, M: sp.sparray, C: sp.sparray | None,
     Cp = None if Ct is None else sp.csc_array(Ct[p][:, p])
     Bp = np.asfortranarray(B[p])
     gather = Gather(sp.csr_array(OT[:, p]))
+    H = np.empty((w.size, OT.shape[0], B.shape[1]), dtype=complex)
+    batch = batch_size(Kt.shape[0], B.shape[1], w.size) if banded else 0
     if banded:
         Kb, Mb = band_storage(Kp, width), band_storage(Mp, width)
         Cb = None if Cp is None else band_storage(Cp, width)
-    H = np.empty((w.size, OT.shape[0], B.shape[1]), dtype=complex)
+    if batch:
+        X = np.empty((Kt.shape[0], batch, B.shape[1]), dtype=complex)
+        for start in range(0, w.size, batch):
+            wb = w[start:start + batch]
+            f = wb.size
+            ab = (Kb - wb[:, None, None]**2 * Mb).astype(complex)
+            if Cb is not None:
+                ab += 1j * wb[:, None, None] * Cb
+            try:
+                piv = band_factor_batch(ab, width)
+            except np.linalg.LinAlgError as exc:
+                raise _singular(wb[exc.args[1]]) from exc
+            Xb = X[:, :f]
+            band_solve_batch(ab, piv, width, Bp, Xb)
+            for i in range(f):
+                gather(Xb[:, i], H[start + i])
+            if progress is not None:
+                progress(start + f)
+        return H
     for k, wk in enumerate(w):
         try:
             if banded:
                 Zb = Kb - wk**2 * Mb + (0.0 if Cb is None else 1j * wk * Cb)
-                X = band_solve(np.asarray(Zb, dtype=complex), width, Bp)
+                Xk = band_solve(np.asarray(Zb, dtype=complex), width, Bp)
             else:
                 Z = Kp.astype(complex) - wk**2 * Mp + (0.0 if Cp is None else 1j * wk * Cp)
-                X = complex_symmetric(Z, ordered=True)(Bp)
+                Xk = complex_symmetric(Z, ordered=True)(Bp)
         except (RuntimeError, np.linalg.LinAlgError) as exc:
-            raise ValueError(f"the receptance is singular at omega = {wk:g} rad/s (a "
-                             f"resonance of an undamped system, or a rigid-body motion at "
-                             f"omega = 0)") from exc
-        gather(np.asarray(X).reshape(Bp.shape), H[k])
+            raise _singular(wk) from exc
+        gather(np.asarray(Xk).reshape(Bp.shape), H[k])
         if progress is not None and ((k + 1) % 10 == 0 or k + 1 == w.size):
             progress(k + 1)
     return H
