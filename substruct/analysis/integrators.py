@@ -31,7 +31,8 @@ with :math:`S` in the place of :math:`M`: the acceleration without constraint,
 .. math::  a_{n+1} = a^0 + S^{-1} A^T (A S^{-1} A^T)^+ (c - A a^0), \qquad
            c = (b - A d^*)/(\beta h^2) ,
 
-which makes :math:`A d_{n+1} = b` (:math:`d^*` the predicted displacement).  :math:`S` is
+which makes :math:`A d_{n+1} = b` (:math:`d^*` the predicted displacement; with a moving
+ground, :math:`b_{n+1} = b + e g_{n+1}`, :mod:`substruct.analysis.transient_base`).  :math:`S` is
 definite where :math:`M` is only semidefinite (massless coordinates with a stiffness, eq 10),
 so the same correction serves.  After each step the displacement, velocity and acceleration
 are projected (the :math:`S`-orthogonal projector), which removes the rounding that would
@@ -107,6 +108,18 @@ class Correction:
     A: sp.csr_array
     b: np.ndarray
     gain: np.ndarray
+    #: a moving ground (:mod:`substruct.analysis.transient_base`): ``A q_k = b + e g_k``,
+    #: ``A v_k = e g'_k``; ``g`` is ``(n_steps + 1) x 3`` (``None``: a fixed ``b``)
+    e: np.ndarray | None = None
+    g: np.ndarray | None = None
+
+    def target(self, step: int) -> np.ndarray:
+        """The right-hand side :math:`b + e g_k` of step ``step``."""
+        return self.b if self.e is None or self.g is None else self.b + self.e * self.g[step, 0]
+
+    def rate(self, step: int) -> np.ndarray | float:
+        r"""The velocity's right-hand side :math:`e \dot g_k` of step ``step``."""
+        return 0.0 if self.e is None or self.g is None else self.e * self.g[step, 1]
 
     def apply(self, x: np.ndarray, target: np.ndarray | float) -> np.ndarray:
         r""":math:`x + G (t - A x)`: the :math:`S`-orthogonal projection onto
@@ -171,12 +184,13 @@ def integrate(M: Matrix, C: Matrix | None, K: Matrix, s: Scheme, h: float, n_ste
             rhs -= Cm @ (af * v + (1 - af) * v_star)
         a_new = solve(rhs)
         if correction is not None:
-            a_new = correction.apply(a_new, (correction.b - correction.A @ d_star) / c3)
+            target = correction.target(n + 1)
+            a_new = correction.apply(a_new, (target - correction.A @ d_star) / c3)
         d_new = d_star + c3 * a_new
         v_new = v_star + gamma * h * a_new
         if correction is not None:  # remove the rounding that would drift
-            d_new = correction.apply(d_new, correction.b)
-            v_new = correction.apply(v_new, 0.0)
+            d_new = correction.apply(d_new, target)
+            v_new = correction.apply(v_new, correction.rate(n + 1))
         if work is not None:
             work.external += float((Bt @ (d_new - d)) @ (0.5 * (f[n + 1] + f[n])))
             if damped:

@@ -48,6 +48,7 @@ from substruct.analysis.integrators import (
 from substruct.analysis.krylov import eliminate
 from substruct.analysis.projection import constrained_acceleration
 from substruct.analysis.results import DEFAULT_TOLERANCE
+from substruct.analysis.transient_base import BaseMotion, Motion, ground_history, influence
 from substruct.analysis.transient_modal import modal_run
 from substruct.analysis.transient_record import (
     Physical,
@@ -91,22 +92,25 @@ def _small(*mats: sp.sparray | np.ndarray | None) -> list[np.ndarray | None]:
 
 
 def _correction(S: sp.sparray | np.ndarray, solve: Solve, A: sp.csr_array,
-                b: np.ndarray) -> Correction:
+                b: np.ndarray, motion: Motion | None = None) -> Correction:
     r"""The gain :math:`S^{-1} A^T (A S^{-1} A^T)^+` (``A`` equilibrated), its rank decided on
     ``A`` with the columns scaled by ``S`` (:func:`substruct.linalg.constraints.independent_rows`)."""
     At = sp.csr_array(A.T).toarray()
     Y = np.asarray(solve(At)).reshape(At.shape)
     rank = independent_rows(A, col_scale=mass_column_scale(sp.csr_array(S))).rank
-    return Correction(A=A, b=b, gain=Y @ pinv_sym(At.T @ Y, rank))
+    return Correction(A=A, b=b, gain=Y @ pinv_sym(At.T @ Y, rank),
+                      e=None if motion is None else motion.e,
+                      g=None if motion is None else motion.g)
 
 
 def initial_state(M: sp.csr_array, K: sp.csr_array, A: sp.csr_array, load: np.ndarray,
-                  d0: np.ndarray, force: Callable[[np.ndarray], np.ndarray]
-                  ) -> tuple[np.ndarray, np.ndarray]:
+                  d0: np.ndarray, force: Callable[[np.ndarray], np.ndarray],
+                  accel: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     r"""``(d0, a0)``: the initial displacement and acceleration, consistent with
     :math:`A \ddot q = 0` and the massless coordinates.  The acceleration is eq (10)
     (:func:`substruct.analysis.projection.constrained_acceleration`, ``force(d0)`` the force
-    :math:`P - C \dot q - K q`).  Where eq (10) cannot determine a massless coordinate (one held
+    :math:`P - C \dot q - K q`; ``accel``: :math:`A \ddot q` of a moving ground, else 0).
+    Where eq (10) cannot determine a massless coordinate (one held
     by springs only, not by a constraint), its equation is algebraic, :math:`K_s q = P_s`: the
     massless rows of the displacement are put on it first (massed coordinates kept), and the
     acceleration solved with those rows differentiated twice, the load taken as locally
@@ -121,8 +125,9 @@ def initial_state(M: sp.csr_array, K: sp.csr_array, A: sp.csr_array, load: np.nd
     Raises:
         ValueError: the system is singular (a massless coordinate with no stiffness).
     """
+    target = np.zeros(A.shape[0]) if accel is None else np.asarray(accel, dtype=float)
     try:
-        return d0, constrained_acceleration(M, A, np.zeros(A.shape[0]), force(d0))
+        return d0, constrained_acceleration(M, A, target, force(d0))
     except ValueError:
         pass
     s = massless_coordinates(M)
@@ -130,7 +135,7 @@ def initial_state(M: sp.csr_array, K: sp.csr_array, A: sp.csr_array, load: np.nd
                                     if A.shape[0] else [])
     Ak = sp.csr_array(A[keep]) if A.shape[0] else A
     on, off = sp.diags_array(s.astype(float)), sp.diags_array((~s).astype(float))
-    zero = np.zeros(Ak.shape[0])
+    zero = target[keep] if A.shape[0] else np.zeros(0)
 
     def kkt(rows: sp.sparray, rhs: np.ndarray) -> np.ndarray:
         big = sp.block_array([[rows, Ak.T], [Ak, None]], format="csc")
@@ -157,7 +162,8 @@ def direct_run(phys: Physical, form: str, s: Scheme, h: float, n_steps: int, d0:
             M, C, K, B = _small(M, C, K, B)  # type: ignore[assignment]
         S = effective_matrix(M, C, K, s, h)
         solve = _spd_solver(S, opts.factorization)
-        corr = _correction(S, solve, phys.A, phys.b) if phys.A.shape[0] else None
+        corr = (_correction(S, solve, phys.A, phys.b, phys.motion) if phys.A.shape[0]
+                else None)
         rec = Recorder(phys, M, K, h, forces, opts.field_every)
         integrate(M, C, K, s, h, n_steps, B, phys.f, d0, v0, a0, solve, rec, opts.every,
                   corr, Work(), rec.on_work)
@@ -167,8 +173,14 @@ def direct_run(phys: Physical, form: str, s: Scheme, h: float, n_steps: int, d0:
     qp = phys.qp if phys.qp is not None else np.zeros(n)
     Mt, Kt = T.T @ M @ T, T.T @ K @ T
     Ct = None if C is None else T.T @ C @ T
-    Bt = sp.hstack([T.T @ sp.csc_array(B), sp.csc_array(-(T.T @ (K @ qp))[:, None])]).tocsr()
+    cols = [T.T @ sp.csc_array(B), sp.csc_array(-(T.T @ (K @ qp))[:, None])]
     ft = np.hstack([phys.f, np.ones((phys.f.shape[0], 1))])
+    mo = phys.motion
+    if mo is not None:  # q = T p + q_p + r g: the effective loads -M r g'' - C r g' - K r g
+        cols += [sp.csc_array(-(T.T @ (X @ mo.r))[:, None]) for X in (M, K, C) if X is not None]
+        ft = np.hstack([ft, mo.g[:, [2, 0, 1][:len(cols) - 2]]])
+        d0, v0, a0 = (x - mo.r * mo.g[0, k] for k, x in enumerate((d0, v0, a0)))
+    Bt = sp.hstack(cols).tocsr()
     p0, pv0 = d0[el.masters] - qp[el.masters], v0[el.masters]
     pa0 = a0[el.masters]
     if not massless_coordinates(Mt).any() and Mt.shape[0]:  # independent of eq 10
@@ -178,7 +190,8 @@ def direct_run(phys: Physical, form: str, s: Scheme, h: float, n_steps: int, d0:
         Mt, Ct, Kt, Bt = _small(Mt, Ct, Kt, Bt)  # type: ignore[assignment]
     S = effective_matrix(Mt, Ct, Kt, s, h)
     solve = _spd_solver(S, opts.factorization)
-    nphys = Physical(phys.M, phys.C, phys.K, phys.B, phys.f, phys.A, phys.b, phys.O, T, qp)
+    nphys = Physical(phys.M, phys.C, phys.K, phys.B, phys.f, phys.A, phys.b, phys.O, T, qp,
+                     phys.motion)
     rec = Recorder(nphys, Mt, Kt, h, forces, opts.field_every)
     integrate(Mt, Ct, Kt, s, h, n_steps, Bt, ft, p0, pv0, pa0, solve, rec, opts.every,
               None, Work(), rec.on_work)
@@ -203,7 +216,7 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
               d0: np.ndarray | None = None, v0: np.ndarray | None = None,
               method: str = "generalized-inverse", checks: Sequence[str] = (),
               tolerance: float = DEFAULT_TOLERANCE, options: TransientOptions | None = None,
-              what: str = "transient") -> Transient:
+              base: BaseMotion | None = None, what: str = "transient") -> Transient:
     r"""Time histories of :math:`M \ddot q + C \dot q + K q = B f(t) + Q^c`, :math:`A q = b`
     (eqs 5, 10), by ``method``, checked by ``checks``.
 
@@ -220,6 +233,10 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
         method, checks: forms of :data:`TRANSIENT_METHODS`.
         tolerance: the largest agreement a check may have.
         options: :class:`TransientOptions`.
+        base: a prescribed ground motion at grounding rows of ``A``
+            (:mod:`substruct.analysis.transient_base`): :math:`A q = b + e g(t)`; ``d0`` and
+            ``v0`` are then relative to the pseudo-static position :math:`r g(0)`,
+            :math:`r \dot g(0)`.
 
     Returns:
         :class:`~substruct.analysis.transient_results.Transient` of the main form, with the
@@ -250,8 +267,19 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
     O = sp.csr_array(outputs, dtype=float)
     d0 = np.zeros(n) if d0 is None else np.asarray(d0, dtype=float).ravel()
     v0 = np.zeros(n) if v0 is None else np.asarray(v0, dtype=float).ravel()
+    motion = None
+    if base is not None:
+        e = np.asarray(eq.scale.apply(np.asarray(base.rows, dtype=float)))
+        g = ground_history(base.kind, base.values, s, dt, base.rate0, base.accel0)
+        if g.shape[0] != n_steps + 1 or e.shape != be.shape:
+            raise ValueError(f"the ground motion has {g.shape[0]} samples and {e.size} rows "
+                             f"for {n_steps + 1} instants and {be.size} constraint rows")
+        motion = Motion(e=e, g=g, r=influence(Ks, Ae, e))
+        d0, v0 = d0 + motion.r * g[0, 0], v0 + motion.r * g[0, 1]
+    bt = be if motion is None else be + motion.e * motion.g[0, 0]
+    vt = 0.0 * be if motion is None else motion.e * motion.g[0, 1]
     scale = max(float(np.abs(d0).max(initial=0.0)), 1e-300)
-    for name, vec, rhs in (("displacement", d0, be), ("velocity", v0, 0.0 * be)):
+    for name, vec, rhs in (("displacement", d0, bt), ("velocity", v0, vt)):
         bad = float(np.abs(Ae @ vec - rhs).max(initial=0.0))
         ref = max(float(np.abs(vec).max(initial=0.0)), scale if name == "displacement" else 0)
         if bad > 1e-9 * max(ref, float(np.abs(rhs).max(initial=0.0)), 1e-300):
@@ -261,8 +289,9 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
     def force0(d: np.ndarray) -> np.ndarray:
         return np.asarray(Bs @ f[0] - Ks @ d - (Cs @ v0 if Cs is not None else 0.0))
 
-    d0, a0 = initial_state(Ms, Ks, Ae, np.asarray(Bs @ f[0]), d0, force0)
-    phys = Physical(Ms, Cs, Ks, Bs, f, Ae, be, O, None, qp)
+    d0, a0 = initial_state(Ms, Ks, Ae, np.asarray(Bs @ f[0]), d0, force0,
+                           None if motion is None else motion.e * motion.g[0, 2])
+    phys = Physical(Ms, Cs, Ks, Bs, f, Ae, be, O, None, qp, motion)
 
     def run(form: str) -> Recorder:
         if form == "modal":
@@ -282,4 +311,8 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
                      drift=float(r["residual"].max(initial=0.0) / max(main.qmax, 1e-300)),
                      energy=r["energy"], snapshot_t=r["field_t"], snapshots=r["field"],
                      agreement=agreement, tolerance=float(tolerance),
-                     solver="dense step" if n <= DENSE_STEP else opts.factorization)
+                     solver="dense step" if n <= DENSE_STEP else opts.factorization,
+                     base_motion=(np.zeros((0, 3)) if motion is None else
+                                  motion.g[np.rint(r["t"] / dt).astype(int)]),
+                     base_influence=(np.zeros(0) if motion is None else
+                                     np.asarray(O @ motion.r)))

@@ -14,7 +14,9 @@ where ``G`` is the constrained static flexibility
 and :math:`\Phi_e` the elastic modes kept: the quasi-static response of the modes left out.
 With every coupled mode kept, :math:`R = 0` to rounding and the superposition is the direct
 integration in other coordinates (the integrators are linear and invariant under a change of
-coordinates); with fewer, the difference is the dynamic part of the truncated modes.  The modal
+coordinates); with fewer, the difference is the dynamic part of the truncated modes.  A moving
+ground adds :math:`r g(t)` and the effective loads :math:`-M r \ddot g - C r \dot g - K r g`
+(:mod:`substruct.analysis.transient_base`).  The modal
 equations are integrated by the same scheme and step as the direct forms.
 """
 
@@ -61,6 +63,12 @@ def modal_run(phys: Physical, s: Scheme, h: float, n_steps: int, d0: np.ndarray,
     M, K, B, f = phys.M, phys.K, phys.B, phys.f
     rigid = omega == 0.0
     Bd = np.asarray(sp.csr_array(B).toarray()) if sp.issparse(B) else np.asarray(B)
+    mo = phys.motion
+    if mo is not None:  # q = r g + w: the effective loads -M r g'' - K r g - C r g'
+        extra = [X @ mo.r for X in (M, K, phys.C) if X is not None]
+        Bd = np.hstack([Bd, -np.column_stack(extra)])
+        f = np.hstack([f, mo.g[:, [2, 0, 1][:len(extra)]]])
+        d0, v0 = d0 - mo.r * mo.g[0, 0], v0 - mo.r * mo.g[0, 1]
     if Bd.shape[1]:
         G = static_solver(sp.csr_array(K), sp.csr_array(M), phys.A, Phi[:, rigid])
         Pe, we = Phi[:, ~rigid], omega[~rigid]
@@ -77,7 +85,7 @@ def modal_run(phys: Physical, s: Scheme, h: float, n_steps: int, d0: np.ndarray,
     r0 = Be @ f[0] - Ke @ eta0 - (Ce @ etav0 if Ce is not None else 0.0)
     S = effective_matrix(Me, Ce, Ke, s, h)
     inv = np.linalg.inv(S)
-    mphys = Physical(M, phys.C, K, B, f, phys.A, phys.b, phys.O, Phi, phys.qp)
+    mphys = Physical(M, phys.C, K, B, phys.f, phys.A, phys.b, phys.O, Phi, phys.qp, mo)
     rec = Recorder(mphys, Me, Ke, h, None, opts.field_every, offset=lambda step: R @ f[step])
     integrate(Me, Ce, Ke, s, h, n_steps, Be, f, eta0, etav0, r0, lambda r: inv @ r, rec,
               opts.every, None, Work(), rec.on_work)

@@ -18,6 +18,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from substruct.analysis.integrators import Work
+from substruct.analysis.transient_base import Motion
 from substruct.linalg.factorize import factorizer
 
 __all__ = ["Physical", "Recorder", "constraint_force_solver"]
@@ -53,6 +54,8 @@ class Physical:
             step.
         A, b: equilibrated constraint rows.
         O: output rows (``n_out x n``).
+        T, qp: the integrated coordinates' map and particular solution.
+        motion: a moving ground (:mod:`substruct.analysis.transient_base`), or ``None``.
     """
 
     M: Matrix
@@ -65,15 +68,22 @@ class Physical:
     O: Matrix
     T: Matrix | None = None
     qp: np.ndarray | None = None
+    motion: Motion | None = None
 
-    def position(self, x: np.ndarray) -> np.ndarray:
-        """:math:`q = T x + q_p`."""
+    def position(self, x: np.ndarray, step: int = 0) -> np.ndarray:
+        """:math:`q = T x + q_p + r g_k` (``r g_k``: a moving ground, only when ``T`` is
+        given; the generalized-inverse form integrates ``q`` itself)."""
         q = x if self.T is None else self.T @ x
+        if self.T is not None and self.motion is not None:
+            q = q + self.motion.r * self.motion.g[step, 0]
         return q if self.qp is None else q + self.qp
 
-    def rate(self, x: np.ndarray) -> np.ndarray:
-        """:math:`\\dot q = T \\dot x` (and the same for accelerations)."""
-        return x if self.T is None else self.T @ x
+    def rate(self, x: np.ndarray, step: int = 0, order: int = 1) -> np.ndarray:
+        """:math:`\\dot q = T \\dot x + r \\dot g_k` (``order`` 2: the accelerations)."""
+        if self.T is None:
+            return x
+        q = self.T @ x
+        return q if self.motion is None else q + self.motion.r * self.motion.g[step, order]
 
 
 @dataclass
@@ -108,15 +118,16 @@ class Recorder:
     def __call__(self, step: int, x: np.ndarray, xd: np.ndarray, xdd: np.ndarray) -> None:
         """Record step ``step`` of the integrated state ``(x, x', x'')``."""
         p = self.phys
-        q = p.position(x)
+        q = p.position(x, step)
         if self.offset is not None:
             q = q + self.offset(step)
-        qd, qdd = p.rate(xd), p.rate(xdd)
+        qd, qdd = p.rate(xd, step, 1), p.rate(xdd, step, 2)
         self.t.append(step * self.dt)
         self.d.append(np.asarray(p.O @ q))
         self.v.append(np.asarray(p.O @ qd))
         self.a.append(np.asarray(p.O @ qdd))
-        self.residual.append(float(np.abs(p.A @ q - p.b).max(initial=0.0)))
+        rhs = p.b if p.motion is None else p.b + p.motion.e * p.motion.g[step, 0]
+        self.residual.append(float(np.abs(p.A @ q - rhs).max(initial=0.0)))
         self.qmax = max(self.qmax, float(np.abs(q).max(initial=0.0)))
         self.energy.append([0.5 * float(xd @ (self.M_x @ xd)), 0.5 * float(x @ (self.K_x @ x)),
                             0.0, 0.0])

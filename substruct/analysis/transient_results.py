@@ -29,7 +29,7 @@ ENERGY_LABELS = ("kinetic", "strain", "external_work", "dissipated")
 
 @dataclass(kw_only=True)
 class Transient:
-    """Time histories of a constrained system.
+    r"""Time histories of a constrained system.
 
     Attributes:
         method: the main form (``"generalized-inverse"``, ``"null-space"``, ``"modal"``).
@@ -47,6 +47,12 @@ class Transient:
             and the final field.
         tolerance: the largest agreement allowed.
         solver: how it was solved (factorization, notes).
+        base_motion: ``n_samples x 3``, the ground's displacement, velocity and acceleration
+            :math:`g, \dot g, \ddot g` at the recorded instants (empty without a moving ground,
+            :mod:`substruct.analysis.transient_base`).
+        base_influence: ``n_outputs``, the influence vector at the outputs, :math:`O r`.
+
+    The histories are absolute; :meth:`relative` gives them relative to the moving ground.
     """
 
     method: str
@@ -68,6 +74,17 @@ class Transient:
     agreement: dict[str, float] = dataclasses.field(default_factory=dict)
     tolerance: float = DEFAULT_TOLERANCE
     solver: str = ""
+    base_motion: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((0, 3)))
+    base_influence: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
+
+    def relative(self, name: str) -> np.ndarray:
+        r"""``displacement``, ``velocity`` or ``acceleration`` relative to the ground,
+        :math:`O (q - r g)` and its rates (the absolute history without a moving ground)."""
+        k = ("displacement", "velocity", "acceleration").index(name)
+        y = np.asarray(getattr(self, name))
+        if not self.base_motion.size:
+            return y
+        return y - self.base_motion[:, k:k + 1] * self.base_influence[None, :]
 
     @property
     def steps(self) -> int:

@@ -49,6 +49,9 @@ def point_uses(case: Case) -> list[PointUse]:
                  for i, ld in enumerate(tr.loads)]
         uses += [PointUse(p, ("analysis", "transient", "outputs", i))
                  for i, p in enumerate(tr.outputs)]
+        if tr.base is not None:
+            uses += [PointUse(p, ("analysis", "transient", "base", "at", i))
+                     for i, p in enumerate(tr.base.at)]
     return uses
 
 

@@ -1,7 +1,8 @@
 r"""The ``analysis: transient:`` block of a case file: the constrained transient response
 (eqs 5, 10; :mod:`substruct.analysis.transient`).
 
-Loads act at points; each is ``amplitude`` times a shape of ``t``:
+Loads act at points; each is ``amplitude`` times a shape of ``t`` (a signal); ``base`` moves
+grounded supports by a signal (their acceleration or displacement):
 
 =============  ===============================================================================
 shape          value at ``t``
@@ -37,7 +38,7 @@ from substruct.case.fields import (
     gigabytes,
 )
 
-__all__ = ["MAX_STEPS", "MAX_TABLE_ROWS", "TransientLoad", "InitialState", "TransientAnalysis",
+__all__ = ["MAX_STEPS", "MAX_TABLE_ROWS", "Signal", "TransientLoad", "BaseExcitation", "InitialState", "TransientAnalysis",
            "load_values", "read_table"]
 
 #: The most steps a run may take.
@@ -48,10 +49,9 @@ MAX_TABLE_ROWS = 1_000_000
 TOLERANCE = 1e-6
 
 
-class TransientLoad(StrictModel):
-    """A force at ``point``: ``amplitude`` times a shape of ``t`` (module docstring)."""
+class Signal(StrictModel):
+    """``amplitude`` times a shape of ``t`` (module docstring)."""
 
-    point: Point
     amplitude: Number = 1.0
     shape: Literal["step", "ramp", "half-sine", "harmonic", "expression", "table"] = "step"
     start: Number = 0.0
@@ -62,7 +62,7 @@ class TransientLoad(StrictModel):
     table: str | None = None
 
     @model_validator(mode="after")
-    def _complete(self) -> "TransientLoad":
+    def _complete(self) -> "Signal":
         if self.shape in ("ramp", "half-sine") and self.duration is None:
             raise FieldError("duration", f"a {self.shape} load needs a duration")
         if self.shape == "expression":
@@ -71,6 +71,43 @@ class TransientLoad(StrictModel):
         if self.shape == "table" and self.table is None:
             raise FieldError("table", "a table load needs a CSV or NPZ file")
         return self
+
+
+class TransientLoad(Signal):
+    """A force at ``point``: ``amplitude`` times a shape of ``t`` (module docstring)."""
+
+    point: Point
+
+
+class BaseExcitation(StrictModel):
+    r"""A prescribed ground motion :math:`g(t)` of the supports at the points ``at``: each
+    point must be held by a constraint row on it alone (``terms: {p: c}``), which becomes
+    :math:`c\, u(p) = \text{rhs} + c\, g(t)` (:mod:`substruct.analysis.transient_base`).
+    Give the ``acceleration`` :math:`\ddot g` (the ground starts at rest) or the
+    ``displacement`` :math:`g`, each a signal as a load's."""
+
+    at: Annotated[list[Point], Field(min_length=1)]
+    acceleration: Signal | None = None
+    displacement: Signal | None = None
+
+    @model_validator(mode="after")
+    def _one(self) -> "BaseExcitation":
+        if (self.acceleration is None) == (self.displacement is None):
+            raise FieldError("acceleration", "give the ground's acceleration or its "
+                             "displacement (one of the two)")
+        return self
+
+    @property
+    def kind(self) -> str:
+        """``"acceleration"`` or ``"displacement"``."""
+        return "acceleration" if self.acceleration is not None else "displacement"
+
+    @property
+    def signal(self) -> Signal:
+        """The signal given."""
+        sig = self.acceleration if self.acceleration is not None else self.displacement
+        assert sig is not None
+        return sig
 
 
 def read_table(path: Path) -> tuple[np.ndarray, np.ndarray]:
@@ -109,7 +146,7 @@ def read_table(path: Path) -> tuple[np.ndarray, np.ndarray]:
     return t, v
 
 
-def load_values(load: TransientLoad, t: np.ndarray, base_dir: Path,
+def load_values(load: Signal, t: np.ndarray, base_dir: Path,
                 parameters: dict[str, float]) -> np.ndarray:
     """The load's values at the times ``t`` (module docstring)."""
     s = t - load.start
@@ -157,6 +194,8 @@ class TransientAnalysis(StrictModel):
         default_factory=list)
     tolerance: Positive = TOLERANCE
     loads: list[TransientLoad] = Field(default_factory=list)
+    #: a prescribed ground motion of grounded supports
+    base: BaseExcitation | None = None
     initial: InitialState = Field(default_factory=InitialState)
     outputs: list[Point] = Field(default_factory=list)
     constraint_forces: bool = True

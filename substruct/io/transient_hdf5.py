@@ -14,6 +14,12 @@ dataset                       contents                                          
 ``constraint_residual``       largest equilibrated :math:`|A q - b|` per sample
 ``energy``                    ``n_samples x 4``; ``energy_labels``                    ``energy``
 ``snapshot_t``, ``snapshots`` the full displacement every k steps (empty if not asked)
+``base_motion``               ``n_samples x 3``: ground :math:`g, \dot g, \ddot g`     per column
+                              (only with a moving ground)
+``base_influence``            ``n_outputs``: :math:`O r`, the influence vector
+``relative_displacement``     ``displacement - base_motion[:, 0] base_influence``     ``length``
+``relative_velocity``,        likewise with :math:`\dot g`, :math:`\ddot g`           ...
+``relative_acceleration``
 ============================  ======================================================  =========
 
 Attributes: ``method``, ``integrator``, ``rho_inf``, ``dt``, ``drift``, ``tolerance``,
@@ -60,6 +66,14 @@ def write_transient(g: h5py.Group, tr: Transient) -> None:
     _strings(g, "energy_labels", list(ENERGY_LABELS))
     g.create_dataset("snapshot_t", data=np.asarray(tr.snapshot_t, dtype=float))
     g.create_dataset("snapshots", data=np.asarray(tr.snapshots, dtype=float))
+    if tr.base_motion.size:
+        d = g.create_dataset("base_motion", data=np.asarray(tr.base_motion, dtype=float))
+        d.attrs["units"] = "length, length/time, length/time^2"
+        d.attrs["columns"] = "displacement, velocity, acceleration"
+        g.create_dataset("base_influence", data=np.asarray(tr.base_influence, dtype=float))
+        for name in ("displacement", "velocity", "acceleration"):
+            d = g.create_dataset(f"relative_{name}", data=tr.relative(name))
+            d.attrs["units"] = units[name]
 
 
 class ArrayReader(Protocol):
@@ -129,6 +143,11 @@ def read_transient(rd: ArrayReader, g: h5py.Group, n: int) -> Transient:
         snap_t = _finite(g, "snapshot_t", rd.array(g, "snapshot_t", "f", 1))
         snaps = _finite(g, "snapshots", rd.array(g, "snapshots", "f", 2,
                                                    (len(snap_t), n if len(snap_t) else None)))
+    base, infl = np.zeros((0, 3)), np.zeros(0)
+    if "base_motion" in g or "base_influence" in g:
+        base = _finite(g, "base_motion", rd.array(g, "base_motion", "f", 2, (k, 3)))
+        infl = _finite(g, "base_influence", rd.array(g, "base_influence", "f", 1,
+                                                       (len(outputs),)))
     agreement = {key[len("agreement_"):]: float(v) for key, v in attrs.items()
                  if key.startswith("agreement_")}
     return Transient(
@@ -140,4 +159,5 @@ def read_transient(rd: ArrayReader, g: h5py.Group, n: int) -> Transient:
         drift=num["drift"],
         energy=_finite(g, "energy", rd.array(g, "energy", "f", 2, (k, len(ENERGY_LABELS)))),
         snapshot_t=snap_t, snapshots=snaps, agreement=agreement,
-        tolerance=num["tolerance"], solver=_text(attrs.get("solver", "")))
+        tolerance=num["tolerance"], solver=_text(attrs.get("solver", "")),
+        base_motion=base, base_influence=infl)

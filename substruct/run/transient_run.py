@@ -2,7 +2,8 @@ r"""``analysis.transient`` of a case on its model: a thin adapter to
 :func:`substruct.analysis.transient.transient` (eqs 5, 10).
 
 A force at point ``p`` is the generalized force :math:`r(p)^T f(t)`; an output is
-:math:`r(p)\, q(t)`.  Input the analysis cannot take becomes a
+:math:`r(p)\, q(t)`.  A ground motion at point ``p`` moves the constraint rows that hold ``p``
+alone, :math:`A_i = c\, r(p)` (:mod:`substruct.analysis.transient_base`).  Input the analysis cannot take becomes a
 :class:`~substruct.case.loader.CaseError` at ``analysis.transient`` (exit 2); a check beyond
 the tolerance stays a :class:`~substruct.analysis.errors.CheckError` (exit 1).
 """
@@ -15,6 +16,7 @@ import scipy.sparse as sp
 from substruct.analysis.api import modes
 from substruct.analysis.errors import CheckError
 from substruct.analysis.transient import TransientOptions, transient
+from substruct.analysis.transient_base import BaseMotion
 from substruct.analysis.transient_results import Transient
 from substruct.builder.model import Model
 from substruct.case.fields import MEMORY_LIMIT, gigabytes
@@ -35,6 +37,53 @@ def _mode(case: Case, model: Model, k: int, field: str) -> np.ndarray:
         raise case.error(("analysis", "transient", "initial", field),
                          f"the model has {len(md)} modes", k)
     return np.asarray(md.shapes[:, k - 1]).real
+
+
+def _grounding_rows(case: Case, model: Model) -> np.ndarray:
+    """``m``: the coefficient ``c`` of each constraint row ``A_i = c r(p)`` that grounds a
+    point ``p`` of ``analysis.transient.base.at`` (0 for the other rows)."""
+    spec = case.analysis.transient
+    assert spec is not None and spec.base is not None
+    asm = model.assembly
+    A = sp.csr_array(asm.A)
+    coef = np.zeros(A.shape[0])
+    for i, p in enumerate(spec.base.at):
+        r = asm.row(model.points[p]).toarray().ravel()
+        rr = float(r @ r)
+        found = False
+        for k in np.flatnonzero(np.abs(A @ r) > 0.0):
+            row = A[[k]].toarray().ravel()
+            c = float(row @ r) / rr if rr else 0.0
+            if c and np.abs(row - c * r).max() <= 1e-12 * np.abs(row).max():
+                coef[k], found = c, True
+        if not found:
+            raise case.error(("analysis", "transient", "base", "at", i),
+                             "not a grounded support: no active constraint holds this point "
+                             "alone (add one with terms: {point: 1})", p)
+    return coef
+
+
+def _base(case: Case, model: Model, t: np.ndarray) -> BaseMotion | None:
+    """The ground motion of ``analysis.transient.base``, or ``None``."""
+    spec = case.analysis.transient
+    assert spec is not None
+    if spec.base is None:
+        return None
+    sig, kind = spec.base.signal, spec.base.kind
+    params = dict(case.parameters)
+    try:
+        values = load_values(sig, t, case.base_dir, params)
+        rate0 = accel0 = 0.0
+        if kind == "displacement":  # g'(0), g''(0): one-sided differences of the signal
+            d = max(1e-3 * float(t[1] - t[0]), 1e-12)
+            g0, g1, g2 = load_values(sig, np.array([0.0, d, 2 * d]), case.base_dir, params)
+            rate0, accel0 = (-3 * g0 + 4 * g1 - g2) / (2 * d), (g0 - 2 * g1 + g2) / d ** 2
+    except ValueError as err:
+        field = "table" if sig.shape == "table" else "expression"
+        raise case.error(("analysis", "transient", "base", kind, field),
+                         " ".join(str(err).split()), sig.table or sig.expression) from None
+    return BaseMotion(rows=_grounding_rows(case, model), kind=kind, values=values,
+                      rate0=float(rate0), accel0=float(accel0))
 
 
 def transient_result(case: Case, model: Model) -> Transient:
@@ -77,11 +126,12 @@ def transient_result(case: Case, model: Model) -> Transient:
     opts = TransientOptions(integrator=spec.integrator, rho_inf=spec.rho_inf, every=spec.every,
                             field_every=spec.field_every, forces=spec.constraint_forces,
                             modal_count=spec.modal_count)
+    ground = _base(case, model, t)
     try:
         return transient(asm.M, asm.C, asm.K, asm.A, asm.b, B, f, spec.dt, steps, O,
                          output_names=spec.outputs, constraint_labels=asm.constraint_labels,
                          d0=d0, v0=v0, method=spec.method, checks=spec.check,
-                         tolerance=spec.tolerance, options=opts)
+                         tolerance=spec.tolerance, options=opts, base=ground)
     except ValueError as err:
         raise case.error(("analysis", "transient"), " ".join(str(err).split())) from None
     except CheckError as err:
