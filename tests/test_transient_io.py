@@ -3,6 +3,8 @@ listed by ``info``, and hostile groups (mismatched lengths, NaN, 3 GB declared s
 that go back) refused in one line, exit 2, like the other groups of the layout."""
 
 import dataclasses
+import re
+from pathlib import Path
 
 import h5py
 import numpy as np
@@ -126,6 +128,25 @@ HOSTILE = {
     "soft_link": (_set("t", h5py.SoftLink("/transient/t")), "/transient/t is a SoftLink"),
 }
 
+#: a moving ground's datasets of the wrong shape (written beside the group's own)
+HOSTILE_BASE = {
+    "base_motion_columns": ({"base_motion": np.zeros((41, 2)), "base_influence": np.zeros(2)},
+                            "/transient/base_motion has shape (41, 2), expected (41, 3)"),
+    "base_influence_length": ({"base_motion": np.zeros((41, 3)), "base_influence": np.zeros(3)},
+                              "/transient/base_influence has shape (3,), expected (2,)"),
+}
+
+
+def _add(items):
+    def mutate(g):
+        for name, value in items.items():
+            g[name] = value
+    return mutate
+
+
+HOSTILE.update({name: (_add(items), fragment)
+                for name, (items, fragment) in HOSTILE_BASE.items()})
+
 
 @pytest.mark.parametrize("name", sorted(HOSTILE))
 def test_hostile_transient_group_is_refused_in_one_line(name, tmp_path, capsys):
@@ -141,3 +162,37 @@ def test_hostile_transient_group_is_refused_in_one_line(name, tmp_path, capsys):
         assert err.count("\n") == 1 and "Traceback" not in err
         assert fragment in err, err
     assert not (tmp_path / "vtu").exists()
+
+
+def _documented_transient():
+    """The dataset and attribute names of the ``/transient`` section of docs/results.md."""
+    text = (Path(__file__).resolve().parents[1] / "docs" / "results.md").read_text()
+    section = text.split("## `/transient`", 1)[1].split("\n## ", 1)[0]
+    tables = [[re.match(r"\| `([^`]+)` \|", line).group(1) for line in block.splitlines()
+               if re.match(r"\| `([^`]+)` \|", line)]
+              for block in section.split("\n\n") if block.startswith("| dataset")
+              or block.startswith("| attribute")]
+    return set(tables[0]), set(tables[1])
+
+
+def test_results_doc_lists_every_transient_dataset_and_attribute(tmp_path):
+    """docs/results.md's /transient table against a written file (with a moving ground, so the
+    optional datasets are there), both ways; the ground's datasets read back to the last bit."""
+    r = _with_transient()
+    tr = r.transient
+    k, n_out = len(tr.t), len(tr.outputs)
+    r.transient = dataclasses.replace(tr, base_motion=np.linspace(0, 1, 3 * k).reshape(k, 3),
+                                      base_influence=np.arange(1.0, n_out + 1))
+    path = results.save(r, tmp_path / "r.h5")
+    datasets, attributes = _documented_transient()
+    with h5py.File(path, "r") as f:
+        g = f["transient"]
+        assert set(g.keys()) == datasets
+        written = {("agreement_<form>" if a.startswith("agreement_") else a) for a in g.attrs}
+        assert written == attributes
+        np.testing.assert_array_equal(g["relative_velocity"][()],
+                                      tr.velocity - r.transient.base_motion[:, 1:2]
+                                      * r.transient.base_influence[None, :])
+    back = results.load(path).transient
+    _same(back.base_motion, r.transient.base_motion)
+    _same(back.base_influence, r.transient.base_influence)
