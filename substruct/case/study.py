@@ -13,6 +13,7 @@ A study runs the case once per *sample*, each sample a set of values of case ``p
         frequencies: 4            # the lowest 4 physical frequencies (rad/s)
         damping_ratios: true
         frf_peaks: [rod@200]      # max |H| over the sweep, outputs of analysis.frf
+        frf: [rod@200]            # the whole curve H(omega) of each sample
         mac: true                 # MAC of each mode to the same mode of the case as written
 
     study:
@@ -144,6 +145,7 @@ class Collect(StrictModel):
     frequencies: Annotated[int, Field(ge=0, le=10_000)] = 0
     damping_ratios: bool = False
     frf_peaks: list[Annotated[PeakSpec, BeforeValidator(_peak)]] = Field(default_factory=list)
+    frf: list[Annotated[PeakSpec, BeforeValidator(_peak)]] = Field(default_factory=list)
     mac: bool = False
 
 
@@ -200,10 +202,12 @@ class StudySpec(StrictModel):
                              f"{modes.count} modes of analysis.modes.count",
                              collect.frequencies)
         frf = case.analysis.frf
-        for k, peak in enumerate(collect.frf_peaks):
-            where: tuple[str | int, ...] = ("study", "collect", "frf_peaks", k)
+        for key, k, peak in [("frf_peaks", k, p) for k, p in enumerate(collect.frf_peaks)] + \
+                [("frf", k, p) for k, p in enumerate(collect.frf)]:
+            where: tuple[str | int, ...] = ("study", "collect", key, k)
             if frf is None:
-                raise FieldError(where, "an FRF peak needs analysis.frf", peak.output)
+                what = "an FRF peak" if key == "frf_peaks" else "an FRF curve"
+                raise FieldError(where, f"{what} needs analysis.frf", peak.output)
             if peak.output not in frf.outputs:
                 raise FieldError((*where, "output"), f"not an output of analysis.frf "
                                  f"({', '.join(frf.outputs)})", peak.output)

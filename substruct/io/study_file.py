@@ -9,6 +9,8 @@ Layout::
     /parameters/       names (strings), table (samples x parameters)
     /samples/<name>    collected arrays, samples x k: frequency, damping_ratio, mac (per mode),
                        frf_peak, frf_peak_omega (per peak; attr ``peaks`` names them);
+                       frf (samples x frequencies x curves, complex; attr ``curves``) and
+                       frf_omega (samples x frequencies) with ``collect: frf``;
                        seconds (time of each sample), error (one string per sample, "" if run)
     /failures/         index, message: the samples that failed and why
     /reference/<name>  the same arrays for the case as written (when the MAC is collected)
@@ -60,6 +62,8 @@ def save_study(result: StudyResult, path: str | os.PathLike) -> Path:
                 s.create_dataset(name, data=values)
             s.attrs["peaks"] = np.array(result.peaks, dtype=object).astype(_STR) \
                 if result.peaks else np.array([], dtype=_STR)
+            s.attrs["curves"] = np.array(result.curves, dtype=object).astype(_STR) \
+                if result.curves else np.array([], dtype=_STR)
             s.create_dataset("seconds", data=result.seconds)
             s.create_dataset("error", data=np.array(result.errors, dtype=object), dtype=_STR)
             fail = f.create_group("failures")
@@ -95,6 +99,8 @@ def load_study(path: str | os.PathLike) -> StudyResult:
                            reference={k: np.asarray(v[()]) for k, v in f["reference"].items()},
                            backend=str(f.attrs["backend"]),
                            case_yaml=str(f.attrs["case_yaml"]), peaks=peaks,
+                           curves=[p.decode() if isinstance(p, bytes) else str(p)
+                                   for p in s.attrs.get("curves", [])],
                            shared=[p.decode() if isinstance(p, bytes) else str(p)
                                    for p in f.attrs.get("shared", [])],
                            shared_seconds=float(f.attrs.get("shared_seconds", 0.0)))

@@ -24,6 +24,7 @@ from substruct.studies.study_shared import shared_parts
 from substruct.studies.study_task import (
     PartJob,
     SampleRecord,
+    COMPLEX_FIELDS,
     SampleTask,
     collect,
     record_fields,
@@ -41,13 +42,15 @@ class StudyResult:
         kind: ``"grid"`` or ``"random"``.
         parameters: the names of the varied parameters.
         table: ``(samples, parameters)`` values.
-        values: collected arrays by name, each ``(samples, k)`` (NaN for failed samples).
+        values: collected arrays by name, each ``(samples, k)`` (NaN for failed samples);
+            ``frf`` is ``(samples, n_omega, curves)``, complex.
         errors: one message per sample, ``""`` for a sample that ran.
         seconds: time each sample took where it ran.
         reference: the collected arrays of the case as written (no study values).
         backend: where it ran.
         case_yaml: the case text.
         peaks: ``"output<-input"`` names of the FRF peaks.
+        curves: ``"output<-input"`` names of the full FRF curves (``values["frf"][s, :, c]``).
         shared: the reduced parts made once and shared by every sample.
         shared_seconds: the time it took to make them.
     """
@@ -63,6 +66,7 @@ class StudyResult:
     backend: str = "in-process"
     case_yaml: str = ""
     peaks: list[str] = field(default_factory=list)
+    curves: list[str] = field(default_factory=list)
     shared: list[str] = field(default_factory=list)
     shared_seconds: float = 0.0
 
@@ -95,16 +99,33 @@ def study_tasks(case: Case, reference: np.ndarray | None = None) -> tuple[list[s
     return names, table, tasks
 
 
-def gather(records: list[SampleRecord], spec: StudySpec) -> tuple[dict[str, np.ndarray],
-                                                                   list[str], np.ndarray]:
-    """Stack the records: arrays ``(samples, k)``, errors, seconds."""
-    lengths = record_fields(spec.collect)
-    values = {name: np.full((len(records), n), np.nan) for name, n in lengths.items()}
+def gather(records: list[SampleRecord], spec: StudySpec, n_omega: int = 0
+           ) -> tuple[dict[str, np.ndarray], list[str], np.ndarray]:
+    """Stack the records: arrays ``(samples, k)`` (NaN for a failed sample), errors, seconds.
+
+    The full FRF (``collect: frf``) is ``frf`` ``(samples, n_omega, curves)``, complex, with
+    ``frf_omega`` ``(samples, n_omega)``; a sample whose sweep has not ``n_omega``
+    frequencies (its grid named a varied parameter) is recorded as failed.
+    """
+    lengths = record_fields(spec.collect, n_omega)
+    values = {name: np.full((len(records), n), np.nan,
+                            dtype=complex if name in COMPLEX_FIELDS else float)
+              for name, n in lengths.items()}
     errors = []
     for s, record in enumerate(records):
-        errors.append(record.error)
+        error = record.error
+        sizes = {name: len(array) for name, array in record.values.items()}
+        if not error and any(sizes[n] != lengths[n] for n in sizes):
+            error = (f"the sweep has {sizes.get('frf_omega')} frequencies, the study's "
+                     f"{n_omega}: collect: frf needs one grid for every sample")
+        errors.append(error)
+        if error:
+            continue
         for name, array in record.values.items():
             values[name][s, :] = array
+    if "frf" in values:
+        curves = len(spec.collect.frf)
+        values["frf"] = values["frf"].reshape(len(records), curves, n_omega).transpose(0, 2, 1)
     return values, errors, np.array([r.seconds for r in records])
 
 
@@ -139,11 +160,16 @@ def run_study(case: Case, backend: Backend = Backend(), tick: Tick | None = None
             reference = collect(base, spec.collect, shapes)
             tasks = [replace(t, reference=shapes) for t in tasks]
         records = session.samples(tasks, tick, shared)
-    values, errors, seconds = gather(records, spec)
-    peaks = [f"{p.output}<-{p.input or (case.analysis.frf.inputs[0] if case.analysis.frf else '')}"
-             for p in spec.collect.frf_peaks]
+    frf = case.analysis.frf
+    n_omega = len(frf.omega.grid()) if frf is not None and spec.collect.frf else 0
+    values, errors, seconds = gather(records, spec, n_omega)
+    first = frf.inputs[0] if frf is not None else ""
+    peaks = [f"{p.output}<-{p.input or first}" for p in spec.collect.frf_peaks]
+    curves = [f"{p.output}<-{p.input or first}" for p in spec.collect.frf]
+    if "frf" in reference:
+        reference["frf"] = reference["frf"].reshape(len(curves), -1).T
     return StudyResult(case_name=case.name, kind="grid" if spec.grid is not None else "random",
                        parameters=names, table=table, values=values, errors=errors,
                        seconds=seconds, reference=reference, backend=backend.describe(),
-                       case_yaml=case.text, peaks=peaks, shared=names_shared,
+                       case_yaml=case.text, peaks=peaks, curves=curves, shared=names_shared,
                        shared_seconds=made)

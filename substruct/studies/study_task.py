@@ -33,7 +33,7 @@ from substruct.run.runner import build_model, run_case
 from substruct.substructure import Substructure
 
 __all__ = ["SampleTask", "SampleRecord", "PartJob", "make_part", "run_sample", "collect",
-           "mac_diagonal", "record_fields"]
+           "mac_diagonal", "record_fields", "COMPLEX_FIELDS"]
 
 
 @dataclass(frozen=True)
@@ -85,9 +85,11 @@ class SampleRecord:
     seconds: float = 0.0
 
 
-def record_fields(spec: Collect) -> dict[str, int]:
+def record_fields(spec: Collect, n_omega: int = 0) -> dict[str, int]:
     """The arrays of a record and their lengths: ``frequency``, ``damping_ratio``, ``mac``
-    (one per mode), ``frf_peak`` and ``frf_peak_omega`` (one per peak)."""
+    (one per mode), ``frf_peak`` and ``frf_peak_omega`` (one per peak), ``frf_omega`` (the
+    sweep's ``n_omega`` frequencies) and ``frf`` (complex, the curves one after the other,
+    ``n_omega`` values each)."""
     out: dict[str, int] = {}
     if spec.frequencies:
         out["frequency"] = spec.frequencies
@@ -97,7 +99,14 @@ def record_fields(spec: Collect) -> dict[str, int]:
         out["mac"] = spec.frequencies
     if spec.frf_peaks:
         out["frf_peak"] = out["frf_peak_omega"] = len(spec.frf_peaks)
+    if spec.frf:
+        out["frf_omega"] = n_omega
+        out["frf"] = n_omega * len(spec.frf)
     return out
+
+
+#: The arrays of a record that are complex.
+COMPLEX_FIELDS = ("frf",)
 
 
 def _padded(values: np.ndarray, n: int) -> np.ndarray:
@@ -145,6 +154,13 @@ def collect(result: Result, spec: Collect, reference: np.ndarray | None) -> dict
             where.append(frf.omega[k])
         out["frf_peak"] = np.asarray(peaks, dtype=float)
         out["frf_peak_omega"] = np.asarray(where, dtype=float)
+    if spec.frf and result.frf is not None:
+        frf = result.frf
+        curves = [frf.H[:, frf.outputs.index(c.output),
+                        frf.inputs.index(c.input) if c.input is not None else 0]
+                  for c in spec.frf]
+        out["frf_omega"] = np.asarray(frf.omega, dtype=float)
+        out["frf"] = np.concatenate(curves).astype(complex)
     return out
 
 
