@@ -89,6 +89,9 @@ def build_parser() -> argparse.ArgumentParser:
     export.add_argument("--modes", default=None, metavar="SPEC",
                         help="mode numbers, e.g. 1-6 or 1,3,5 (default: all)")
     export.add_argument("--variant", default=None, help="export the modes of this variant")
+    export.add_argument("--transient", action="store_true",
+                        help="with --format xdmf: the stored fields of the transient response "
+                        "as a time series, instead of the modes")
     export.add_argument("--out", default=None, metavar="DIR",
                         help="output directory (default: beside the result)")
     export.add_argument("--force", action="store_true",

@@ -15,7 +15,7 @@ import json
 import os
 import sys
 from pathlib import Path
-from typing import TextIO
+from typing import Any, TextIO
 
 from substruct.cli.errors import InputError
 from substruct.cli.files import check_out_dir, load_result, optional_module
@@ -84,6 +84,41 @@ def _same_file(a: Path, b: Path) -> bool:
         return a.resolve() == b.resolve()
 
 
+def _export_transient(args: argparse.Namespace, result: Any) -> int:
+    """``export --format xdmf --transient``: the stored fields of the transient response as
+    an XDMF time series (:mod:`substruct.io.transient_export`), with the checks of
+    :func:`export_command`."""
+    from substruct.io.file_set import BusyError
+
+    if args.format != "xdmf" or args.modes is not None or args.variant is not None:
+        raise InputError("--transient exports the stored fields as --format xdmf; --modes and "
+                         "--variant do not apply")
+    export = optional_module("io.transient_export")
+    out = args.out if args.out is not None else str(Path(args.result).parent)
+    try:
+        paths = export.transient_export_paths(result, Path(out) if out else Path("."))
+    except ValueError as err:
+        raise InputError(" ".join(str(err).split())) from None
+    as_file = Path(out).suffix.lower() == ".xdmf"
+    check_out_dir(str(Path(out).parent) if as_file else out, "--out", [p.name for p in paths])
+    for p in paths:
+        if p.exists() and _same_file(p, Path(args.result)):
+            raise InputError(f"{p} is the result being exported; export into another "
+                             "--out directory")
+        if p.exists() and not args.force:
+            raise InputError(f"{p} exists; use --force to overwrite it")
+    try:
+        paths = export.export_transient(result, Path(out) if out else Path("."),
+                                        force=args.force)
+    except BusyError as err:
+        raise InputError(str(err)) from None
+    except (ValueError, FileExistsError) as err:
+        raise InputError(" ".join(str(err).split())) from None
+    for p in paths:
+        print(p)
+    return 0
+
+
 def export_command(args: argparse.Namespace) -> int:
     """Write the selected modes of ``args.result`` as VTU or XDMF; print the paths; return 0.
 
@@ -93,6 +128,8 @@ def export_command(args: argparse.Namespace) -> int:
     from substruct.io.file_set import BusyError
 
     result = load_result(args.result)
+    if getattr(args, "transient", False):
+        return _export_transient(args, result)
     export = optional_module("io.export")
     out = args.out if args.out is not None else str(Path(args.result).parent)
     try:

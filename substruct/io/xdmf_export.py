@@ -1,6 +1,7 @@
 """The XDMF half of the ParaView export (:mod:`substruct.io.export`): a time series
-``<stem>.xdmf`` + ``<stem>.h5`` with one step per mode (time = mode number), written by
-meshio's time-series writer with two fixes, and read back before it is kept."""
+``<stem>.xdmf`` + ``<stem>.h5`` with one step per mode (time = mode number), or one step per
+stored field of a transient run (time = the instant, :mod:`substruct.io.transient_export`),
+written by meshio's time-series writer with two fixes, and read back before it is kept."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["write_xdmf", "check_xdmf"]
+__all__ = ["write_xdmf", "check_xdmf", "write_xdmf_series", "check_xdmf_series"]
 
 
 def _by_type(cells: list[tuple[str, np.ndarray]]) -> list[tuple[str, np.ndarray]]:
@@ -91,3 +92,36 @@ def check_xdmf(path: Path, n_points: int, n_cells: int, n_steps: int) -> None:
             if np.shape(data["shape_real"]) != (n_points, 3):
                 raise ValueError(f"{path.name} does not read back: step {step} has data of "
                                  f"shape {np.shape(data['shape_real'])}")
+
+
+def write_xdmf_series(path: Path, points: np.ndarray, cells: list[tuple[str, np.ndarray]],
+                      times: np.ndarray, disp: list[np.ndarray]) -> list[Path]:
+    """Write ``path`` (``.xdmf``) and its ``.h5``: the mesh, then one step per instant
+    ``times[i]`` with point data ``displacement`` (``(N, 3)``, ``disp[i]``); return both
+    paths."""
+    with _xdmf_writer()(path) as writer:
+        writer.write_points_cells(points, _by_type(cells))
+        for t, u in zip(times, disp):
+            writer.write_data(float(t), point_data={
+                "displacement": np.ascontiguousarray(u, dtype=float)})
+    return [path, path.with_suffix(".h5")]
+
+
+def check_xdmf_series(path: Path, n_points: int, n_cells: int, times: np.ndarray) -> None:
+    """Read ``path`` back with meshio; raise :class:`ValueError` unless it holds ``n_points``
+    points, ``n_cells`` cells and one step of ``(n_points, 3)`` displacements at each of
+    ``times``."""
+    import meshio
+
+    with meshio.xdmf.TimeSeriesReader(path) as reader:
+        points, cells = reader.read_points_cells()
+        got_cells = sum(len(c.data) for c in cells)
+        if (len(points) != n_points or got_cells != n_cells
+                or reader.num_steps != len(times)):
+            raise ValueError(f"{path.name} does not read back: {len(points)} points, "
+                             f"{got_cells} cells, {reader.num_steps} steps")
+        for step in range(len(times)):
+            t, data, _ = reader.read_data(step)
+            if float(t) != float(times[step]) or np.shape(data["displacement"]) != (n_points, 3):
+                raise ValueError(f"{path.name} does not read back: step {step} at t = {t} "
+                                 f"holds data of shape {np.shape(data['displacement'])}")
