@@ -78,6 +78,20 @@ def _summary(result: Any, seconds: float) -> dict[str, Any]:
     return out
 
 
+def _den_hartog(case: Any) -> Any:
+    """Den Hartog's tuning of the absorber the grid tunes, if it tunes one
+    (:func:`substruct.studies.study_tuning.absorber_tuning`); a problem computing it is a
+    warning, the study is written anyway."""
+    from substruct.studies.study_tuning import absorber_tuning
+
+    try:
+        return absorber_tuning(case)
+    except Exception as err:  # the marker is an extra: never lose a study for it
+        print(f"substruct: warning: no Den Hartog tuning: {' '.join(str(err).split())}",
+              file=sys.stderr)
+        return None
+
+
 def study_command(args: argparse.Namespace) -> int:
     """Run the study of ``args.case``; return the exit code (0, also when samples failed:
     they are recorded in the file and listed in the summary)."""
@@ -113,11 +127,19 @@ def study_command(args: argparse.Namespace) -> int:
     seconds = time.perf_counter() - start
     save_study(result, target)
     pictures = []
+    tuning = _den_hartog(case)
     if not args.no_pictures and case.output.pictures:
         from substruct.viz.study_picture import study_pictures
 
-        pictures = study_pictures(result, out)
+        marked = None if tuning is None else (
+            tuning[1].k_opt, tuning[1].c_opt,
+            f"Den Hartog ({tuning[1].k_opt:.5g}, {tuning[1].c_opt:.4g})")
+        pictures = study_pictures(result, out, marked=marked)
     summary = _summary(result, seconds)
+    if tuning is not None:
+        summary["den_hartog"] = {"absorber": tuning[0], "mu": tuning[1].mu,
+                                 result.parameters[0]: tuning[1].k_opt,
+                                 result.parameters[1]: tuning[1].c_opt}
     summary["files"] = [str(p) for p in (target, *pictures)]
     if args.json:
         print(json.dumps(summary, indent=1))
@@ -129,6 +151,10 @@ def study_command(args: argparse.Namespace) -> int:
             best = summary["smallest_peak"]
             at = ", ".join(f"{k} = {v:.6g}" for k, v in best["at"].items())
             print(f"smallest FRF peak {result.peaks[0]}: {best['peak']:.6g} at {at}")
+        if "den_hartog" in summary:
+            dh = summary["den_hartog"]
+            print(f"Den Hartog's tuning of absorber {dh['absorber']} (mu = {dh['mu']:.4g}): "
+                  + ", ".join(f"{p} = {dh[p]:.6g}" for p in result.parameters))
         for fail in summary["failures"]:
             print(f"sample {fail['sample']} failed: {fail['error']}")
         for f in summary["files"]:

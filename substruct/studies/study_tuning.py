@@ -17,9 +17,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Any, Sequence
 
-__all__ = ["DenHartog", "den_hartog", "grid_optimum"]
+import numpy as np
+
+from substruct.case.loader import Case
+
+__all__ = ["DenHartog", "den_hartog", "grid_optimum", "absorber_tuning"]
 
 
 @dataclass(frozen=True)
@@ -52,3 +56,59 @@ def grid_optimum(peaks: Sequence[float]) -> tuple[int, float]:
         if math.isfinite(p) and p < value:
             best, value = k, float(p)
     return best, value
+
+
+def _mentions(point: Any, name: str) -> bool:
+    text = str(point)
+    return text == name or text.startswith(name + "@")
+
+
+def absorber_tuning(case: Case) -> tuple[str, DenHartog] | None:
+    """Den Hartog's tuning of the absorber a two-parameter grid tunes, or ``None``.
+
+    The absorber is the ``free-free`` spring-mass-damper whose ``stiffness`` and ``damping``
+    are the grid's first and second parameters, by name, joined to the rest by one
+    connection.  The primary is the case without it (and without its connection and the
+    study): its modes are computed, the mode tuned is the one nearest the absorber's own
+    frequency :math:`\\sqrt{k/m}` at the middle of the stiffness axis, and its equivalent mass
+    at the attachment point is :math:`1/\\phi(x_a)^2` (mass-normalized shape).
+
+    Returns:
+        ``(absorber name, tuning)``; ``None`` when the study is not such a grid.
+    """
+    from substruct.case.loader import load_case
+    from substruct.case.yaml_io import load_yaml
+    from substruct.run.runner import build_model, run_case
+    from substruct.studies.study_plan import axis_values
+
+    spec = case.study
+    if spec is None or spec.grid is None or len(spec.grid.parameters) != 2:
+        return None
+    k_name, c_name = spec.parameter_names()
+    raw = load_yaml(case.text, case.source)
+    entry = next((s for s in raw.get("substructures") or [] if isinstance(s, dict)
+                  and s.get("type") == "free-free" and s.get("stiffness") == k_name
+                  and s.get("damping") == c_name), None)
+    if entry is None:
+        return None
+    name = str(entry["name"])
+    chains = [c for c in raw.get("connections") or [] if any(_mentions(p, name) for p in c)]
+    if len(chains) != 1 or len(chains[0]) != 2:
+        return None
+    where = next(str(p) for p in chains[0] if not _mentions(p, name))
+    raw["substructures"] = [s for s in raw["substructures"] if s is not entry]
+    raw["connections"] = [c for c in raw["connections"] if c is not chains[0]]
+    raw.pop("study", None)
+    raw["analysis"] = {"modes": raw.get("analysis", {}).get("modes") or {"count": 6}}
+    raw["output"] = {"pictures": False}
+    primary = load_case(raw)
+    model = build_model(primary)
+    modes = run_case(primary, model=model).modes
+    absorber = case.substructure(name)
+    if modes is None or absorber is None or where not in model.points:
+        return None
+    mass = float(getattr(absorber, "mass"))
+    k_mid = float(np.median(axis_values(spec.grid.parameters[0])))
+    i = int(np.argmin(np.abs(modes.omega - math.sqrt(k_mid / mass))))
+    u = float((model.assembly.rows([model.points[where]]) @ modes.shapes[:, i]).real.item())
+    return name, den_hartog(float(modes.omega[i]), 1.0 / u ** 2, mass)
