@@ -13,7 +13,7 @@ from substruct import cli
 from substruct.analysis.frf_quantity import as_quantity, quantity_units
 from substruct.case.loader import load_case
 from substruct.io import hdf5
-from substruct.io.uff import read_uff
+from substruct.io.uff import modes_from_2414, read_uff
 from substruct.run.runner import build_model, run_case
 
 CASE = Path(__file__).resolve().parents[1] / "cases" / "tapered_rod.yaml"
@@ -69,7 +69,10 @@ def test_export_uff_reads_back_exactly(result_file, tmp_path, capsys):
     result = hdf5.load(result_file)
     sets = read_uff(tmp_path / "tapered_rod.uff")
     types = [s["type"] for s in sets]
-    assert types == [15] + [55] * len(result.modes) + [58] * 3
+    assert types == [15] + [55] * len(result.modes) + [58] * 3 + [2414] * len(result.modes)
+    lam, shapes_2414 = modes_from_2414(sets)  # the exact copy of the modes
+    np.testing.assert_array_equal(lam, result.modes.eigenvalues)
+    np.testing.assert_array_equal(shapes_2414, result.modes.shapes)
     frfs = [s for s in sets if s["type"] == 58]
     for i, s in enumerate(frfs):
         np.testing.assert_array_equal(s["data"], result.frf.H[:, i, 0])

@@ -1,5 +1,5 @@
-"""``substruct export RESULT.h5 --format uff``: the result's receptances (UFF 58), modes (55)
-and nodes (15) in one ``<case>.uff`` file (:func:`substruct.io.uff.export_uff`); the other
+"""``substruct export RESULT.h5 --format uff``: the result's receptances (UFF 58, binary), modes
+(55, six digits, and 2414, double precision) and nodes (15) in one ``<case>.uff`` file (:func:`substruct.io.uff.export_uff`); the other
 formats go to :func:`substruct.cli.result_commands.export_command`."""
 
 from __future__ import annotations
