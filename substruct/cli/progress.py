@@ -1,6 +1,7 @@
 """What a long run says while it runs, on stderr: the phases as they start (with sizes and the
 elapsed time), a warning before a dense eigen solve that will be slow, and a progress bar
-(tqdm) for sweeps (frequencies of an FRF, levels of a study).
+(tqdm) for sweeps (frequencies of an FRF, levels of a study) and for counted phases of a
+study (:class:`CountBar`: the shared reductions, the samples).
 
 The phases are shown when stderr is a terminal, or when ``SUBSTRUCT_PROGRESS=1`` asks for them
 (a log file, the tests); ``SUBSTRUCT_PROGRESS=0`` and ``--quiet`` turn them off.  The slow-solve
@@ -14,7 +15,7 @@ import time
 from typing import Any, TextIO
 
 __all__ = ["PROGRESS_MIN", "DENSE_SECONDS_PER_N3", "SLOW_SECONDS", "ProgressBar", "PhaseLog",
-           "dense_seconds", "phases_wanted"]
+           "CountBar", "dense_seconds", "phases_wanted"]
 
 #: Sweeps with more frequencies than this show a progress bar (unless ``--quiet``).
 PROGRESS_MIN = 50
@@ -141,3 +142,37 @@ class ProgressBar:
             self.stream.write("\n")
             self.last = -1
         self.stream.flush()
+
+
+class CountBar:
+    """A tqdm bar (count, elapsed, ETA) of a phase made of ``total`` tasks, called as
+    ``bar(done, total)`` as they finish; drawn only when ``show`` (see :func:`phases_wanted`),
+    created at the first call, closed by :meth:`close`.
+
+    Args:
+        stream: where to write (``sys.stderr``).
+        desc: what the phase is (``study``, ``reductions``).
+        unit: what is counted (``sample``, ``part``).
+        show: draw the bar at all.
+    """
+
+    def __init__(self, stream: TextIO, desc: str, unit: str, show: bool):
+        self.stream, self.desc, self.unit, self.show = stream, desc, unit, show
+        self.bar: Any = None
+
+    def __call__(self, done: int, total: int) -> None:
+        """``done`` of the ``total`` tasks have finished."""
+        if not self.show:
+            return
+        if self.bar is None:
+            from tqdm import tqdm
+
+            tqdm.monitor_interval = 0  # no monitor thread (see ProgressBar)
+            self.bar = tqdm(total=total, file=self.stream, unit=self.unit, desc=self.desc)
+        self.bar.update(done - self.bar.n)
+
+    def close(self) -> None:
+        """Close the bar, if it was drawn."""
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None

@@ -3,8 +3,8 @@
 (``--workers N``) or on an existing Dask cluster (``--scheduler tcp://host:port``); written as
 ``DIR/<name>_study.h5`` (:mod:`substruct.io.study_file`) and pictures beside it.
 
-A progress bar (tqdm: samples done, elapsed, ETA) is drawn on stderr when it is a terminal and
-``--quiet`` is not given.
+Progress bars (tqdm: done, elapsed, ETA) for the shared reductions and the samples are drawn
+on stderr when it is a terminal and ``--quiet`` is not given.
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from substruct.cli.errors import InputError
+from substruct.cli.progress import CountBar
 from substruct.cli.files import writable_dir
 
 __all__ = ["study_command", "add_study_parser"]
@@ -46,24 +47,6 @@ def add_study_parser(sub: Any) -> None:
     study.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
     study.add_argument("--json", action="store_true",
                        help="print a machine-readable summary instead of the table")
-
-
-def _tick(show: bool) -> Any:
-    if not show:
-        return None, None
-    from tqdm import tqdm
-
-    bar: dict[str, Any] = {}
-
-    def tick(done: int, total: int) -> None:
-        if "bar" not in bar:
-            bar["bar"] = tqdm(total=total, file=sys.stderr, unit="sample", desc="study")
-        bar["bar"].update(done - bar["bar"].n)
-
-    def close() -> None:
-        if "bar" in bar:
-            bar["bar"].close()
-    return tick, close
 
 
 def _summary(result: Any, seconds: float) -> dict[str, Any]:
@@ -115,15 +98,17 @@ def study_command(args: argparse.Namespace) -> int:
     if target.exists() and not args.force:
         raise InputError(f"{target} exists; use --force to overwrite it")
     show = not args.quiet and bool(getattr(sys.stderr, "isatty", lambda: False)())
-    tick, close = _tick(show)
+    samples = CountBar(sys.stderr, "study", "sample", show)
+    parts = CountBar(sys.stderr, "reductions", "part", show)
     start = time.perf_counter()
     try:
-        result = run_study(case, Backend(workers=args.workers, scheduler=args.scheduler), tick)
+        result = run_study(case, Backend(workers=args.workers, scheduler=args.scheduler),
+                           samples, parts_tick=parts)
     except BackendError as err:
         raise InputError(str(err)) from None
     finally:
-        if close is not None:
-            close()
+        parts.close()
+        samples.close()
     seconds = time.perf_counter() - start
     save_study(result, target)
     pictures = []

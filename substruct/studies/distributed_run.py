@@ -33,7 +33,7 @@ from substruct.case.loader import Case, parse_case
 from substruct.run.analyses import frf_result
 from substruct.run.result import Result
 from substruct.run.runner import build_model, run_case
-from substruct.studies.study_backend import Backend, Session
+from substruct.studies.study_backend import Backend, Session, Tick
 from substruct.studies.study_plan import number_text
 from substruct.studies.study_task import PartJob
 
@@ -82,8 +82,10 @@ def join_chunks(pieces: Sequence[Receptance]) -> Receptance:
                    constraint_residual=max(p.constraint_residual for p in pieces))
 
 
-def run_distributed(case: Case, backend: Backend = Backend(), chunks: int = 1) -> Result:
-    """Run ``case`` with its reductions as tasks and its direct sweep in ``chunks`` tasks.
+def run_distributed(case: Case, backend: Backend = Backend(), chunks: int = 1,
+                    tick: Tick | None = None) -> Result:
+    """Run ``case`` with its reductions as tasks and its direct sweep in ``chunks`` tasks
+    (``tick(done, total)`` as reductions, then chunks, finish).
 
     Returns:
         The :class:`~substruct.run.result.Result` of :func:`substruct.run.runner.run_case`
@@ -96,7 +98,7 @@ def run_distributed(case: Case, backend: Backend = Backend(), chunks: int = 1) -
     jobs = [PartJob(case.text, case.source, str(case.base_dir), n) for n in reduced_names(case)]
     frf = case.analysis.frf
     with Session(backend) as session:
-        parts = session.parts(jobs) if jobs else {}
+        parts = session.parts(jobs, tick) if jobs else {}
         model = build_model(case, prebuilt=parts)
         if frf is None or frf.method not in DIRECT_METHODS or chunks <= 1:
             return run_case(case, model=model)
@@ -108,9 +110,9 @@ def run_distributed(case: Case, backend: Backend = Backend(), chunks: int = 1) -
                            tuple(float(v) for v in grid[a:b]))
                   for a, b in chunk_bounds(len(grid), chunks)]
         if session.client is None:
-            received = [sweep_chunk(p, model) for p in pieces]
+            received = session.map(sweep_chunk, pieces, [model] * len(pieces), tick=tick)
         else:
             shared = session.client.scatter([model], broadcast=True, hash=False)[0]
-            received = session.map(sweep_chunk, pieces, [shared] * len(pieces))
+            received = session.map(sweep_chunk, pieces, [shared] * len(pieces), tick=tick)
         result.frf = join_chunks(received)
     return result

@@ -139,18 +139,31 @@ class Session:
         if self.cluster is not None:
             self.cluster.close()
 
-    def map(self, function: Callable[..., Any], *args: Sequence[Any]) -> list[Any]:
+    def map(self, function: Callable[..., Any], *args: Sequence[Any],
+            tick: Tick | None = None) -> list[Any]:
         """``[function(*a) for a in zip(*args)]``, each call a task on Dask (in parallel,
         results in order); an exception of a call is raised here."""
+        calls = list(zip(*args))
         if self.client is None:
-            return [function(*a) for a in zip(*args)]
+            out = []
+            for k, a in enumerate(calls):
+                out.append(function(*a))
+                if tick is not None:
+                    tick(k + 1, len(calls))
+            return out
+        from distributed import as_completed
+
         futures = self.client.map(function, *[list(a) for a in args], pure=False,
                                   retries=RETRIES)
+        for k, _ in enumerate(as_completed(futures)):
+            if tick is not None:
+                tick(k + 1, len(calls))
         return list(self.client.gather(futures))
 
-    def parts(self, jobs: Sequence[PartJob]) -> dict[str, Substructure]:
+    def parts(self, jobs: Sequence[PartJob], tick: Tick | None = None
+              ) -> dict[str, Substructure]:
         """The shared reduced parts, each made once (one task each on Dask)."""
-        made = self.map(make_part, jobs)
+        made = self.map(make_part, jobs, tick=tick)
         return {job.name: sub for job, sub in zip(jobs, made)}
 
     def samples(self, tasks: Sequence[SampleTask], tick: Tick | None = None,

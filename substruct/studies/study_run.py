@@ -130,12 +130,13 @@ def gather(records: list[SampleRecord], spec: StudySpec, n_omega: int = 0
 
 
 def run_study(case: Case, backend: Backend = Backend(), tick: Tick | None = None,
-              share: bool = True) -> StudyResult:
+              share: bool = True, parts_tick: Tick | None = None) -> StudyResult:
     """Run the study of ``case`` on ``backend`` (default: in-process, serial).
 
     The reduced parts no study parameter changes (:func:`substruct.studies.study_shared.
     shared_parts`) are made once (on Dask one task each, then scattered to every worker) and
-    used by every sample, unless ``share`` is false; the table is the same either way.  The
+    used by every sample, unless ``share`` is false; the table is the same either way.
+    ``tick(done, total)`` is called as samples finish, ``parts_tick`` as shared parts do.  The
     case as written is run first, here, when the MAC is collected: its mode shapes are the
     reference set, sent with every task.
 
@@ -150,7 +151,7 @@ def run_study(case: Case, backend: Backend = Backend(), tick: Tick | None = None
     jobs = [PartJob(case.text, case.source, str(case.base_dir), n) for n in names_shared]
     with Session(backend) as session:
         start = time.perf_counter()
-        shared = session.parts(jobs) if jobs else {}
+        shared = session.parts(jobs, parts_tick) if jobs else {}
         made = time.perf_counter() - start
         reference: dict[str, np.ndarray] = {}
         if spec.collect.mac:
