@@ -42,10 +42,12 @@ def decibels(H: np.ndarray) -> np.ndarray:
 def case_magnitude(result: Result) -> str:
     """``analysis.frf.magnitude`` of the case the result was computed from (its stored YAML
     text); ``"log"`` when the case does not say, or cannot be read."""
+    if not result.case_yaml:
+        return "log"
     try:
-        data = load_yaml(result.case_yaml, result.case_name) if result.case_yaml else None
-        value = data["analysis"]["frf"].get("magnitude", "log")
-    except Exception:  # an old or hand-made result: the default
+        value = load_yaml(result.case_yaml, result.case_name)["analysis"]["frf"] \
+            .get("magnitude", "log")
+    except Exception:  # a hand-made result, or a case text that is not the usual mapping
         return "log"
     return value if value in MAGNITUDES else "log"
 
