@@ -108,9 +108,9 @@ def gather(records: list[SampleRecord], spec: StudySpec, n_omega: int = 0
     frequencies (its grid named a varied parameter) is recorded as failed.
     """
     lengths = record_fields(spec.collect, n_omega)
-    values = {name: np.full((len(records), n), np.nan,
-                            dtype=complex if name in COMPLEX_FIELDS else float)
-              for name, n in lengths.items()}
+    values: dict[str, np.ndarray] = {
+        name: np.full((len(records), n), np.nan, dtype=complex if name in COMPLEX_FIELDS
+                      else float) for name, n in lengths.items()}
     errors = []
     for s, record in enumerate(records):
         error = record.error
