@@ -93,6 +93,14 @@ def _run_locked(case: Any, args: argparse.Namespace, target: Any, out: Path, h5_
     placed = target.commit(staging, remove=gone)
     order = [out / h5_name] + [out / p.name for p in drawn]
     assert sorted(placed) == sorted(order), (placed, order)
+    tr = result.transient
+    if pictures and tr is not None and len(tr.snapshot_t) and result.model.drawings:
+        # the animation, slow, only once the result is in place: a set of its own
+        movie = optional_module("viz.transient_animation")
+        staging = target.stage(f"{case.name}_transient")
+        gif = staging / f"{case.name}_transient.gif"
+        call_isolated(lambda: movie.write_transient_gif(result, gif))
+        order += target.commit(staging)
     return order, result
 
 
@@ -119,6 +127,8 @@ def picture_paths(case: Any, out: Path) -> list[Path]:
         paths.append(out / f"{name}_frf.png")
     if case.analysis.transient is not None:
         paths.append(out / f"{name}_transient.png")
+        if case.analysis.transient.field_every:
+            paths.append(out / f"{name}_transient.gif")
     return paths
 
 
