@@ -62,18 +62,18 @@ def test_residual_checks_catch_a_wrong_frequency_and_a_wrong_shape(coupled):
     Ak = sp.csr_array(As[el.kept_rows])
     good = modes(asm.M, None, asm.K, asm.A, 6, solver="sparse")
     U, w = good.shapes.real, good.omega
-    assert kkt_residual(Ks, Ms, Ak, w, U) < 1e-10
-    assert generalized_inverse_residual(Ks, Ms, Ak, w, U) < 1e-10
+    assert kkt_residual(Ks, Ms, Ak, 1j * w, U) < 1e-10
+    assert generalized_inverse_residual(Ks, Ms, Ak, 1j * w, U) < 1e-10
     # a frequency off by 1e-4 relative (2e-4 in omega^2): both figures far above the default
     # tolerance 1e-6 (the KKT one is relative to |K u|, which holds the tie forces too)
     off = w * np.r_[1.0, 1.0, 1.0 + 1e-4, 1.0, 1.0, 1.0]
-    assert 1e-5 < kkt_residual(Ks, Ms, Ak, off, U) < 2e-4
-    assert 5e-5 < generalized_inverse_residual(Ks, Ms, Ak, off, U) < 2e-4
+    assert 1e-5 < kkt_residual(Ks, Ms, Ak, 1j * off, U) < 2e-4
+    assert 5e-5 < generalized_inverse_residual(Ks, Ms, Ak, 1j * off, U) < 2e-4
     # a shape that violates the ties: the KKT residual sees it through A u
     bad = U.copy()
     bad[:, 0] += 1e-3 * np.abs(U[:, 0]).max() * (np.arange(U.shape[0]) % 7 == 0)
-    assert kkt_residual(Ks, Ms, Ak, w, bad) > 1e-5
-    assert generalized_inverse_residual(Ks, Ms, Ak, w, bad) > 1e-5
+    assert kkt_residual(Ks, Ms, Ak, 1j * w, bad) > 1e-5
+    assert generalized_inverse_residual(Ks, Ms, Ak, 1j * w, bad) > 1e-5
 
 
 def test_a_check_past_the_tolerance_fails_the_production_path(coupled, monkeypatch):

@@ -13,8 +13,10 @@ by a main formulation and the check formulations, and returns one
   paper's eqs 28-34);
 * ``"sparse"``: the lowest roots of an undamped model, computed by the null-space form with
   the others as residual checks (:mod:`substruct.analysis.production`);
-* ``"sparse-damped"``: the lowest roots of a damped model by shift-invert Arnoldi on a
-  first-order pencil (:func:`substruct.analysis.sparse_damped.damped_sparse_modes`).
+* ``"sparse-damped"``: the lowest roots of a damped model by shift-invert Arnoldi on the
+  first-order pencil of the null-space form
+  (:func:`substruct.analysis.sparse_damped.damped_sparse_modes`), the others again as
+  residual checks (:mod:`substruct.analysis.production`).
 
 It fails with :class:`~substruct.analysis.errors.CheckError` when a check disagrees with the
 main formulation by more than ``tolerance``, and with ``ValueError`` on input it cannot analyse.
@@ -145,18 +147,18 @@ def modes(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
     .. math::  (\lambda^2 M + \lambda C + K)\, u = A^T \mu, \qquad A u = 0
                \qquad \text{(eqs 23-34)}
 
-    The strategy (dense, sparse, sparse-damped) is :func:`choose_solver`'s.  Dense and
-    sparse-damped: the main formulation is ``method``, each check formulation is solved by the
-    same strategy and compared with it (:func:`substruct.analysis.checks.modes_agreement`).
-    Sparse (undamped): the production path (:func:`substruct.analysis.production.production_modes`),
+    The strategy (dense, sparse, sparse-damped) is :func:`choose_solver`'s.  Dense: the main
+    formulation is ``method``, each check formulation is solved by the same strategy and
+    compared with it (:func:`substruct.analysis.checks.modes_agreement`).  Sparse and
+    sparse-damped: the production path (:func:`substruct.analysis.production.production_modes`),
     whatever ``method`` names: the numbers from the null-space form (``method`` of the result
     ``"null-space/sparse"``), the KKT and generalized-inverse forms as residual checks
     (``agreement`` keys ``"kkt-residual"`` and ``"generalized-inverse-residual"``; a check
     skipped as too costly is named in ``solver``); ``full_checks`` solves the named method and
     checks in full instead (the sparse eigensolves of each formulation, compared).  On a
-    damped model the sparse
-    ``"null-space"`` and ``"generalized-inverse"`` are one pencil, so neither is reported as a
-    check of the other (``"kkt"`` is an independent one).
+    damped model the sparse ``"null-space"`` and ``"generalized-inverse"`` are one pencil, so
+    with ``full_checks`` neither is reported as a check of the other (``"kkt"`` is an
+    independent one).
 
     Args:
         M, C, K: ``n x n`` (``M`` may be singular on massless coordinates, eq 6; ``C`` may be
@@ -200,18 +202,19 @@ def modes(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
         assert count is not None  # choose_solver is dense when every mode is asked
         return _sparse(M, C, K, A, count, formulation, choice)
 
-    if choice.strategy == "sparse" and not full_checks:
+    if choice.strategy != "dense" and not full_checks:
         assert count is not None
         if events is not None:
             events("sparse-eigen", f"{what}: sparse factorization and shift-invert eigen solve",
                    M.shape[0])
+        damped = choice.strategy == "sparse-damped"
         try:
-            main, agreement, note = production_modes(M, K, A, count,
-                                                     elimination=choice.elimination)
+            main, agreement, note = production_modes(
+                M, K, A, count, C=C if damped else None, elimination=choice.elimination)
         except ValueError as err:
             raise ValueError(f"sparse eigensolver: {' '.join(str(err).split())}") from None
         require_agreement(what, main.method, agreement, tolerance)
-        solver_label = f"sparse ({note})" if note else "sparse"
+        solver_label = f"{choice.strategy} ({note})" if note else choice.strategy
     else:
         main = solve(method)
         agreement = {m: modes_agreement(solve(m), main) for m in others}

@@ -2,31 +2,34 @@ r"""Checks of sparse modes by the equations of the other formulations, at the co
 products and one small solve: the modes come from the null-space form, the Lagrange (KKT) and
 generalized-inverse forms verify them.
 
-Given the modes :math:`(\omega_j, u_j)` of :math:`K u = \omega^2 M u + A^T \mu`,
-:math:`A u = 0` from the reduced pencil :math:`T^T K T p = \omega^2 T^T M T p`, ``u = T p``:
+Given the roots and shapes :math:`(\lambda_j, u_j)` of
+:math:`(\lambda^2 M + \lambda C + K) u = A^T \mu`, :math:`A u = 0` from the null-space form
+``u = T p`` (undamped: :math:`\lambda = i\omega`, from :math:`T^T K T p = \omega^2 T^T M T p`;
+damped: from the first-order pencil of :math:`T^T M T`, :math:`T^T C T`, :math:`T^T K T`):
 
 **KKT residual** (:func:`kkt_residual`): the Lagrange equations in the full coordinates,
 
-.. math::  (K - \omega^2 M) u + A_k^T \mu = 0, \qquad A_k u = 0,
+.. math::  (\lambda^2 M + \lambda C + K) u + A_k^T \mu = 0, \qquad A_k u = 0,
 
 with :math:`\mu` from the small ``m x m`` least-squares system
-:math:`(A_k A_k^T) \mu = -A_k (K - \omega^2 M) u`; the figure is, over the modes,
+:math:`(A_k A_k^T) \mu = -A_k (\lambda^2 M + \lambda C + K) u`; the figure is, over the modes,
 
-.. math::  \max_j \max\Big(\frac{|(K - \omega_j^2 M) u_j + A_k^T \mu_j|}
-                               {|K u_j| + \omega_j^2 |M u_j|},\;
+.. math::  \max_j \max\Big(\frac{|(\lambda_j^2 M + \lambda_j C + K) u_j + A_k^T \mu_j|}
+                               {|K u_j| + |\lambda_j| |C u_j| + |\lambda_j|^2 |M u_j|},\;
                           \frac{|A_k u_j|}{|u_j|}\Big)
 
-(for a rigid-body mode, :math:`\omega_j = 0`, the denominator is :math:`|K|_\infty |u_j|`:
+(for a rigid-body mode, :math:`\lambda_j = 0`, the denominator is :math:`|K|_\infty |u_j|`:
 ``K u`` is round-off there).
 
 **Generalized-inverse residual** (:func:`generalized_inverse_residual`): the paper's
 acceleration of the constrained system (eqs 5 and 10) with :math:`M_d` the mass made definite
 on massless coordinates (eq 6),
 
-.. math::  -\omega^2 u = a + M_d^{-1} A^T S^+ (0 - A a), \qquad
-           a = -M_d^{-1} \big(K + \omega^2 (M_d - M)\big) u, \qquad S = A M_d^{-1} A^T,
+.. math::  \lambda^2 u = a + M_d^{-1} A^T S^+ (0 - A a), \qquad
+           a = -M_d^{-1} \big(K + \lambda C - \lambda^2 (M_d - M)\big) u, \qquad
+           S = A M_d^{-1} A^T,
 
-figure :math:`\max_j |\omega_j^2 u_j + P a_j| / (\omega_j^2 |u_j| + |P a_j|)` (``|a|`` itself
+figure :math:`\max_j |P a_j - \lambda_j^2 u_j| / (|\lambda_j|^2 |u_j| + |P a_j|)` (``|a|`` itself
 holds the accelerations of the constraint forces and the stiff part of ``M_d^{-1} K``).  It needs
 :math:`M_d^{-1} A^T`: sparse when ``M`` is diagonal (lumped), otherwise one factorization of
 :math:`M_d` and ``m`` solves, which :func:`generalized_inverse_affordable` allows only for small
@@ -38,6 +41,8 @@ elimination, the reduced matrices or the eigensolver shows in them.
 """
 
 from __future__ import annotations
+
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -60,34 +65,59 @@ GI_CHECK_ROWS = 200
 GI_CHECK_SIZE = 20_000
 
 
-def _rigid_scale(K: sp.csr_array, U: np.ndarray, omega: np.ndarray) -> np.ndarray:
-    r"""The denominator of a rigid-body mode (:math:`\omega_j = 0`, where ``K u`` is round-off
+def _rigid_scale(K: sp.csr_array, U: np.ndarray, lam: np.ndarray) -> np.ndarray:
+    r"""The denominator of a rigid-body mode (:math:`\lambda_j = 0`, where ``K u`` is round-off
     and the relative figure would be 0/0): :math:`|K|_\infty |u_j|`, a backward error; 0 for
     the other modes."""
     norm = float(abs(K).sum(axis=1).max(initial=0.0))
-    return np.where(np.asarray(omega) == 0.0, norm * np.linalg.norm(U, axis=0), 0.0) + 1e-300
+    return np.where(np.asarray(lam) == 0.0, norm * np.linalg.norm(U, axis=0), 0.0) + 1e-300
 
 
-def kkt_residual(K: sp.csr_array, M: sp.csr_array, Ak: sp.csr_array, omega: np.ndarray,
-                 U: np.ndarray) -> float:
+def _roots_and_shapes(eigenvalues: np.ndarray, U: np.ndarray,
+                      C: sp.csr_array | None) -> tuple[np.ndarray, np.ndarray]:
+    """``(lambda, U)``: complex roots and shapes; real shapes of an undamped model stay real
+    (``lambda = i omega`` enters only through ``lambda^2 = -omega^2``)."""
+    lam = np.asarray(eigenvalues, dtype=complex)
+    if C is None and np.iscomplexobj(U) and not np.any(U.imag):
+        U = U.real
+    return lam, np.asarray(U)
+
+
+def _solve_real(solve: Any, B: np.ndarray) -> np.ndarray:
+    """A real factorization applied to a possibly complex right-hand side."""
+    if np.iscomplexobj(B):
+        return np.asarray(solve(B.real)) + 1j * np.asarray(solve(B.imag))
+    return np.asarray(solve(B))
+
+
+def kkt_residual(K: sp.csr_array, M: sp.csr_array, Ak: sp.csr_array, eigenvalues: np.ndarray,
+                 U: np.ndarray, C: sp.csr_array | None = None) -> float:
     r"""The largest relative residual of the Lagrange equations
-    :math:`(K - \omega^2 M) u + A_k^T \mu = 0`, :math:`A_k u = 0` over the modes (columns of
-    ``U``), :math:`\mu` by least squares (module docstring).  ``Ak``: independent rows."""
+    :math:`(\lambda^2 M + \lambda C + K) u + A_k^T \mu = 0`, :math:`A_k u = 0` over the modes
+    (roots ``eigenvalues``, complex; shapes the columns of ``U``), :math:`\mu` by least squares
+    (module docstring).  ``Ak``: independent rows; ``C`` ``None`` for an undamped model."""
     if U.shape[1] == 0:
         return 0.0
-    U = np.asarray(U.real if np.iscomplexobj(U) else U, dtype=float)
-    w2 = np.asarray(omega, dtype=float) ** 2
+    lam, U = _roots_and_shapes(eigenvalues, U, C)
+    l2 = lam**2
+    if C is None:  # lambda = i omega: lambda^2 real
+        l2 = l2.real
     KU, MU = K @ U, M @ U
-    R = KU - MU * w2
+    R = KU + MU * l2
+    cnorm = 0.0
+    if C is not None:
+        CU = C @ U
+        R = R + CU * lam
+        cnorm = np.abs(lam) * np.linalg.norm(CU, axis=0)
     if Ak.shape[0]:
         S = sp.csc_array(Ak @ Ak.T)
-        mu = factorizer("superlu", spd=True)(S)(-(Ak @ R))
-        R = R + Ak.T @ np.asarray(mu).reshape(Ak.shape[0], -1)
+        mu = _solve_real(factorizer("superlu", spd=True)(S), -(Ak @ R))
+        R = R + Ak.T @ mu.reshape(Ak.shape[0], -1)
         tie = np.linalg.norm(Ak @ U, axis=0) / np.maximum(np.linalg.norm(U, axis=0), 1e-300)
     else:
         tie = np.zeros(U.shape[1])
-    denom = np.linalg.norm(KU, axis=0) + w2 * np.linalg.norm(MU, axis=0) + \
-        _rigid_scale(K, U, omega)
+    denom = np.linalg.norm(KU, axis=0) + cnorm + np.abs(l2) * np.linalg.norm(MU, axis=0) + \
+        _rigid_scale(K, U, lam)
     return float(max(np.max(np.linalg.norm(R, axis=0) / denom), np.max(tie)))
 
 
@@ -111,16 +141,22 @@ def generalized_inverse_affordable(M: sp.csr_array, rows: int) -> bool:
 
 
 def generalized_inverse_residual(K: sp.csr_array, M: sp.csr_array, Ak: sp.csr_array,
-                                 omega: np.ndarray, U: np.ndarray) -> float:
+                                 eigenvalues: np.ndarray, U: np.ndarray,
+                                 C: sp.csr_array | None = None) -> float:
     r"""The largest relative residual of the generalized-inverse acceleration (eqs 5, 10)
-    :math:`-\omega^2 u = P a` over the modes (columns of ``U``; module docstring).  ``Ak``:
-    independent rows; ``S^+`` is the pseudo-inverse of eq 5."""
+    :math:`\lambda^2 u = P a` over the modes (roots ``eigenvalues``, complex; shapes the
+    columns of ``U``; module docstring).  ``Ak``: independent rows; ``S^+`` is the
+    pseudo-inverse of eq 5; ``C`` ``None`` for an undamped model."""
     if U.shape[1] == 0:
         return 0.0
-    U = np.asarray(U.real if np.iscomplexobj(U) else U, dtype=float)
-    w2 = np.asarray(omega, dtype=float) ** 2
+    lam, U = _roots_and_shapes(eigenvalues, U, C)
+    l2 = lam**2
+    if C is None:
+        l2 = l2.real
     Md = _definite_mass(M)
-    rhs = -(K @ U) - ((Md - M) @ U) * w2
+    rhs = -(K @ U) + ((Md - M) @ U) * l2
+    if C is not None:
+        rhs = rhs - (C @ U) * lam
     m = Ak.shape[0]
     if _is_diagonal(Md):
         dinv = 1.0 / Md.diagonal()
@@ -129,13 +165,16 @@ def generalized_inverse_residual(K: sp.csr_array, M: sp.csr_array, Ak: sp.csr_ar
         correction = Y @ _pinv_solve(Ak @ Y, Ak @ a) if m else 0.0
     else:
         solve = factorizer("auto", spd=True)(sp.csc_array(Md))
-        block = np.asarray(solve(np.hstack([rhs, Ak.T.toarray()]) if m else rhs))
-        a, Yd = block[:, :U.shape[1]], block[:, U.shape[1]:]
-        correction = Yd @ (np.linalg.pinv(Ak @ Yd) @ (Ak @ a)) if m else 0.0
+        a = _solve_real(solve, rhs)
+        if m:
+            Yd = np.asarray(solve(Ak.T.toarray()))
+            correction = Yd @ (np.linalg.pinv(Ak @ Yd) @ (Ak @ a))
+        else:
+            correction = 0.0
     Pa = a - correction
-    R = U * w2 + Pa
-    denom = w2 * np.linalg.norm(U, axis=0) + np.linalg.norm(Pa, axis=0) + \
-        _rigid_scale(K, U, omega) / max(float(np.mean(abs(M.diagonal()))), 1e-300)
+    R = Pa - U * l2
+    denom = np.abs(l2) * np.linalg.norm(U, axis=0) + np.linalg.norm(Pa, axis=0) + \
+        _rigid_scale(K, U, lam) / max(float(np.mean(abs(M.diagonal()))), 1e-300)
     return float(np.max(np.linalg.norm(R, axis=0) / denom))
 
 
@@ -144,4 +183,4 @@ def _pinv_solve(S: sp.sparray, b: np.ndarray) -> np.ndarray:
     sparse factorization, or the dense pseudo-inverse for up to 2000 rows."""
     if S.shape[0] <= 2000:
         return np.linalg.pinv(np.asarray(sp.csr_array(S).toarray())) @ b
-    return np.asarray(factorizer("superlu", spd=True)(sp.csc_array(S))(b))
+    return _solve_real(factorizer("superlu", spd=True)(sp.csc_array(S)), b)

@@ -1,11 +1,14 @@
-r"""The production path of the undamped sparse modes: the numbers from the null-space form, the
+r"""The production path of the sparse modes: the numbers from the null-space form, the
 Lagrange and generalized-inverse forms as residual checks.
 
 Whatever formulation a case names, on the sparse path the modes come from
 
 .. math::  u = T p, \quad A T = 0: \qquad (T^T K T)\, p = \omega^2 (T^T M T)\, p
 
-(master-slave elimination, :func:`substruct.analysis.sparse_modes.null_space_modes`), with the
+(master-slave elimination, :func:`substruct.analysis.sparse_modes.null_space_modes`; with
+damping, the first-order pencil of :math:`T^T M T`, :math:`T^T C T`, :math:`T^T K T` by
+:func:`substruct.analysis.sparse_damped.damped_sparse_modes`, one real LU of twice the reduced
+size, where the KKT pencil would need one of ``2n + m``), with the
 best factorization available (CHOLMOD when scikit-sparse is importable, SuperLU in symmetric
 mode otherwise): one symmetric positive definite factorization of the reduced size, where the
 sparse generalized-inverse and KKT eigensolves need two indefinite saddle-point factorizations
@@ -33,6 +36,7 @@ from substruct.analysis.mode_checks import (
     kkt_residual,
 )
 from substruct.analysis.results import Modes
+from substruct.analysis.sparse_damped import damped_sparse_modes
 from substruct.analysis.sparse_modes import null_space_modes
 from substruct.linalg.factorize import has_cholmod
 from substruct.linalg.memory import factor_memory, require_memory
@@ -58,9 +62,12 @@ def sparse_memory(K: sp.sparray, count: int, kind: str) -> float:
 
 
 def production_modes(M: sp.sparray, K: sp.sparray, A: sp.sparray | None, count: int, *,
-                     elimination: Elimination | None = None) -> tuple[Modes, dict[str, float],
-                                                                      str]:
+                     C: sp.sparray | None = None, elimination: Elimination | None = None
+                     ) -> tuple[Modes, dict[str, float], str]:
     r"""The lowest ``count`` modes by the null-space form, with the residual checks.
+
+    ``C`` ``None`` (undamped): :math:`T^T K T p = \omega^2 T^T M T p` by shift-invert Lanczos;
+    otherwise the damped roots of the null-space first-order pencil (eqs 23-34 in ``p``).
 
     Returns:
         ``(modes, agreement, note)``: the modes (``method`` ``"null-space/sparse"``), the
@@ -73,19 +80,25 @@ def production_modes(M: sp.sparray, K: sp.sparray, A: sp.sparray | None, count: 
             :func:`~substruct.analysis.sparse_modes.null_space_modes` refuses.
     """
     Ms, Ks, As, k = check_inputs(M, K, A, count)
-    kind = "cholmod" if has_cholmod() else "superlu"
-    label = "CHOLMOD" if kind == "cholmod" else "SuperLU"
-    require_memory(sparse_memory(Ks, k, kind),
-                   f"the sparse eigensolve of {Ks.shape[0]} coordinates ({label})")
     el = elimination or eliminate(Ms, As)
-    main = null_space_modes(Ms, Ks, As, k, factorization=kind, elimination=el)
+    if C is None:
+        kind = "cholmod" if has_cholmod() else "superlu"
+        label = "CHOLMOD" if kind == "cholmod" else "SuperLU"
+        require_memory(sparse_memory(Ks, k, kind),
+                       f"the sparse eigensolve of {Ks.shape[0]} coordinates ({label})")
+        main = null_space_modes(Ms, Ks, As, k, factorization=kind, elimination=el)
+        roots, Cs = 1j * main.omega, None
+    else:
+        Cs = sp.csr_array(C, dtype=float)
+        main = damped_sparse_modes(Ms, Cs, Ks, As, k, formulation="null-space", elimination=el)
+        roots = main.eigenvalues
     main.method = f"{MAIN_METHOD}/sparse"
     U = main.shapes
     Ak = sp.csr_array(As[el.kept_rows])
-    agreement = {KKT_CHECK: kkt_residual(Ks, Ms, Ak, main.omega, U)}
+    agreement = {KKT_CHECK: kkt_residual(Ks, Ms, Ak, roots, U, Cs)}
     note = ""
     if generalized_inverse_affordable(Ms, Ak.shape[0]):
-        agreement[GI_CHECK] = generalized_inverse_residual(Ks, Ms, Ak, main.omega, U)
+        agreement[GI_CHECK] = generalized_inverse_residual(Ks, Ms, Ak, roots, U, Cs)
     else:
         note = (f"generalized-inverse check skipped: {Ak.shape[0]} constraint rows on a "
                 f"consistent mass of {Ks.shape[0]} coordinates")
