@@ -1,32 +1,59 @@
 """Makers of substructures: rods (assumed modes, enriched assumed modes, finite elements),
-discrete systems (spring-mass-damper secondaries, springs, point masses) and meshed solids."""
+discrete systems (spring-mass-damper secondaries, springs, point masses) and meshed solids.
 
-from substruct.models.discrete import fixed_free, free_free, point_mass, spring
-from substruct.models.enrichment import rod_assumed_modes_enriched, static_shapes
-from substruct.models.rod import (
-    SUPPORTS,
-    paper_taper,
-    rod_assumed_modes,
-    rod_fe,
-    uniform_rod_frequencies,
-)
-from substruct.models.mesh_io import read_mesh
-from substruct.models.solid import solid_box, solid_from_mesh, solid_rectangle
+The names are imported from their modules on first use: a case of rods and springs never
+loads the mesh readers and the solid meshers (meshio, scikit-fem's 3D elements, k-d trees).
+"""
 
-__all__ = [
-    "SUPPORTS",
-    "fixed_free",
-    "free_free",
-    "paper_taper",
-    "point_mass",
-    "read_mesh",
-    "rod_assumed_modes",
-    "rod_assumed_modes_enriched",
-    "rod_fe",
-    "solid_box",
-    "solid_from_mesh",
-    "solid_rectangle",
-    "spring",
-    "static_shapes",
-    "uniform_rod_frequencies",
-]
+from __future__ import annotations
+
+from importlib import import_module
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from substruct.models.discrete import fixed_free, free_free, point_mass, spring
+    from substruct.models.enrichment import rod_assumed_modes_enriched, static_shapes
+    from substruct.models.mesh_io import read_mesh
+    from substruct.models.rod import (
+        SUPPORTS,
+        paper_taper,
+        rod_assumed_modes,
+        rod_fe,
+        uniform_rod_frequencies,
+    )
+    from substruct.models.solid import solid_box, solid_from_mesh, solid_rectangle
+
+#: Public name -> the module that defines it.
+_LAZY = {
+    "SUPPORTS": "rod",
+    "fixed_free": "discrete",
+    "free_free": "discrete",
+    "paper_taper": "rod",
+    "point_mass": "discrete",
+    "read_mesh": "mesh_io",
+    "rod_assumed_modes": "rod",
+    "rod_assumed_modes_enriched": "enrichment",
+    "rod_fe": "rod",
+    "solid_box": "solid",
+    "solid_from_mesh": "solid",
+    "solid_rectangle": "solid",
+    "spring": "discrete",
+    "static_shapes": "enrichment",
+    "uniform_rod_frequencies": "rod",
+}
+
+__all__ = sorted(_LAZY)
+
+
+def __getattr__(name: str) -> Any:
+    """Import the defining module on first use."""
+    if name not in _LAZY:
+        raise AttributeError(f"module 'substruct.models' has no attribute {name!r}")
+    value = getattr(import_module(f"substruct.models.{_LAZY[name]}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    """The public names, lazy ones included."""
+    return sorted(__all__)
