@@ -18,7 +18,9 @@ what is timed is the command a user runs:
     outside the timing; only its solve timed).
 
 Time: wall clock of the subprocess, median of ``--repeat`` runs (one run where a run takes
-over 60 s).  Memory: the peak resident set of the subprocess (``ru_maxrss`` of the child).
+over 60 s); and the CPU time (user + system) of each whole process, which a machine shared
+with other jobs disturbs far less than the wall clock (b's process builds the monolithic
+model once and solves it up to ``--repeat`` times: the CPU of the extra solves is taken off).  Memory: the peak resident set of the subprocess (``ru_maxrss`` of the child).
 Sizes 10k, 30k and 100k coordinates (``--quick``: 10k and 30k, one run each, about two
 minutes); ``--big`` adds 300k.  The frequencies of (a), read back from its ``--json``
 summary, are compared with (b).
@@ -88,9 +90,9 @@ output: {{pictures: false}}
 """
 
 
-def child(cmd: list[str], env: dict) -> tuple[float, float, str]:
-    """Wall time, peak resident set (bytes, ``ru_maxrss`` of this child by ``wait4``) and
-    stdout of one subprocess."""
+def child(cmd: list[str], env: dict) -> tuple[float, float, str, float]:
+    """Wall time, peak resident set (bytes, ``ru_maxrss`` of this child by ``wait4``),
+    stdout and CPU time (user + system, ``wait4``) of one subprocess."""
     with tempfile.TemporaryFile() as err:
         t0 = time.perf_counter()
         proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=err)
@@ -103,7 +105,7 @@ def child(cmd: list[str], env: dict) -> tuple[float, float, str]:
             err.seek(0)
             raise RuntimeError(f"{' '.join(cmd)} failed ({proc.returncode}):\n"
                                f"{err.read().decode()[-3000:]}")
-    return wall, usage.ru_maxrss * 1024.0, out
+    return wall, usage.ru_maxrss * 1024.0, out, usage.ru_utime + usage.ru_stime
 
 
 def run_a(size: int, repeat: int, env: dict, work: Path) -> dict:
@@ -112,15 +114,17 @@ def run_a(size: int, repeat: int, env: dict, work: Path) -> dict:
     exe = str(Path(sys.executable).parent / "substruct")
     cmd = [exe, "run", str(case), "--out", str(work / f"out_{size}"), "--force", "--quiet",
            "--no-pictures", "--json"]
-    walls, peak, summary = [], 0.0, ""
+    walls, cpus, peak, summary = [], [], 0.0, ""
     for i in range(repeat):
-        wall, peak_i, summary = child(cmd, env)
+        wall, peak_i, summary, cpu = child(cmd, env)
         walls.append(wall)
+        cpus.append(cpu)
         peak = max(peak, peak_i)
         if wall > 60.0:
             break
     data = json.loads(summary)
-    return {"time": statistics.median(walls), "runs": len(walls), "peak": peak,
+    return {"time": statistics.median(walls), "cpu": statistics.median(cpus),
+            "runs": len(walls), "peak": peak,
             "n": data["model"]["n_dof"], "omega": data["modes"]["omega"],
             "method": data["modes"]["method"], "agreement": data["modes"]["agreement"]}
 
@@ -128,9 +132,11 @@ def run_a(size: int, repeat: int, env: dict, work: Path) -> dict:
 def run_b(size: int, repeat: int, env: dict, fact: str) -> dict:
     cmd = [sys.executable, str(Path(__file__).with_name("modes.py")), "--worker", "b",
            "--size", str(size), "--factorization", fact, "--repeat", str(repeat)]
-    wall, peak, out = child(cmd, env)
+    wall, peak, out, cpu = child(cmd, env)
     data = json.loads(out.strip().splitlines()[-1])
-    return {"time": data["time"], "process": wall, "peak": peak, "n": data["n"],
+    runs = len(data["times"])  # one build, `runs` solves: the CPU of a build and one solve
+    return {"time": data["time"], "process": wall, "cpu": cpu - (runs - 1) * data["cpu"],
+            "peak": peak, "n": data["n"],
             "omega": 2 * np.pi * np.asarray(data["freq_hz"]), "runs": len(data["times"])}
 
 
@@ -149,7 +155,8 @@ def main() -> None:
     print(f"machine: {machine()}")
     print(f"factorization: {fact} (the baseline's and the one substruct picks)")
     print(f"\n{'n':>8} {'a: run s':>9} {'a: MB':>7} {'b: solve s':>10} {'b: proc s':>9} "
-          f"{'b: MB':>7} {'a/b t':>6} {'a/b t proc':>10} {'a/b mem':>7} {'max |wa/wb-1|':>13}")
+          f"{'b: MB':>7} {'a/b t':>6} {'a/b t proc':>10} {'a/b mem':>7} {'max |wa/wb-1|':>13} "
+          f"{'a: cpu s':>8} {'b: cpu s':>8} {'a/b cpu':>7}")
     with tempfile.TemporaryDirectory() as tmp:
         for size in sizes:
             b = run_b(size, repeat, env, fact)
@@ -158,7 +165,8 @@ def main() -> None:
             print(f"{a['n']:>8} {a['time']:>9.2f} {a['peak'] / 2**20:>7,.0f} "
                   f"{b['time']:>10.2f} {b['process']:>9.2f} {b['peak'] / 2**20:>7,.0f} "
                   f"{a['time'] / b['time']:>6.2f} {a['time'] / b['process']:>10.2f} "
-                  f"{a['peak'] / b['peak']:>7.2f} {diff:>13.1e}", flush=True)
+                  f"{a['peak'] / b['peak']:>7.2f} {diff:>13.1e} {a['cpu']:>8.2f} "
+                  f"{b['cpu']:>8.2f} {a['cpu'] / b['cpu']:>7.2f}", flush=True)
             print(f"         (a) {a['method']}, checks "
                   f"{', '.join(f'{k} {v:.1e}' for k, v in a['agreement'].items())}; "
                   f"runs a {a['runs']}, b {b['runs']}", flush=True)
