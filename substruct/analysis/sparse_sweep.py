@@ -20,8 +20,8 @@ Where a reverse Cuthill-McKee ordering makes :math:`Z_T` narrow (half-bandwidth 
 LU instead (:mod:`substruct.linalg.banded`): with many inputs, for a batch of frequencies at
 a time (:func:`~substruct.linalg.banded.band_solve_batch`: each row operation of the
 substitutions done for every frequency of the batch and every input at once), with few inputs
-``gbsv`` a frequency at a time.  The outputs
-are gathered by rows (:class:`Gather`).  The reduced system has ``n - rank(A)`` unknowns instead of the ``n + m`` of the KKT system and
+``gbsv`` a frequency at a time.  The outputs are gathered by rows (:class:`Gather`).  The
+reduced system has ``n - rank(A)`` unknowns instead of the ``n + m`` of the KKT system and
 the ``n + m`` of the bordered generalized-inverse system, and needs one factorization a
 frequency instead of their two.
 """
