@@ -12,6 +12,7 @@ model is the same, bit for bit.
 from __future__ import annotations
 
 from substruct.builder.factory import make_substructures
+from substruct.builder.frf_parts import has_frf_parts, split_frf_case
 from substruct.builder.model import point_positions
 from substruct.builder.solids import tie_and_reduce
 from substruct.case.loader import Case, RodSpec
@@ -31,7 +32,9 @@ def reduced_part(case: Case, name: str) -> Substructure:
     """The reduced substructure ``name`` of ``case``, as the assembled model holds it.
 
     A solid tied by an interface needs the other tied solids (unreduced) for its ties: they are
-    made too, not reduced.
+    made too, not reduced.  In a case with FRF substructures the part is made in the
+    finite-element case the model is assembled from (:func:`substruct.builder.frf_parts.
+    split_frf_case`).
 
     Raises:
         KeyError: ``name`` is not one of :func:`reduced_names`.
@@ -39,6 +42,8 @@ def reduced_part(case: Case, name: str) -> Substructure:
     """
     if name not in reduced_names(case):
         raise KeyError(f"{name!r} is not a reduced substructure of {case.name!r}")
+    if has_frf_parts(case):  # the model is the finite-element part (builder.frf_parts)
+        case = split_frf_case(case).model_case
     _, _, positions = point_positions(case)
     spec = case.substructure(name)
     if isinstance(spec, RodSpec):
