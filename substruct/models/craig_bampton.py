@@ -33,11 +33,11 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from substruct.linalg.factorize import Factorize, factorizer
+from substruct.linalg.factorize import Factorize, Solve, factorizer
 from substruct.linalg.lanczos import rayleigh_ritz, shift_invert_lanczos
 from substruct.substructure import Substructure, as_csr
 
-__all__ = ["craig_bampton"]
+__all__ = ["craig_bampton", "fixed_interface_modes"]
 
 
 def _boundary(sub: Substructure, boundary_dofs: Any) -> np.ndarray:
@@ -55,6 +55,69 @@ def _boundary(sub: Substructure, boundary_dofs: Any) -> np.ndarray:
     if b.size >= n:
         raise ValueError(f"{sub.name}: every coordinate is on the boundary; nothing to reduce")
     return b
+
+
+def fixed_interface_modes(name: str, K: sp.csr_array, M: sp.csr_array, interior: np.ndarray,
+                          n_modes: int, *, factorization: str | Factorize = "auto",
+                          dense_limit: int = 1500, ncv: int | None = None
+                          ) -> tuple[Solve, np.ndarray, np.ndarray]:
+    r"""One factorization of :math:`K_{ii}` and the ``n_modes`` lowest fixed-interface modes.
+
+    .. math::  K_{ii} \Phi_i = M_{ii} \Phi_i \Omega^2, \qquad \Phi_i^T M_{ii} \Phi_i = I,
+
+    each column's largest entry positive.  Interiors up to ``dense_limit`` coordinates are
+    solved densely (Cholesky, ``eigh``), larger ones by the registry's factorization and the
+    shift-invert Lanczos (shift 0) with a Rayleigh-Ritz step.
+
+    Returns:
+        ``(solve, lam, Phi)``: ``b -> K_ii^{-1} b`` (for the constraint modes), the eigenvalues
+        :math:`\omega^2` ascending and the ``n_i x n_modes`` mass-normalized modes.
+
+    Raises:
+        ValueError: massless interior coordinates, singular ``K_ii`` or a zero-frequency mode
+            (the boundary and the supports do not hold the interior).
+    """
+    g = int(n_modes)
+    ni = interior.size
+    Kii = sp.csc_array(K[interior][:, interior])
+    Mii = sp.csc_array(M[interior][:, interior])
+    if np.any(np.asarray(abs(Mii).sum(axis=1)).ravel() == 0):
+        raise ValueError(f"{name}: Craig-Bampton needs mass on every interior coordinate; "
+                         "put massless coordinates on the boundary")
+    solve: Solve
+    if ni <= dense_limit:
+        Kd, Md = Kii.toarray(), Mii.toarray()
+        try:
+            cho = sla.cho_factor(Kd)
+        except np.linalg.LinAlgError:
+            raise ValueError(f"{name}: K_ii is singular: the boundary coordinates and the "
+                             "supports do not hold the interior") from None
+
+        def solve(rhs: np.ndarray) -> np.ndarray:
+            return np.asarray(sla.cho_solve(cho, rhs))
+
+        lam, Phi = (sla.eigh(Kd, Md, subset_by_index=[0, g - 1]) if g else
+                    (np.zeros(0), np.zeros((ni, 0))))
+    else:
+        try:
+            solve = factorizer(factorization, spd=True)(Kii)
+        except Exception as exc:
+            raise ValueError(f"{name}: K_ii cannot be factorized ({exc}): the boundary "
+                             "coordinates and the supports do not hold the interior") from None
+        if g:
+            v0 = np.random.default_rng(0).standard_normal(ni)
+            _, vecs = shift_invert_lanczos(Kii, Mii, g, 0.0, solve, v0, ncv)
+            lam, Phi = rayleigh_ritz(Kii, Mii, vecs)
+        else:
+            lam, Phi = np.zeros(0), np.zeros((ni, 0))
+    if g and lam[0] <= 1e-10 * max(abs(lam).max(), 1e-300):
+        raise ValueError(f"{name}: a fixed-interface mode has zero frequency: the boundary "
+                         "and the supports do not hold the interior")
+    if g:
+        Phi = Phi / np.sqrt(np.einsum("ij,ij->j", Phi, Mii @ Phi))
+        big = np.argmax(np.abs(Phi), axis=0)
+        Phi = Phi * np.sign(Phi[big, np.arange(g)])
+    return solve, lam, Phi
 
 
 def craig_bampton(sub: Substructure, boundary_dofs: Sequence[int] | np.ndarray, n_modes: int,
@@ -96,42 +159,11 @@ def craig_bampton(sub: Substructure, boundary_dofs: Sequence[int] | np.ndarray, 
         raise ValueError(f"{sub.name}: n_modes = {n_modes!r}, but the interior has {ni} "
                          f"coordinates (need 0 <= n_modes < {ni})")
     K, M = as_csr(sub.K), as_csr(sub.M)
-    Kii = sp.csc_array(K[interior][:, interior])
-    Mii = sp.csc_array(M[interior][:, interior])
     Kib = K[interior][:, b].toarray()
-    if np.any(np.asarray(abs(Mii).sum(axis=1)).ravel() == 0):
-        raise ValueError(f"{sub.name}: Craig-Bampton needs mass on every interior coordinate; "
-                         "put massless coordinates on the boundary")
-    if ni <= dense_limit:
-        Kd, Md = Kii.toarray(), Mii.toarray()
-        try:
-            cho = sla.cho_factor(Kd)
-        except np.linalg.LinAlgError:
-            raise ValueError(f"{sub.name}: K_ii is singular: the boundary coordinates and the "
-                             "supports do not hold the interior") from None
-        Psi = -sla.cho_solve(cho, Kib)
-        lam, Phi = (sla.eigh(Kd, Md, subset_by_index=[0, g - 1]) if g else
-                    (np.zeros(0), np.zeros((ni, 0))))
-    else:
-        try:
-            solve = factorizer(factorization, spd=True)(Kii)
-        except Exception as exc:
-            raise ValueError(f"{sub.name}: K_ii cannot be factorized ({exc}): the boundary "
-                             "coordinates and the supports do not hold the interior") from None
-        Psi = -np.asarray(solve(Kib)).reshape(ni, b.size)
-        if g:
-            v0 = np.random.default_rng(0).standard_normal(ni)
-            _, vecs = shift_invert_lanczos(Kii, Mii, g, 0.0, solve, v0, ncv)
-            lam, Phi = rayleigh_ritz(Kii, Mii, vecs)
-        else:
-            lam, Phi = np.zeros(0), np.zeros((ni, 0))
-    if g and lam[0] <= 1e-10 * max(abs(lam).max(), 1e-300):
-        raise ValueError(f"{sub.name}: a fixed-interface mode has zero frequency: the boundary "
-                         "and the supports do not hold the interior")
-    if g:
-        Phi = Phi / np.sqrt(np.einsum("ij,ij->j", Phi, Mii @ Phi))
-        big = np.argmax(np.abs(Phi), axis=0)
-        Phi = Phi * np.sign(Phi[big, np.arange(g)])
+    solve, lam, Phi = fixed_interface_modes(sub.name, K, M, interior, g,
+                                            factorization=factorization,
+                                            dense_limit=dense_limit, ncv=ncv)
+    Psi = -np.asarray(solve(Kib)).reshape(ni, b.size)
     T = np.zeros((n, g + b.size))
     T[interior, :g] = Phi
     T[interior, g:] = Psi
