@@ -28,6 +28,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from substruct.assembly.stack import Connection
+from substruct.builder.interface_reduced import interface_reduced
 from substruct.case.errors import MISSING
 from substruct.case.expressions import ExpressionError, scalar
 from substruct.case.fields import MAX_ELEMENTS, MEMORY_LIMIT, gigabytes
@@ -267,18 +268,14 @@ def _interface_ties(case: Any, k: int, spec: InterfaceSpec, subs: dict[str, Subs
 
 
 def _craig_bampton(case: Any, i: int, spec: SolidSpec, reduce: SolidReduce, sub: Substructure,
-                   wheres: Sequence[Any]) -> Substructure:
+                   wheres: Sequence[Any], groups: Sequence[tuple[str, list[Any]]] = ()
+                   ) -> Substructure:
     from substruct.assembly.interfaces import node_dofs
     from substruct.models.craig_bampton import craig_bampton
 
     loc = ("substructures", i, "reduce")
-    cols: set[int] = set()
-    for where in wheres:
-        try:
-            row = sp.csr_array(sub.row(where))
-        except (PointError, ValueError):
-            continue  # reported where the point is used
-        cols.update(int(j) for j in row.indices[row.data != 0])
+    cols = _columns(sub, wheres)
+    faces: list[tuple[str, set[int]]] = [(label, _columns(sub, w)) for label, w in groups]
     for k, sel in enumerate(reduce.selectors()):
         field = (*loc, "interface", k) if isinstance(reduce.interface, list) else \
             (*loc, "interface")
@@ -290,15 +287,30 @@ def _craig_bampton(case: Any, i: int, spec: SolidSpec, reduce: SolidReduce, sub:
             raise case.error(field, f"the interface selects no free coordinate of "
                              f"{spec.name!r}", sel.describe())
         cols.update(int(j) for j in dofs)
+        faces.append((f"interface{k}", {int(j) for j in dofs}))
     if not cols:
         raise case.error(loc, f"Craig-Bampton needs boundary coordinates: {spec.name!r} is in "
                          f"no interface, no point is used on it and reduce.interface is not "
                          f"given (use reduce: {{modes: ...}} for a free-standing solid)")
+    if reduce.interface_degree is not None:
+        return interface_reduced(case, loc, reduce, sub, cols, faces)
     try:
         return craig_bampton(sub, np.array(sorted(cols)), reduce.modes)
     except ValueError as err:
         raise case.error((*loc, "modes"), " ".join(str(err).split()),
                          reduce.modes) from None
+
+
+def _columns(sub: Substructure, wheres: Sequence[Any]) -> set[int]:
+    """The coordinates of ``sub`` that the rows of the points ``wheres`` use."""
+    cols: set[int] = set()
+    for where in wheres:
+        try:
+            row = sp.csr_array(sub.row(where))
+        except (PointError, ValueError):
+            continue  # reported where the point is used
+        cols.update(int(j) for j in row.indices[row.data != 0])
+    return cols
 
 
 def _modal(case: Any, i: int, r: SolidReduce, sub: Substructure) -> Substructure:
@@ -338,6 +350,7 @@ def tie_and_reduce(case: Any, subs: list[Substructure], positions: dict[str, lis
     seen: set[str] = set()
     ties: list[Connection] = []
     used: dict[str, list[Any]] = {n: list(positions.get(n, [])) for n in names}
+    groups: dict[str, list[tuple[str, list[Any]]]] = {n: [] for n in names}
     for k, spec in enumerate(case.interfaces):
         if spec.name is not None:
             if spec.name in seen:
@@ -346,6 +359,12 @@ def tie_and_reduce(case: Any, subs: list[Substructure], positions: dict[str, lis
             seen.add(spec.name)
         conns = _interface_ties(case, k, spec, by_name)
         ties += conns
+        label = spec.name if spec.name is not None else f"interfaces{k}"
+        for side in ("a", "b"):
+            on = {getattr(c, side).substructure for c in conns}
+            for name in on:
+                groups[name].append((label, [getattr(c, side).where for c in conns
+                                             if getattr(c, side).substructure == name]))
         for c in conns:
             used[c.a.substructure].append(c.a.where)
             used[c.b.substructure].append(c.b.where)
@@ -359,7 +378,8 @@ def tie_and_reduce(case: Any, subs: list[Substructure], positions: dict[str, lis
         elif isinstance(spec, SolidSpec) and spec.reduce is not None and \
                 (only is None or spec.name in only):
             sub = _modal(case, i, spec.reduce, sub) if spec.reduce.method == "modal" else \
-                _craig_bampton(case, i, spec, spec.reduce, sub, used[spec.name])
+                _craig_bampton(case, i, spec, spec.reduce, sub, used[spec.name],
+                               groups[spec.name])
         out.append(sub)
     return out, ties
 

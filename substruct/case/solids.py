@@ -208,11 +208,15 @@ class SolidDamping(StrictModel):
 
 
 class SolidReduce(StrictModel):
-    """``{modes: g}`` (modal truncation) or ``{method: craig-bampton, modes: g, interface: ..}``."""
+    """``{modes: g}`` (modal truncation) or ``{method: craig-bampton, modes: g, interface: ..,
+    interface_degree: p}`` (``p``: each interface reduced to polynomial fields of degree
+    ``<= p``, :mod:`substruct.models.interface_basis`)."""
 
     method: Literal["modal", "craig-bampton"] = "modal"
     modes: Annotated[int, BeforeValidator(_no_bool), Field(ge=0, le=MAX_COUNT)]
     interface: Selector | list[Selector] | None = None
+    interface_degree: Annotated[int, BeforeValidator(_no_bool),
+                                Field(ge=0, le=12)] | None = None
     damping: ModalDamping | None = None
 
     @model_validator(mode="after")
@@ -224,6 +228,10 @@ class SolidReduce(StrictModel):
             if self.interface is not None:
                 raise FieldError("interface", "an interface is for method: craig-bampton "
                                  "(modal truncation keeps no boundary)")
+            if self.interface_degree is not None:
+                raise FieldError("interface_degree", "an interface basis is for method: "
+                                 "craig-bampton (modal truncation keeps no boundary)",
+                                 self.interface_degree)
             if self.damping is not None and isinstance(self.damping.ratio, list) and \
                     len(self.damping.ratio) != self.modes:
                 raise FieldError(("damping", "ratio"), f"one damping ratio per kept mode: "

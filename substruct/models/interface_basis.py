@@ -41,7 +41,8 @@ from numpy.polynomial import legendre
 from substruct.models.selection import node_tolerance, nodes_in_box, parse_box
 from substruct.substructure import Substructure
 
-__all__ = ["RANK_TOL", "InterfaceBasis", "interface_basis", "lower_degree", "polynomial_fields"]
+__all__ = ["RANK_TOL", "InterfaceBasis", "interface_basis", "interface_basis_of_dofs", "lower_degree",
+           "polynomial_fields"]
 
 #: Relative singular-value threshold of the rank step (on values of polynomials of
 #: coordinates normalized to [-1, 1], so it does not depend on the scale of the input).
@@ -138,12 +139,51 @@ def interface_basis(sub: Substructure, name: str, box: Any, degree: int | None,
             raise ValueError(f"{sub.name}: interface {name!r}: node {int(nodes[i // dim])} has "
                              "a supported component; an interface must be free")
         dofs[i] = interp.indices[a]
-    xyz = points[nodes]
+    return _basis(name, points[nodes], dofs, dim, degree)
+
+
+def _basis(name: str, xyz: np.ndarray, dofs: np.ndarray, dim: int, degree: int | None
+           ) -> InterfaceBasis:
     if degree is None:
         R = np.eye(dofs.size)
     else:
         R = np.kron(polynomial_fields(xyz[:, :dim], degree), np.eye(dim))
     return InterfaceBasis(name=name, xyz=xyz, dofs=dofs, basis=R, degree=degree)
+
+
+def interface_basis_of_dofs(sub: Substructure, name: str, dofs: np.ndarray,
+                            degree: int | None) -> InterfaceBasis:
+    """The interface made of the nodal coordinates ``dofs`` of the meshed ``sub`` (each one a
+    node's displacement component; every component of each node must be in ``dofs``), nodes
+    sorted as :func:`interface_basis` sorts them, basis of ``degree``.
+
+    Raises:
+        ValueError: ``sub`` has no mesh, a coordinate that is not a nodal displacement, or a
+            node with some of its components only.
+    """
+    if sub.geometry is None:
+        raise ValueError(f"{sub.name}: a substructure without a mesh has no interface nodes")
+    dim = int(sub.meta.get("dim", 3))
+    interp = sub.geometry.interp.tocoo()
+    unit = (interp.data == 1.0) & (interp.row % 3 < dim)
+    where = dict(zip(interp.col[unit].tolist(), interp.row[unit].tolist()))
+    wanted = np.unique(np.asarray(dofs, dtype=np.int64))
+    try:
+        rows = np.array([where[int(j)] for j in wanted], dtype=np.int64)
+    except KeyError:
+        raise ValueError(f"{sub.name}: interface {name!r}: a coordinate is not a nodal "
+                         "displacement") from None
+    nodes, count = np.unique(rows // 3, return_counts=True)
+    if np.any(count != dim):
+        raise ValueError(f"{sub.name}: interface {name!r}: an interface basis needs every "
+                         "displacement component of each interface node")
+    points = np.asarray(sub.geometry.points, dtype=float)
+    tol_ = node_tolerance(points)
+    grid = np.round((points[nodes] - points.min(axis=0)) / tol_ / 10).astype(np.int64)
+    nodes = nodes[np.lexsort(grid.T[::-1])]
+    col = {r: c for c, r in where.items()}
+    ordered = np.array([col[3 * k + c] for k in nodes for c in range(dim)], dtype=np.int64)
+    return _basis(name, points[nodes], ordered, dim, degree)
 
 
 def lower_degree(face: InterfaceBasis, degree: int) -> InterfaceBasis:
@@ -157,7 +197,4 @@ def lower_degree(face: InterfaceBasis, degree: int) -> InterfaceBasis:
     if face.degree is not None and degree > face.degree:
         raise ValueError(f"interface {face.name!r}: degree {degree} above the basis's "
                          f"{face.degree}")
-    dim = face.dofs.size // len(face.xyz)
-    R = np.kron(polynomial_fields(face.xyz[:, :dim], degree), np.eye(dim))
-    return InterfaceBasis(name=face.name, xyz=face.xyz, dofs=face.dofs, basis=R,
-                          degree=degree)
+    return _basis(face.name, face.xyz, face.dofs, face.dofs.size // len(face.xyz), degree)
