@@ -103,6 +103,22 @@ def _correction(S: sp.sparray | np.ndarray, solve: Solve, A: sp.csr_array,
                       g=None if motion is None else motion.g)
 
 
+def _kkt_acceleration(M: sp.csr_array, A: sp.csr_array, target: np.ndarray,
+                      force: np.ndarray) -> np.ndarray | None:
+    r"""Eq (10) by one sparse factorization: :math:`M a + A_k^T \lambda = F`,
+    :math:`A_k a = c_k` on the independent rows (``None`` if singular: a massless coordinate
+    the constraints leave undetermined)."""
+    rows = independent_rows(A, col_scale=mass_column_scale(M))
+    Ak = sp.csr_array(A[rows.keep])
+    big = sp.block_array([[M, Ak.T], [Ak, None]], format="csc")
+    try:
+        x = factorizer("superlu", spd=False)(big)(np.concatenate([force, target[rows.keep]]))
+    except RuntimeError:
+        return None
+    a = np.asarray(x[:M.shape[0]])
+    return a if np.all(np.isfinite(a)) else None
+
+
 def initial_state(M: sp.csr_array, K: sp.csr_array, A: sp.csr_array, load: np.ndarray,
                   d0: np.ndarray, force: Callable[[np.ndarray], np.ndarray],
                   accel: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
@@ -128,6 +144,10 @@ def initial_state(M: sp.csr_array, K: sp.csr_array, A: sp.csr_array, load: np.nd
     target = np.zeros(A.shape[0]) if accel is None else np.asarray(accel, dtype=float)
     try:
         return d0, constrained_acceleration(M, A, target, force(d0))
+    except MemoryError:  # its n x m gain is too large to copy: the same eq 10 as a sparse KKT
+        a = _kkt_acceleration(M, A, target, force(d0))
+        if a is not None:
+            return d0, a
     except ValueError:
         pass
     s = massless_coordinates(M)
