@@ -45,6 +45,7 @@ from substruct.analysis.modal_frf import (
 )
 from substruct.analysis.production_sweep import (
     PRODUCTION_SWEEP,
+    constraint_residual,
     production_sweep,
     production_sweep_applies,
     sweep_checks,
@@ -152,18 +153,21 @@ def receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
     m = As.shape[0]
     Rs = None if R is None or not sp.csr_array(R).nnz else sp.csr_array(R, dtype=float)
     labels = None if constraint_labels is None else list(constraint_labels)
-    rows = sp.csr_array(sp.vstack([out_rows, As])) if m else out_rows
     k_out = out_rows.shape[0]
     production = production_sweep_applies(n, Rs, method)
-    full = production_sweep(Ks, Ms, Cs, As, w, forces, rows, progress) if production else \
-        _sweep(Ks, Ms, Cs, As, w, Rs, method, forces, rows, labels, progress)
-    H = full[:, :k_out]
-    # max |H| a frequency at a time: no temporary of the size of H (1,000 x 400 x 400: 1.3 GB)
-    scale = max(max((float(np.abs(Hk).max(initial=0.0)) for Hk in H), default=0.0), 1e-300)
-    residual = 0.0
-    if m and full.size:
-        RE = (Rs @ forces).toarray() if Rs is not None else np.zeros((m, forces.shape[1]))
-        residual = float(np.abs(full[:, k_out:] - RE[None]).max() / scale)
+    if production:  # the outputs only; the constraint residual at the checked frequencies
+        H = production_sweep(Ks, Ms, Cs, As, w, forces, out_rows, progress)
+        scale = _largest(H)
+        residual = constraint_residual(Ks, Ms, Cs, As, w, forces, scale)
+    else:
+        rows = sp.csr_array(sp.vstack([out_rows, As])) if m else out_rows
+        full = _sweep(Ks, Ms, Cs, As, w, Rs, method, forces, rows, labels, progress)
+        scale = _largest(full[:, :k_out])
+        residual = 0.0
+        if m and full.size:
+            RE = (Rs @ forces).toarray() if Rs is not None else np.zeros((m, forces.shape[1]))
+            residual = float(np.abs(full[:, k_out:] - RE[None]).max() / scale)
+        H = _leading_rows(full, k_out)
     agreement = {}
     if production:  # checked at a few frequencies (analysis/production_sweep.py)
         agreement = sweep_checks(Ks, Ms, Cs, As, w, forces, out_rows, H, method, checks, labels)
@@ -179,3 +183,22 @@ def receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
     return Receptance(method=method, omega=w, H=H, inputs=names_in, outputs=names_out,
                       agreement=agreement, constraint_residual=residual,
                       tolerance=float(tolerance))
+
+
+def _largest(H: np.ndarray) -> float:
+    """``max |H|`` a frequency at a time: no temporary of the size of ``H`` (1,000 x 400 x 400:
+    1.3 GB); at least 1e-300."""
+    return max(max((float(np.abs(Hk).max(initial=0.0)) for Hk in H), default=0.0), 1e-300)
+
+
+def _leading_rows(full: np.ndarray, rows: int) -> np.ndarray:
+    """``full[:, :rows]`` as a C-contiguous array in ``full``'s own memory (each frequency's
+    block moved down in place, no copy of the whole), so that it is written to HDF5 and sent
+    between processes without a copy; ``full`` is overwritten."""
+    if rows == full.shape[1] or not full.flags.c_contiguous:
+        return full if rows == full.shape[1] else np.ascontiguousarray(full[:, :rows])
+    flat = full.reshape(-1)
+    block = rows * full.shape[2]
+    for k in range(full.shape[0]):  # moving down: a block never overwrites one still unread
+        flat[k * block:(k + 1) * block] = full[k, :rows].reshape(-1)
+    return flat[:full.shape[0] * block].reshape(full.shape[0], rows, full.shape[2])

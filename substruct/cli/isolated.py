@@ -10,7 +10,9 @@ and unwinds as usual (temporary files removed, exit code 130 or 143).
 The child writes where the parent would: to the same file descriptors, or, when the parent's
 ``sys.stdout``/``sys.stderr`` are in-memory streams (tests), through pipes the parent copies
 into them.  Its answer (the return value, or the exception with its traceback) comes back
-pickled.  Without ``os.fork`` (not POSIX) the function runs in-process, and so it does in a
+pickled; the large arrays of a value (a receptance of 1,000 x 400 x 400 is 2.6 GB) as
+out-of-band buffers (pickle protocol 5) written to an unnamed temporary file that the parent
+maps into memory, so they are neither copied through the pipe nor unpickled.  Without ``os.fork`` (not POSIX) the function runs in-process, and so it does in a
 process that has loaded CHOLMOD (scikit-sparse): a forked child of a process whose CHOLMOD has
 run hangs in its next factorization (its thread pool does not survive the fork).  The command
 line never loads it before forking; a program (or a test session) that has used CHOLMOD and
@@ -20,11 +22,13 @@ then calls the command in-process loses only the prompt reaction to signals.
 from __future__ import annotations
 
 import io
+import mmap
 import os
 import pickle
 import select
 import signal
 import sys
+import tempfile
 import traceback
 from typing import Any, Callable, TypeVar
 
@@ -58,12 +62,37 @@ def _die_with_parent(parent: int) -> None:
         os._exit(1)
 
 
-def _answer(fn: Callable[[], Any]) -> bytes:
+def _spill(value: Any, fd: int) -> bytes:
+    """``value`` pickled with its out-of-band buffers written one after the other into the file
+    ``fd`` (:func:`_unspill` reads them back)."""
+    buffers: list[pickle.PickleBuffer] = []
+    data = pickle.dumps(value, protocol=5, buffer_callback=buffers.append)
+    layout, offset = [], 0
+    for buf in buffers:
+        raw = buf.raw()
+        done = 0
+        while done < raw.nbytes:
+            done += os.pwrite(fd, raw[done:], offset + done)
+        layout.append((offset, raw.nbytes))
+        offset += -(-raw.nbytes // 64) * 64  # aligned as NumPy aligns its data
+    return pickle.dumps(("ok", data, layout), protocol=pickle.HIGHEST_PROTOCOL)
+
+
+def _unspill(data: bytes, layout: list[tuple[int, int]], fd: int) -> Any:
+    """The value :func:`_spill` wrote: its buffers are views of a private (copy-on-write)
+    mapping of the file ``fd``."""
+    size = max((o + n for o, n in layout if n), default=0)
+    view = memoryview(mmap.mmap(fd, size, access=mmap.ACCESS_COPY)) if size else None
+    return pickle.loads(data, buffers=[view[o:o + n] if n and view is not None else
+                                       bytearray() for o, n in layout])
+
+
+def _answer(fn: Callable[[], Any], spill: int) -> bytes:
     from substruct.analysis.errors import CheckError
     from substruct.case.errors import CaseError
 
     try:
-        return pickle.dumps(("ok", fn()), protocol=pickle.HIGHEST_PROTOCOL)
+        return _spill(fn(), spill)
     except BaseException as err:  # noqa: BLE001 - every failure goes back to the parent
         kind = ("input" if isinstance(err, (CaseError, InputError)) else
                 "check" if isinstance(err, CheckError) else "error")
@@ -96,7 +125,7 @@ def _relay(fd: int, terminal: bool) -> _Relay:
     return stream
 
 
-def _child(fn: Callable[[], Any], parent: int, answer: int, relays: dict) -> None:
+def _child(fn: Callable[[], Any], parent: int, answer: int, relays: dict, spill: int) -> None:
     code = 0
     try:
         signal.signal(signal.SIGINT, signal.SIG_IGN)  # the parent decides what Ctrl-C does
@@ -105,7 +134,7 @@ def _child(fn: Callable[[], Any], parent: int, answer: int, relays: dict) -> Non
         for name, (r, w, terminal) in relays.items():
             os.close(r)
             setattr(sys, name, _relay(w, terminal))
-        data = _answer(fn)
+        data = _answer(fn, spill)
         view = memoryview(data)
         while view:
             view = view[os.write(answer, view):]
@@ -164,8 +193,6 @@ def call_isolated(fn: Callable[[], T]) -> T:
     """
     if not hasattr(os, "fork") or "sksparse.cholmod" in sys.modules:
         return fn()
-    from substruct.analysis.errors import CheckError
-
     relays = {}
     for name in _STREAMS:
         stream = getattr(sys, name)
@@ -173,11 +200,31 @@ def call_isolated(fn: Callable[[], T]) -> T:
         if not _has_fd(stream):
             relays[name] = (*os.pipe(), bool(getattr(stream, "isatty", lambda: False)()))
     answer_r, answer_w = os.pipe()
-    parent = os.getpid()
-    pid = os.fork()
-    if pid == 0:
-        os.close(answer_r)
-        _child(fn, parent, answer_w, relays)
+    with tempfile.TemporaryFile(prefix="substruct-") as spill:
+        parent = os.getpid()
+        pid = os.fork()
+        if pid == 0:
+            os.close(answer_r)
+            _child(fn, parent, answer_w, relays, spill.fileno())
+        reply = _wait(pid, answer_r, answer_w, relays)
+        if reply[0] == "ok":
+            return _unspill(reply[1], reply[2], spill.fileno())
+    from substruct.analysis.errors import CheckError
+
+    _, kind, err, text = reply
+    if kind == "input":
+        raise InputError(str(err))
+    if kind == "check":
+        raise CheckError(str(err))
+    if isinstance(err, BaseException):
+        err.add_note("in the computation:\n" + text.rstrip())
+        raise err
+    raise RuntimeError(str(err))
+
+
+def _wait(pid: int, answer_r: int, answer_w: int, relays: dict) -> Any:
+    """The child's reply, unpickled (its output relayed meanwhile); the child is gone when
+    this returns or raises."""
     os.close(answer_w)
     for _, w, _ in relays.values():
         os.close(w)
@@ -195,15 +242,4 @@ def call_isolated(fn: Callable[[], T]) -> T:
             os.close(r)
     if not data:
         raise _failure(status)
-    reply = pickle.loads(data)
-    if reply[0] == "ok":
-        return reply[1]
-    _, kind, err, text = reply
-    if kind == "input":
-        raise InputError(str(err))
-    if kind == "check":
-        raise CheckError(str(err))
-    if isinstance(err, BaseException):
-        err.add_note("in the computation:\n" + text.rstrip())
-        raise err
-    raise RuntimeError(str(err))
+    return pickle.loads(data)
