@@ -101,12 +101,12 @@ def in_child(fn: Any, *args: Any) -> Any:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="small sizes (about a minute)")
-    ap.add_argument("--section", type=int, default=12, help="elements across the section")
+    ap.add_argument("--section", type=int, default=10, help="elements across the section")
     ap.add_argument("--error-dof", type=int, default=300_000)
     ap.add_argument("--error-parts", type=int, default=8)
     ap.add_argument("--big-dof", type=int, default=1_000_000)
     ap.add_argument("--big-parts", type=int, default=16)
-    ap.add_argument("--pairs", default="10:1,10:2,20:2,20:4,40:4,40:6",
+    ap.add_argument("--pairs", default="10:1,10:2,20:1,20:2,20:4,40:4",
                     help="(g, p) pairs of the error table, g:p,...")
     ap.add_argument("--big", default="20:4", help="(g, p) of the large run")
     ap.add_argument("--factorization", default="auto")
