@@ -14,7 +14,15 @@ that the cluster's start-up is timed on its own.  The tables are checked to be i
 ``(t_dask_1_worker - t_in_process) / samples`` (one worker does the same work as the serial
 run, plus the scheduling, serialization and transfer of every task).
 
+A third study, ``shared``, is the box beam of ``cases/box_beam_tmd.yaml`` (two Craig-Bampton
+halves) on a grid of absorber stiffnesses: the halves do not depend on it, so they are reduced
+once and shared; it runs in-process reducing them in every sample (the baseline), in-process
+shared, and shared on 2 workers.  ``chunks`` is one run of that case with a 400-frequency
+direct sweep, serial (baseline) against ``run_distributed`` on 2 workers (the two reductions as
+tasks, the sweep in 2 and 8 chunks).
+
     OMP_NUM_THREADS=1 python benchmarks/study_dask.py [--repeat 3] [--long 20] [--short 200]
+        [--shared 6] [--only long,short,shared,chunks]
 """
 
 from __future__ import annotations
@@ -32,6 +40,16 @@ from substruct.studies.study_backend import Backend
 from substruct.studies.study_run import run_study
 
 CASE = Path(__file__).resolve().parent.parent / "cases" / "tapered_rod_tuning.yaml"
+BOX = CASE.parent / "box_beam_tmd.yaml"
+
+
+def box_study(samples: int) -> list[str]:
+    """The box beam with absorber tmd1's stiffness on a grid of ``samples`` values."""
+    return ["parameters={k1: 2.035e+5}", "substructures[2].stiffness=k1",
+            "analysis.frf.omega={start: 300, stop: 4500, num: 100, spacing: log}",
+            f"study={{grid: {{parameters: [{{parameter: k1, start: 1.8e+5, stop: 2.2e+5, "
+            f"num: {samples}}}]}}, collect: {{frequencies: 4, frf_peaks: "
+            f"['right@1,0.05,0.1:z']}}}}"]
 
 
 def study(samples: int, slow: bool) -> list[str]:
@@ -46,13 +64,14 @@ def study(samples: int, slow: bool) -> list[str]:
             "study.collect={frequencies: 4, frf_peaks: [rod@200]}"]
 
 
-def timed(overrides: list[str], backend: Backend, repeat: int):
+def timed(overrides: list[str], backend: Backend, repeat: int, case_file: Path = CASE,
+          share: bool = True):
     """Median seconds of ``repeat`` runs, and the last result."""
     times, result = [], None
     for _ in range(repeat):
-        case = load_case(CASE, overrides)
+        case = load_case(case_file, overrides)
         start = time.perf_counter()
-        result = run_study(case, backend)
+        result = run_study(case, backend, share=share)
         times.append(time.perf_counter() - start)
     return statistics.median(times), result
 
@@ -67,16 +86,20 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3, help="runs of the short study")
     parser.add_argument("--long", type=int, default=20, help="samples of the long study")
     parser.add_argument("--short", type=int, default=200, help="samples of the short study")
+    parser.add_argument("--shared", type=int, default=6, help="samples of the shared study")
+    parser.add_argument("--only", default="long,short,shared,chunks",
+                        help="which studies to run (comma-separated)")
     args = parser.parse_args()
+    only = set(args.only.split(","))
     from distributed import Client, LocalCluster
 
-    print(f"{'study':6s} {'samples':>7s} {'backend':16s} {'seconds':>9s} {'ratio':>7s} "
+    print(f"{'study':6s} {'samples':>7s} {'backend':18s} {'seconds':>9s} {'ratio':>7s} "
           f"{'overhead/task':>14s} identical", flush=True)
 
     def row(name: str, samples: int, backend: str, t: float, ratio: float, overhead: float,
             ok: bool) -> None:
         extra = f"{1e3 * overhead:11.1f} ms" if np.isfinite(overhead) and overhead else ""
-        print(f"{name:6s} {samples:7d} {backend:16s} {t:9.2f} {ratio:7.2f} {extra:>14s} {ok}",
+        print(f"{name:6s} {samples:7d} {backend:18s} {t:9.2f} {ratio:7.2f} {extra:>14s} {ok}",
               flush=True)
 
     clusters = {}
@@ -92,6 +115,8 @@ def main() -> None:
     try:
         for name, samples, slow, repeat in (("long", args.long, True, 1),
                                             ("short", args.short, False, args.repeat)):
+            if name not in only:
+                continue
             overrides = study(samples, slow)
             base, reference = timed(overrides, Backend(), repeat)
             row(name, samples, "in-process", base, 1.0, 0.0, True)
@@ -101,9 +126,39 @@ def main() -> None:
                 overhead = (t - base) / samples if n == 1 else float("nan")
                 row(name, samples, f"dask {n} worker{'s' * (n > 1)}", t, t / base, overhead,
                     same(reference, result))
+        if "shared" in only:
+            overrides = box_study(args.shared)
+            base, reference = timed(overrides, Backend(), 1, BOX, share=False)
+            row("shared", args.shared, "in-process, each", base, 1.0, 0.0, True)
+            t, result = timed(overrides, Backend(), 1, BOX)
+            row("shared", args.shared, "in-process, once", t, t / base, 0.0,
+                same(reference, result))
+            t, result = timed(overrides, Backend(scheduler=clusters[2][0].scheduler_address),
+                              1, BOX)
+            row("shared", args.shared, "dask 2, once", t, t / base, 0.0,
+                same(reference, result))
+        if "chunks" in only:
+            from substruct.run.runner import run_case
+            from substruct.studies.distributed_run import run_distributed
+
+            case = load_case(BOX, ["analysis.frf.omega={start: 300, stop: 4500, num: 400, "
+                                   "spacing: log}"])
+            start = time.perf_counter()
+            serial = run_case(case)
+            base = time.perf_counter() - start
+            row("chunks", 400, "serial run_case", base, 1.0, 0.0, True)
+            address = clusters[2][0].scheduler_address
+            for chunks in (2, 8):
+                start = time.perf_counter()
+                got = run_distributed(case, Backend(scheduler=address), chunks=chunks)
+                t = time.perf_counter() - start
+                assert got.frf is not None and serial.frf is not None
+                row("chunks", 400, f"dask 2, {chunks} chunks", t, t / base, 0.0,
+                    bool(np.array_equal(got.frf.H, serial.frf.H)))
     finally:
         for cluster, _ in clusters.values():
             cluster.close()
+
 
 if __name__ == "__main__":
     main()
