@@ -43,7 +43,10 @@ def reduced_part(case: Case, name: str) -> Substructure:
     if name not in reduced_names(case):
         raise KeyError(f"{name!r} is not a reduced substructure of {case.name!r}")
     if has_frf_parts(case):  # the model is the finite-element part (builder.frf_parts)
-        case = split_frf_case(case).model_case
+        model_case = split_frf_case(case).model_case
+        if model_case is None:
+            raise KeyError(f"{case.name!r} has only FRF substructures")
+        case = model_case
     _, _, positions = point_positions(case)
     spec = case.substructure(name)
     if isinstance(spec, RodSpec):
