@@ -3,7 +3,7 @@ cut-off plus the second-order residual) against the direct sweep (eq 15, one spa
 factorization per frequency).
 
     OMP_NUM_THREADS=1 python benchmarks/frf_modal.py [--sizes 3000 10000] [--frequencies 1000]
-        [--direct-frequencies 25] [--cutoff 3] [--chain 200]
+        [--direct-frequencies 25] [--cutoff 3] [--count N] [--chain 200]
 
 The model is the one of ``benchmarks/modes.py``: a clamped steel box ``4 x 1 x 1`` (Q1
 hexahedra) of two halves tied node to node, two tuned absorbers (free-free, massless boundary
@@ -13,12 +13,17 @@ point, the three-quarter point and the two absorber masses.  Frequencies: 10 to 
 
 * modal: :func:`substruct.analysis.api.receptance_sweep` with ``method="modal"`` (modes up to
   ``cutoff`` times 500 Hz by the sparse damped solver, the static and second-order residual
-  from one factorization, the modal sum at every frequency, and its direct check at 3
-  frequencies), all of it timed;
-* direct: the same call with ``method="kkt"`` (the fastest direct formulation here) on ``--direct-frequencies``
-  frequencies spread over the grid (a full 1,000-frequency direct sweep takes too long here:
-  its cost is the same at every frequency, so the time is scaled to the whole grid and the
-  table says so).
+  from one factorization, the modal sum at every frequency; its own direct check at
+  ``--check-frequencies`` frequencies, 0 by default, since the direct column below is that
+  check), all of it timed;
+* direct: the Lagrange-multiplier formulation itself,
+  :func:`substruct.analysis.coupling.receptance` with ``method="kkt"`` (one sparse complex LU
+  of the bordered impedance a frequency), on ``--direct-frequencies`` frequencies spread over
+  the grid (a full 1,000-frequency direct sweep takes too long here: its cost is the same at
+  every frequency, so the time is scaled to the whole grid and the table says so).
+
+The peak resident memory of the process after each size is printed (``ru_maxrss``; it only
+grows, so a row is the largest of that size and those before it).
 
 ``--chain n``: two damped chains of ``n`` coordinates joined end to start, all ``2n x 2n``
 receptances at every frequency, by LM-FBS from the two chains' receptances against the inverse
@@ -34,6 +39,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import resource
 import statistics
 import sys
 import time
@@ -129,6 +135,7 @@ def chains_table(n: int, frequencies: int, repeat: int) -> None:
 def main(argv: list[str] | None = None) -> None:
     """Print the tables (one row per size; then the two chains)."""
     from substruct.analysis.api import receptance_sweep
+    from substruct.analysis.coupling import receptance
     from substruct.analysis.modal_frf import ModalOptions
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -136,6 +143,11 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--frequencies", type=int, default=1000)
     ap.add_argument("--direct-frequencies", type=int, default=25)
     ap.add_argument("--cutoff", type=float, default=3.0)
+    ap.add_argument("--count", type=int, default=None,
+                    help="roots kept (default: those up to the cut-off, found by asking the "
+                         "eigensolver for 20, 40, 80, ... roots: up to three solves)")
+    ap.add_argument("--check-frequencies", type=int, default=0,
+                    help="the modal sweep's own direct check (timed with it)")
     ap.add_argument("--repeat", type=int, default=1)
     ap.add_argument("--chain", type=int, default=200, help="coordinates of each chain (0: none)")
     args = ap.parse_args(argv)
@@ -145,24 +157,27 @@ def main(argv: list[str] | None = None) -> None:
           f"{args.frequencies} frequencies 10-500 Hz, modes up to {args.cutoff:g} x 500 Hz, "
           f"direct on {len(pick)} frequencies (scaled to the grid)")
     head = ("| DOF | roots kept | modal sweep (s) | direct per frequency (s) | direct, whole "
-            "grid (s, scaled) | direct / modal | max rel. difference |")
+            "grid (s, scaled) | direct / modal | max rel. difference | peak memory (GB) |")
     print(head)
-    print("|" + "---|" * 7)
+    print("|" + "---|" * 8, flush=True)
     for size in args.sizes:
         asm, E, O = build(size)
-        opts = ModalOptions(cutoff=args.cutoff, solver="sparse")
+        opts = ModalOptions(count=args.count, cutoff=args.cutoff, solver="sparse",
+                            n_check=args.check_frequencies)
         t_modal, modal = timed(lambda: receptance_sweep(
             asm.K, asm.M, asm.C, asm.A, w, E, O, method="modal", modal=opts,
             tolerance=1e-3), args.repeat)
-        t_direct, direct = timed(lambda: receptance_sweep(
-            asm.K, asm.M, asm.C, asm.A, w[pick], E, O, method="kkt"),
+        print(f"  {asm.n_dof} DOF: modal sweep {t_modal:.1f} s ({modal.method})", flush=True)
+        t_direct, direct = timed(lambda: receptance(
+            asm.K, asm.M, asm.C, asm.A, w[pick], method="kkt", inputs=E, outputs=O),
             args.repeat)
         per = t_direct / len(pick)
         whole = per * len(w)
-        err = np.abs(modal.H[pick] - direct.H).max() / np.abs(direct.H).max()
+        err = np.abs(modal.H[pick] - direct).max() / np.abs(direct).max()
         kept = modal.method.split(":")[1].split(" root")[0].strip()
+        peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
         print(f"| {asm.n_dof} | {kept} | {t_modal:.2f} | {per:.3f} | {whole:.1f} | "
-              f"{whole / t_modal:.1f} | {err:.1e} |", flush=True)
+              f"{whole / t_modal:.1f} | {err:.1e} | {peak:.2f} |", flush=True)
     if args.chain:
         chains_table(args.chain, args.frequencies, args.repeat)
 
