@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 import substruct.linalg as la
 from substruct.linalg import factorize as fz
@@ -183,3 +184,27 @@ def test_factorizer_names(monkeypatch):
         la.factorizer("mumps")
     with pytest.raises(ValueError, match="needs scikit-sparse"):
         la.factorizer("cholmod")
+
+
+def test_fill_ordering_gives_superlu_its_own_fill():
+    """A matrix taken in :func:`fill_ordering`'s order and factorized in natural order fills as
+    much as SuperLU's own ``MMD_AT_PLUS_A`` run on it (the order is the inverse of ``perm_c``:
+    taking ``perm_c`` itself gave six times the fill on a 3D mesh), and
+    :func:`complex_symmetric` solves in it."""
+    from skfem import MeshHex
+
+    from substruct.linalg.factorize import complex_symmetric, fill_ordering
+    from substruct.models.elasticity import elasticity_matrices
+
+    mesh = MeshHex.init_tensor(*(np.linspace(0, 1, 9),) * 3)
+    _, K, M = elasticity_matrices(mesh, 1, 1.0, 0.5, 1.0, 1.0)
+    Z = sp.csc_matrix(K - 3.0 * M + 0.5j * M)
+    p = fill_ordering(abs(K) + abs(M))
+    ordered = spla.splu(sp.csc_matrix(Z[p][:, p]), permc_spec="NATURAL", diag_pivot_thresh=0.1,
+                        options={"SymmetricMode": True})
+    own = spla.splu(Z, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.1,
+                    options={"SymmetricMode": True})
+    assert ordered.L.nnz + ordered.U.nnz <= 1.05 * (own.L.nnz + own.U.nnz)
+    b = np.random.default_rng(0).standard_normal(Z.shape[0])
+    x = complex_symmetric(Z, p)(b)
+    assert np.abs(Z @ x - b).max() < 1e-10 * np.abs(b).max()

@@ -122,7 +122,9 @@ def fill_ordering(pattern: sp.sparray | sp.spmatrix) -> np.ndarray:
     A = sp.csc_matrix(P + sp.diags(np.asarray(P.sum(axis=1)).ravel() + 1.0))
     lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
                    options={"SymmetricMode": True})
-    order = np.asarray(lu.perm_c, dtype=np.int64)
+    # SuperLU factorizes Pr A Pc with Pc[i, perm_c[i]] = 1: column j of A Pc is column
+    # argsort(perm_c)[j] of A, so that is the order A[order][:, order] must take
+    order = np.argsort(np.asarray(lu.perm_c, dtype=np.int64))
     return order if order.size == n else np.arange(n)
 
 
