@@ -31,7 +31,7 @@ from substruct.assembly.stack import Connection
 from substruct.builder.interface_reduced import interface_reduced
 from substruct.case.errors import MISSING
 from substruct.case.expressions import ExpressionError, scalar
-from substruct.case.fields import MAX_ELEMENTS, MEMORY_LIMIT, gigabytes
+from substruct.case.fields import MAX_ELEMENTS, gigabytes, memory_limit
 from substruct.case.solids import InterfaceSpec, SolidReduce, SolidSpec, solid_memory
 from substruct.models.selection import (
     COMPONENTS,
@@ -203,12 +203,12 @@ def build_solid(case: Any, i: int, spec: SolidSpec) -> Substructure:
     dim = mesh.dim()
     nodes = _estimate_nodes(mesh, spec.order)
     need = solid_memory(dim * nodes, dim, spec.order)
-    if mesh.nelements > MAX_ELEMENTS or need > MEMORY_LIMIT:
+    if mesh.nelements > MAX_ELEMENTS or need > memory_limit():
         field = (*loc, "mesh") if spec.mesh is not None else loc
         raise case.error(field, f"{mesh.nelements} elements (about {dim * nodes} coordinates "
                          f"at order {spec.order}) would need about {gigabytes(need)} of memory; "
-                         f"at most {MAX_ELEMENTS} elements and {gigabytes(MEMORY_LIMIT)} are "
-                         f"accepted", spec.mesh if spec.mesh is not None else MISSING)
+                         f"at most {MAX_ELEMENTS} elements and the memory available on this "
+                         f"machine are accepted", spec.mesh if spec.mesh is not None else MISSING)
     if dim == 3:
         for key in ("plane", "thickness"):
             if getattr(spec, key) is not None:

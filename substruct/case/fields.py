@@ -24,17 +24,23 @@ from pydantic import (
 )
 
 from substruct.case.expressions import ExpressionError, scalar
-from substruct.case.numbers import (BigNumber, coefficient_problem, digits_problem,
-                                    number_problem)
+from substruct.case.numbers import (
+    BigNumber,
+    coefficient_problem,
+    digits_problem,
+    number_problem,
+)
+from substruct.machine import available_memory
 
 __all__ = [
     "MEMORY_LIMIT", "MAX_ASSUMED_MODES", "MAX_ELEMENTS", "MAX_FREQUENCIES", "MAX_MATRIX_SIZE",
     "MAX_DENSE_ENTRIES", "MAX_COUNT", "MAX_NAME_LENGTH", "DENSE_CHECK", "NAME_PATTERN",
     "Number", "Coefficient", "Positive", "NonNegative", "Count", "Name", "Point", "Distribution",
-    "StrictModel", "parse_point", "gigabytes",
+    "StrictModel", "parse_point", "gigabytes", "memory_limit",
 ]
 
-#: Estimated memory above which an input is refused up front (bytes).
+#: Estimated memory above which an input is refused up front (bytes), where the machine's
+#: available memory is not known or is less (:func:`memory_limit`).
 MEMORY_LIMIT = 4e9
 #: Hard limits on sizes, whatever the memory.
 MAX_ASSUMED_MODES = 20_000
@@ -182,3 +188,10 @@ class StrictModel(BaseModel):
     """Base of every schema model: unknown keys and non-finite numbers are errors."""
 
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, validate_default=False)
+
+
+def memory_limit() -> float:
+    """The estimated memory (bytes) above which a model is refused before it is built: the
+    memory the machine has available now, never less than :data:`MEMORY_LIMIT` (a model that
+    fits the machine runs)."""
+    return max(MEMORY_LIMIT, available_memory() or 0.0)

@@ -32,7 +32,6 @@ from substruct.case.errors import FieldError
 from substruct.case.fields import (
     MAX_COUNT,
     MAX_ELEMENTS,
-    MEMORY_LIMIT,
     Count,
     Name,
     NonNegative,
@@ -40,10 +39,10 @@ from substruct.case.fields import (
     Positive,
     StrictModel,
     gigabytes,
+    memory_limit,
 )
 from substruct.case.mesh_files import MAX_MESH_FILE, mesh_file_problem
 from substruct.case.substructures import ModalDamping
-from substruct.machine import available_memory
 
 __all__ = ["Component", "Selector", "BoxShape", "RectangleShape", "SolidDamping",
            "SolidReduce", "SolidSpec", "InterfaceSpec", "solid_memory", "MAX_MESH_FILE",
@@ -307,9 +306,7 @@ class SolidSpec(StrictModel):
         elements = shape.n_elements()
         nodes = math.prod(int(self.order) * d + 1 for d in shape.divisions)
         need = solid_memory(dim * nodes, dim, self.order)
-        # the machine's memory, not a fixed figure: a model that fits runs (issue 13)
-        limit = max(MEMORY_LIMIT, available_memory() or 0.0)
-        if elements > MAX_ELEMENTS or need > limit:
+        if elements > MAX_ELEMENTS or need > memory_limit():
             raise FieldError((key, "divisions"), f"{elements} elements ({dim * nodes} "
                              f"coordinates) would need about {gigabytes(need)} of memory; at "
                              f"most {MAX_ELEMENTS} elements and the memory available on this "
