@@ -435,8 +435,9 @@ def test_matrix_file_headers_are_read_before_the_data(tmp_path):
 
 def test_receptances_too_large_for_memory_are_refused():
     message = error_of(changed(THREE, ("analysis", "frf"), {
-        "omega": {"start": 1, "stop": 2, "num": 50000}, "inputs": ["P@q1"] * 100,
-        "outputs": ["P@q2"] * 100, "check": ["kkt"]}))
-    assert "analysis.frf: the receptances would need about 16 GB of memory (50000 frequencies x " \
-           "100 outputs x 100 inputs, complex, for 2 formulation(s)), more than the 4 GB " \
-           "allowed, got {\"frequencies\": 50000, \"outputs\": 100, \"inputs\": 100}" in message
+        "omega": {"start": 1, "stop": 2, "num": 100000}, "inputs": ["P@q1"] * 300,
+        "outputs": ["P@q2"] * 300, "check": ["kkt"]}))
+    assert "analysis.frf: the receptances would need about 288 GB of memory (100000 frequencies " \
+           "x 300 outputs x 300 inputs, complex, 2 array(s) at a time), more than this machine " \
+           "has available, got {\"frequencies\": 100000, \"outputs\": 300, \"inputs\": 300}" \
+           in message
