@@ -65,7 +65,9 @@ def independent_rows(A: sp.sparray | sp.spmatrix | np.ndarray, rtol: float = RAN
     .. math::  \tilde A = D A C, \qquad \tilde A^T \Pi = Q R, \qquad
                \operatorname{rank} A = \#\{i : |R_{ii}| > r_{tol} |R_{11}|\}
 
-    ``D`` scales every row to unit 2-norm (powers of two), safely for tiny rows
+    Only the columns with a nonzero entry enter the dense QR (a tie of 1,200 rows on a
+    100k-coordinate model touches a few thousand).  ``D`` scales every row to unit 2-norm
+    (powers of two), safely for tiny rows
     (:func:`substruct.linalg.scaling.row_scale`); ``C`` is ``col_scale`` (e.g.
     :func:`substruct.linalg.scaling.mass_column_scale`), the identity if ``None``.  The
     combination ``W`` of the dropped rows is solved on the well-conditioned :math:`\tilde A` and
@@ -81,11 +83,19 @@ def independent_rows(A: sp.sparray | sp.spmatrix | np.ndarray, rtol: float = RAN
         rtol: relative pivot size under which a row is dependent.
         col_scale: ``n`` positive column factors, or ``None``.
     """
+    scale_c = None if col_scale is None else np.asarray(col_scale, dtype=float)
+    if sp.issparse(A):  # only the columns the rows touch: the rank and W are those of A
+        As_ = sp.csr_array(A)
+        cols = np.unique(As_.indices[As_.data != 0]) if As_.nnz else np.zeros(0, int)
+        A = As_[:, cols]
+        scale_c = None if scale_c is None else scale_c[cols]
     Ad = np.asarray(dense(A), dtype=float)
     m = Ad.shape[0]
     if m == 0:
         return IndependentRows(np.zeros(0, int), 0, np.zeros((0, 0)), np.zeros(0, int))
-    Ac = Ad if col_scale is None else Ad * np.asarray(col_scale, dtype=float)[None, :]
+    if Ad.shape[1] == 0:  # every row zero: all dependent
+        return IndependentRows(np.zeros(0, int), 0, np.zeros((m, 0)), np.arange(m))
+    Ac = Ad if scale_c is None else Ad * scale_c[None, :]
     scale = row_scale(Ac, keep_zero=True)
     As = scale.apply(Ac)
     _, R, piv = sla.qr(As.T, mode="economic", pivoting=True)
