@@ -99,14 +99,7 @@ def _export_transient(args: argparse.Namespace, result: Any) -> int:
         paths = export.transient_export_paths(result, Path(out) if out else Path("."))
     except ValueError as err:
         raise InputError(" ".join(str(err).split())) from None
-    as_file = Path(out).suffix.lower() == ".xdmf"
-    check_out_dir(str(Path(out).parent) if as_file else out, "--out", [p.name for p in paths])
-    for p in paths:
-        if p.exists() and _same_file(p, Path(args.result)):
-            raise InputError(f"{p} is the result being exported; export into another "
-                             "--out directory")
-        if p.exists() and not args.force:
-            raise InputError(f"{p} exists; use --force to overwrite it")
+    _check_targets(args, out, paths, (".xdmf",))
     try:
         paths = export.export_transient(result, Path(out) if out else Path("."),
                                         force=args.force)
@@ -117,6 +110,21 @@ def _export_transient(args: argparse.Namespace, result: Any) -> int:
     for p in paths:
         print(p)
     return 0
+
+
+def _check_targets(args: argparse.Namespace, out: str, paths: list[Path],
+                   file_suffixes: tuple[str, ...]) -> None:
+    """Every file an export will write: its folder writable (``out`` itself, or its parent when
+    ``out`` names a file), none the result read (even with ``--force``), none existing unless
+    ``--force``."""
+    as_file = Path(out).suffix.lower() in file_suffixes
+    check_out_dir(str(Path(out).parent) if as_file else out, "--out", [p.name for p in paths])
+    for p in paths:
+        if p.exists() and _same_file(p, Path(args.result)):
+            raise InputError(f"{p} is the result being exported; export into another "
+                             "--out directory")
+        if p.exists() and not args.force:
+            raise InputError(f"{p} exists; use --force to overwrite it")
 
 
 def export_command(args: argparse.Namespace) -> int:
@@ -138,14 +146,7 @@ def export_command(args: argparse.Namespace) -> int:
     except ValueError as err:
         text = " ".join(str(err).split())
         raise InputError("--" + text if text.startswith("modes: ") else text) from None
-    as_file = Path(out).suffix.lower() in (".vtu", ".xdmf")
-    check_out_dir(str(Path(out).parent) if as_file else out, "--out", [p.name for p in paths])
-    for p in paths:
-        if p.exists() and _same_file(p, Path(args.result)):
-            raise InputError(f"{p} is the result being exported; export into another "
-                             "--out directory")
-        if p.exists() and not args.force:
-            raise InputError(f"{p} exists; use --force to overwrite it")
+    _check_targets(args, out, paths, (".vtu", ".xdmf"))
     try:
         paths = export.export_modes(result, out, args.format, args.modes,
                                     variant=args.variant, force=args.force)
