@@ -12,6 +12,7 @@ is :data:`SCALE_FRACTION` of the model size.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Sequence
 
 import numpy as np
 
@@ -19,6 +20,7 @@ from substruct.builder.drawing import Drawing
 from substruct.io.export import CombinedMesh, combined_mesh
 
 __all__ = ["SCALE_FRACTION", "MIN_SPRING", "WARP_SPRING", "Layout", "layout", "deformed",
+           "drawing_layout",
            "aligned", "is_line_drawing", "is_spring", "view_normal"]
 
 #: The largest displayed displacement as a fraction of the model size.
@@ -89,6 +91,22 @@ def layout(drawings: list[Drawing]) -> Layout:
     else:
         _off_the_body(drawings, mesh, pts, size)
     return Layout(mesh, drawings, pts, size, axial, transverse)
+
+
+def drawing_layout(drawings: Sequence[Drawing], n_coordinates: int, what: str) -> Layout:
+    """The :func:`layout` of a result's drawings, checked to take vectors of ``n_coordinates``
+    (``what``: the vectors drawn, for the message).
+
+    Raises:
+        ValueError: no drawings, or drawings of another number of coordinates.
+    """
+    if not drawings:
+        raise ValueError("the model has no drawings (nothing to draw)")
+    lay = layout(list(drawings))
+    if lay.mesh.interp.shape[1] != n_coordinates:
+        raise ValueError(f"drawings expect {lay.mesh.interp.shape[1]} coordinates, the {what} "
+                         f"have {n_coordinates}")
+    return lay
 
 
 def _exit_length(p0: np.ndarray, direction: np.ndarray, lo: np.ndarray, hi: np.ndarray

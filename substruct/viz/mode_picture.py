@@ -17,7 +17,13 @@ import numpy as np
 
 from substruct.io.hdf5 import atomic_path
 from substruct.run.result import Result
-from substruct.viz.layout import SCALE_FRACTION, Layout, deformed, layout, view_normal
+from substruct.viz.layout import (
+    SCALE_FRACTION,
+    Layout,
+    deformed,
+    drawing_layout,
+    view_normal,
+)
 from substruct.viz.mode_drawing import CMAP, INK, draw_mode, vtk_text
 
 if TYPE_CHECKING:
@@ -170,13 +176,7 @@ def render_modes(result: Result, n_modes: int = 6, variant: str | None = None, *
     k = min(int(n_modes), modes.shapes.shape[1])
     if k == 0:
         raise ValueError(f"result {result.case_name!r} holds no modes to plot")
-    drawings = list(result.model.drawings)
-    if not drawings:
-        raise ValueError("the model has no drawings (nothing to draw)")
-    lay = layout(drawings)
-    if lay.mesh.interp.shape[1] != modes.shapes.shape[0]:
-        raise ValueError(f"drawings expect {lay.mesh.interp.shape[1]} coordinates, the mode "
-                         f"shapes have {modes.shapes.shape[0]}")
+    lay = drawing_layout(result.model.drawings, modes.shapes.shape[0], "mode shapes")
     frames = [deformed(lay, modes.shapes[:, j]) for j in range(k)]
     bounds = _bounds([f[0] for f in frames], lay)
 

@@ -21,7 +21,7 @@ import numpy as np
 
 from substruct.io.hdf5 import atomic_path
 from substruct.run.result import Result
-from substruct.viz.layout import SCALE_FRACTION, Layout, layout, view_normal
+from substruct.viz.layout import SCALE_FRACTION, Layout, drawing_layout, view_normal
 from substruct.viz.mode_drawing import INK, draw_mode, vtk_text
 
 __all__ = ["MAX_FRAMES", "frame_indices", "frame_positions", "write_transient_gif"]
@@ -102,13 +102,7 @@ def write_transient_gif(result: Result, gif_path: str | os.PathLike, *,
     tr = result.transient
     if tr is None or not len(tr.snapshot_t):
         raise ValueError(f"result {result.case_name!r} holds no stored transient fields")
-    drawings = list(result.model.drawings)
-    if not drawings:
-        raise ValueError("the model has no drawings (nothing to draw)")
-    lay = layout(drawings)
-    if lay.mesh.interp.shape[1] != tr.snapshots.shape[1]:
-        raise ValueError(f"drawings expect {lay.mesh.interp.shape[1]} coordinates, the stored "
-                         f"fields have {tr.snapshots.shape[1]}")
+    lay = drawing_layout(result.model.drawings, tr.snapshots.shape[1], "stored fields")
     keep = frame_indices(len(tr.snapshot_t), max_frames)
     positions, mags, peak = frame_positions(lay, tr.snapshots[keep])
     stacked = np.vstack([lay.points, *positions])
