@@ -27,8 +27,9 @@ GRID = ["study.grid.parameters[0]={parameter: kc, values: [1140.0, 1160.0, 1180.
         "study.collect={frf_peaks: [rod@200]}"]
 
 
-def closed_form():
-    """Den Hartog by hand: mode 1 of the rod without absorber c, phi at rod@150, m = 1."""
+def primary_mode() -> tuple[float, float]:
+    """Mode 1 of the shipped tuning case's rod without absorber c: ``(omega_1, phi)``, ``phi``
+    the mass-normalized shape at rod@150, where c is attached."""
     data = yaml.safe_load(TUNING.read_text())
     data["substructures"] = [s for s in data["substructures"] if s["name"] != "c"]
     data["connections"] = [c for c in data["connections"] if c[1] != "c"]
@@ -37,11 +38,18 @@ def closed_form():
     primary = load_case(data)
     model = build_model(primary)
     modes = run_case(primary, model=model).modes
+    assert modes is not None
     phi = (model.assembly.rows([model.points["rod@150"]]) @ modes.shapes[:, 0]).real.item()
+    return float(modes.omega[0]), phi
+
+
+def closed_form():
+    """Den Hartog by hand: mode 1 of the rod without absorber c, phi at rod@150, m = 1."""
+    omega, phi = primary_mode()
     mu = phi ** 2  # absorber mass 1 over the modal mass 1 / phi^2
     f = 1 / (1 + mu)
     zeta = math.sqrt(3 * mu / (8 * (1 + mu) ** 3))
-    w = f * modes.omega[0]
+    w = f * omega
     return w * w, 2 * zeta * w
 
 
