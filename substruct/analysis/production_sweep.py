@@ -82,7 +82,7 @@ def production_sweep(K: sp.csr_array, M: sp.csr_array, C: sp.csr_array | None,
 def constraint_residual(K: sp.csr_array, M: sp.csr_array, C: sp.csr_array | None,
                         A: sp.csr_array, omegas: np.ndarray, inputs: sp.csc_array,
                         scale: float) -> float:
-    """:math:`\max |A u| / \text{scale}` of the null-space sweep at :func:`check_frequencies`
+    r""":math:`\max |A u| / \text{scale}` of the null-space sweep at :func:`check_frequencies`
     (``u`` every coordinate's response to each input)."""
     idx = check_frequencies(len(omegas))
     if not A.shape[0] or not idx.size:
