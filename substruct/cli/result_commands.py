@@ -15,7 +15,7 @@ import json
 import os
 import sys
 from pathlib import Path
-from typing import Any, TextIO
+from typing import Any, Callable, TextIO
 
 from substruct.cli.errors import InputError
 from substruct.cli.files import check_out_dir, load_result, optional_module
@@ -88,8 +88,6 @@ def _export_transient(args: argparse.Namespace, result: Any) -> int:
     """``export --format xdmf --transient``: the stored fields of the transient response as
     an XDMF time series (:mod:`substruct.io.transient_export`), with the checks of
     :func:`export_command`."""
-    from substruct.io.file_set import BusyError
-
     if args.format != "xdmf" or args.modes is not None or args.variant is not None:
         raise InputError("--transient exports the stored fields as --format xdmf; --modes and "
                          "--variant do not apply")
@@ -100,9 +98,17 @@ def _export_transient(args: argparse.Namespace, result: Any) -> int:
     except ValueError as err:
         raise InputError(" ".join(str(err).split())) from None
     _check_targets(args, out, paths, (".xdmf",))
+    return _write(lambda: export.export_transient(result, Path(out) if out else Path("."),
+                                                  force=args.force))
+
+
+def _write(export: Callable[[], list[Path]]) -> int:
+    """Run ``export``, print the paths it wrote; its refusals (a busy directory, a file in the
+    way) as one-line input errors."""
+    from substruct.io.file_set import BusyError
+
     try:
-        paths = export.export_transient(result, Path(out) if out else Path("."),
-                                        force=args.force)
+        paths = export()
     except BusyError as err:
         raise InputError(str(err)) from None
     except (ValueError, FileExistsError) as err:
@@ -133,8 +139,6 @@ def export_command(args: argparse.Namespace) -> int:
     Every file is checked before anything is written: none may be the result read (even with
     ``--force``), none may exist unless ``--force``.
     """
-    from substruct.io.file_set import BusyError
-
     result = load_result(args.result)
     if getattr(args, "transient", False):
         return _export_transient(args, result)
@@ -147,13 +151,5 @@ def export_command(args: argparse.Namespace) -> int:
         text = " ".join(str(err).split())
         raise InputError("--" + text if text.startswith("modes: ") else text) from None
     _check_targets(args, out, paths, (".vtu", ".xdmf"))
-    try:
-        paths = export.export_modes(result, out, args.format, args.modes,
-                                    variant=args.variant, force=args.force)
-    except BusyError as err:
-        raise InputError(str(err)) from None
-    except (ValueError, FileExistsError) as err:
-        raise InputError(" ".join(str(err).split())) from None
-    for p in paths:
-        print(p)
-    return 0
+    return _write(lambda: export.export_modes(result, out, args.format, args.modes,
+                                              variant=args.variant, force=args.force))
