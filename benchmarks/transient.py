@@ -33,14 +33,13 @@ from __future__ import annotations
 import argparse
 import statistics
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sp
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from modes import (  # noqa: E402  (the model of the modal benchmark)
+from modes import (  # noqa: E402  (the model and timer of the modal benchmark)
     LX,
     LY,
     LZ,
@@ -48,6 +47,7 @@ from modes import (  # noqa: E402  (the model of the modal benchmark)
     machine,
     monolithic_system,
     substruct_model,
+    timed_runs,
 )
 
 DT = 1e-4
@@ -105,14 +105,7 @@ def substruct_run(asm, method: str, steps: int, factorization: str) -> tuple[np.
 
 def timed(run, repeat: int) -> tuple[float, float, object]:
     """Median wall-clock and CPU times of up to ``repeat`` runs, and the last output."""
-    times, cpu, out = [], [], None
-    for i in range(repeat):
-        t0, c0 = time.perf_counter(), time.process_time()
-        out = run()
-        times.append(time.perf_counter() - t0)
-        cpu.append(time.process_time() - c0)
-        if times[0] > 60.0:
-            break
+    times, cpu, out = timed_runs(run, repeat, once_above=60.0)
     return statistics.median(times), statistics.median(cpu), out
 
 
