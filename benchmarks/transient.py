@@ -109,6 +109,11 @@ def timed(run, repeat: int) -> tuple[float, float, object]:
     return statistics.median(times), statistics.median(cpu), out
 
 
+def progress(size: int, form: str, wall: float, cpu: float) -> None:
+    """One line on standard error as each form finishes (a large size takes many minutes)."""
+    print(f"  [{size}] {form}: {wall:.2f} s wall, {cpu:.2f} s CPU", file=sys.stderr, flush=True)
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", type=int, nargs="+", default=[10000, 30000])
@@ -132,10 +137,13 @@ def main(argv: list[str] | None = None) -> None:
         asm = assemble(subs, cons, mpcs)
         mono = monolithic(size)
         tb, cb, yb = timed(lambda: baseline_run(mono, args.steps, fact), args.repeat)
+        progress(size, "b", tb, cb)
         tg, cg, (yg, drift) = timed(lambda: substruct_run(asm, "generalized-inverse",
                                                           args.steps, fact), args.repeat)
+        progress(size, "gi", tg, cg)
         tn, cn, (yn, _) = timed(lambda: substruct_run(asm, "null-space", args.steps, fact),
                                 args.repeat)
+        progress(size, "ns", tn, cn)
         peak = float(np.abs(yb[:, 0]).max())
         eg = float(np.abs(yg[:, 0] - yb[:, 0]).max()) / peak
         en = float(np.abs(yn[:, 0] - yb[:, 0]).max()) / peak
