@@ -45,6 +45,7 @@ from substruct.analysis.modal_frf import (
 )
 from substruct.analysis.production_sweep import (
     PRODUCTION_SWEEP,
+    check_frequencies,
     constraint_residual,
     production_sweep,
     production_sweep_applies,
@@ -157,8 +158,8 @@ def receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
     production = production_sweep_applies(n, Rs, method)
     if production:  # the outputs only; the constraint residual at the checked frequencies
         H = production_sweep(Ks, Ms, Cs, As, w, forces, out_rows, progress)
-        scale = _largest(H)
-        residual = constraint_residual(Ks, Ms, Cs, As, w, forces, scale)
+        checked = check_frequencies(w.size)  # the residual's scale where it is measured
+        residual = constraint_residual(Ks, Ms, Cs, As, w, forces, _largest(H[checked]))
     else:
         rows = sp.csr_array(sp.vstack([out_rows, As])) if m else out_rows
         full = _sweep(Ks, Ms, Cs, As, w, Rs, method, forces, rows, labels, progress)

@@ -17,10 +17,9 @@ ordering computed once for the sweep (:func:`substruct.linalg.factorize.fill_ord
 :func:`substruct.linalg.factorize.complex_symmetric`) and solved for all inputs in one call.
 Where a reverse Cuthill-McKee ordering makes :math:`Z_T` narrow (half-bandwidth at most
 :data:`substruct.linalg.banded.BAND_MAX`: chains, rods, beams) the factorization is LAPACK's band
-LU instead (:mod:`substruct.linalg.banded`): with many inputs, for a batch of frequencies at
-a time (:func:`~substruct.linalg.banded.band_solve_batch`: each row operation of the
-substitutions done for every frequency of the batch and every input at once), with few inputs
-``gbsv`` a frequency at a time.  The outputs are gathered by rows (:class:`Gather`).  The
+LU instead (:mod:`substruct.linalg.banded`): with many inputs its substitutions in compiled
+loops over the inputs (:func:`~substruct.linalg.banded.band_solve_many`), with few LAPACK's
+``gbsv``.  The outputs are gathered by rows (:class:`Gather`).  The
 reduced system has ``n - rank(A)`` unknowns instead of the ``n + m`` of the KKT system and
 the ``n + m`` of the bordered generalized-inverse system, and needs one factorization a
 frequency instead of their two.
@@ -36,12 +35,11 @@ import scipy.sparse as sp
 from substruct.analysis.krylov import eliminate
 from substruct.linalg.banded import (
     BAND_MAX,
-    band_factor_batch,
     band_ordering,
     band_solve,
-    band_solve_batch,
+    band_solve_many,
     band_storage,
-    batch_size,
+    kernel_pays,
 )
 from substruct.linalg.factorize import complex_symmetric, fill_ordering
 from substruct.linalg.memory import factor_memory, require_memory
@@ -156,34 +154,23 @@ def null_space_sparse_sweep(K: sp.sparray, M: sp.sparray, C: sp.sparray | None,
     Bp = np.asfortranarray(B[p])
     gather = Gather(sp.csr_array(OT[:, p]))
     H = np.empty((w.size, OT.shape[0], B.shape[1]), dtype=complex)
-    batch = batch_size(Kt.shape[0], B.shape[1], w.size) if banded else 0
+    many = banded and kernel_pays(Kt.shape[0], B.shape[1], w.size)
     if banded:
         Kb, Mb = band_storage(Kp, width), band_storage(Mp, width)
         Cb = None if Cp is None else band_storage(Cp, width)
-    if batch:
-        X = np.empty((Kt.shape[0], batch, B.shape[1]), dtype=complex)
-        for start in range(0, w.size, batch):
-            wb = w[start:start + batch]
-            f = wb.size
-            ab = (Kb - wb[:, None, None]**2 * Mb).astype(complex)
-            if Cb is not None:
-                ab += 1j * wb[:, None, None] * Cb
-            try:
-                piv = band_factor_batch(ab, width)
-            except np.linalg.LinAlgError as exc:
-                raise _singular(wb[exc.args[1]]) from exc
-            Xb = X[:, :f]
-            band_solve_batch(ab, piv, width, Bp, Xb)
-            for i in range(f):
-                gather(Xb[:, i], H[start + i])
-            if progress is not None:
-                progress(start + f)
-        return H
+    Bc = np.ascontiguousarray(Bp) if many else Bp  # the kernel's rows: C order
+    X = np.empty(Bp.shape, dtype=complex)
     for k, wk in enumerate(w):
         try:
             if banded:
-                Zb = Kb - wk**2 * Mb + (0.0 if Cb is None else 1j * wk * Cb)
-                Xk = band_solve(np.asarray(Zb, dtype=complex), width, Bp)
+                Zb = np.asarray(Kb - wk**2 * Mb + (0.0 if Cb is None else 1j * wk * Cb),
+                                dtype=complex)
+                if many:
+                    np.copyto(X, Bc)
+                    band_solve_many(Zb, width, X)
+                    Xk = X
+                else:
+                    Xk = band_solve(Zb, width, Bp)
             else:
                 Z = Kp.astype(complex) - wk**2 * Mp + (0.0 if Cp is None else 1j * wk * Cp)
                 Xk = complex_symmetric(Z, ordered=True)(Bp)

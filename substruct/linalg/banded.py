@@ -5,9 +5,11 @@ With the ordering :math:`\pi` of :func:`band_ordering` the matrix :math:`A_{\pi\
 half-bandwidth ``b``: :math:`a_{ij} = 0` for :math:`|i - j| > b`.  Its LU with partial
 pivoting costs :math:`O(n b^2)` and a solve :math:`O(n b)` a right-hand side, in LAPACK's
 column-major blocks, where a general sparse solve of hundreds of right-hand sides pays a
-per-column overhead (SuperLU: 11 ms for 400 right-hand sides of a 399-coordinate chain;
-the band solve takes a fraction of a millisecond).  The frequency sweeps use it when ``b`` is
-at most :data:`BAND_MAX` (:mod:`substruct.analysis.sparse_sweep`).
+per-column overhead (SuperLU: 11 ms for 400 right-hand sides of a 399-coordinate chain).
+LAPACK's substitutions ``gbtrs`` call a BLAS ``tbsv`` a right-hand side, so with hundreds of
+them :func:`band_solve_many` does the substitutions in compiled loops instead
+(:mod:`substruct.linalg.band_kernel`).  The frequency sweeps use these solves when ``b`` is at
+most :data:`BAND_MAX` (:mod:`substruct.analysis.sparse_sweep`).
 """
 
 from __future__ import annotations
@@ -17,16 +19,16 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 from scipy.sparse.csgraph import reverse_cuthill_mckee
 
-__all__ = ["BAND_MAX", "BATCH_BYTES", "band_factor_batch", "band_ordering", "band_solve",
-           "band_solve_batch", "band_storage", "batch_size"]
+__all__ = ["BAND_MAX", "KERNEL_MIN_WORK", "band_factor", "band_ordering", "band_solve",
+           "band_solve_many", "band_storage", "kernel_pays"]
 
 #: Largest half-bandwidth for which a band solve is chosen over a sparse LU.
 BAND_MAX = 32
-#: Bytes of the solution block of one batch of :func:`band_solve_batch` (``n x F x p`` complex).
-BATCH_BYTES = 32 * 2**20
-#: Fewest entries ``F p`` a row operation of :func:`band_solve_batch` must touch to be chosen
-#: over LAPACK's solve a matrix at a time (below it NumPy's cost a call dominates).
-BATCH_MIN_ROW = 2048
+#: Least work ``n p count`` (unknowns x right-hand sides x matrices) for which the compiled
+#: substitutions of :func:`band_solve_many` are chosen over LAPACK's ``gbsv``: below it the
+#: 0.3 s of loading Numba and its cached code is more than they save (about 25 ns an unknown
+#: and right-hand side with 400 right-hand sides, ``benchmarks/frf_sweep.py``).
+KERNEL_MIN_WORK = 20_000_000
 
 
 def band_ordering(pattern: sp.sparray | sp.spmatrix) -> tuple[np.ndarray, int]:
@@ -70,89 +72,40 @@ def band_solve(ab: np.ndarray, b: int, rhs: np.ndarray) -> np.ndarray:
     return x
 
 
-def batch_size(n: int, p: int, count: int) -> int:
-    """How many matrices :func:`band_solve_batch` takes at once for ``n`` unknowns, ``p``
-    right-hand sides and ``count`` matrices in all: as many as fit :data:`BATCH_BYTES` (at
-    least one, at most ``count``); 0 when a row of the batch would hold fewer than
-    :data:`BATCH_MIN_ROW` entries (then LAPACK's :func:`band_solve` a matrix at a time is
-    faster)."""
-    f = int(min(max(BATCH_BYTES // max(16 * n * p, 1), 1), max(count, 1)))
-    return f if f * p >= BATCH_MIN_ROW else 0
-
-
-def band_factor_batch(ab: np.ndarray, b: int) -> np.ndarray:
-    r"""LU with partial pivoting (LAPACK ``gbtrf``) of each matrix of the stack ``ab``
-    (``F x (3 b + 1) x n`` band storage of :func:`band_storage`, complex), in place:
-    :math:`P_f A_f = L_f U_f`, ``U_f`` with ``2 b`` super-diagonals in rows ``0 .. 2 b``,
-    the multipliers of ``L_f`` below.  Returns the pivots, ``F x n``, 0-based (row ``j`` was
-    swapped with row ``piv[f, j]`` at step ``j``).
+def band_factor(ab: np.ndarray, b: int) -> tuple[np.ndarray, np.ndarray]:
+    r"""LU with partial pivoting (LAPACK ``gbtrf``) of the band storage ``ab`` of
+    :func:`band_storage` (overwritten): :math:`P A = L U`.  Returns the factors in band
+    storage (``U`` with ``2 b`` super-diagonals in rows ``0 .. 2 b``, the multipliers of ``L``
+    below) and the 0-based pivots.
 
     Raises:
-        numpy.linalg.LinAlgError: a matrix is singular (its index in ``args[1]``).
+        numpy.linalg.LinAlgError: ``A`` is singular.
     """
     gbtrf, = sla.get_lapack_funcs(("gbtrf",), (ab,))
-    piv = np.empty((ab.shape[0], ab.shape[2]), dtype=np.intp)
-    for f in range(ab.shape[0]):
-        lu, pf, info = gbtrf(ab[f], b, b, overwrite_ab=True)
-        if info > 0:
-            raise np.linalg.LinAlgError(f"singular matrix: zero pivot {info}", f)
-        if lu is not ab[f]:
-            ab[f] = lu
-        piv[f] = pf
-    return piv
+    lu, piv, info = gbtrf(ab, b, b, overwrite_ab=True)
+    if info > 0:
+        raise np.linalg.LinAlgError(f"singular matrix: zero pivot {info}")
+    if info < 0:
+        raise ValueError(f"gbtrf: illegal argument {-info}")
+    return lu, piv
 
 
-def band_solve_batch(lu: np.ndarray, piv: np.ndarray, b: int, rhs: np.ndarray,
-                     out: np.ndarray) -> None:
-    r"""``out[:, f, :] = A_f^{-1} rhs`` for the stack factorized by :func:`band_factor_batch`.
+def kernel_pays(n: int, p: int, count: int) -> bool:
+    """Whether ``count`` solves of ``n`` unknowns with ``p`` right-hand sides each go to the
+    compiled substitutions (:func:`band_solve_many`): at least :data:`KERNEL_MIN_WORK` of
+    ``n p count``, else LAPACK's :func:`band_solve` costs less than loading Numba."""
+    return n * p * count >= KERNEL_MIN_WORK
 
-    The substitutions of LAPACK's ``gbtrs``, row by row, each row operation done for every
-    matrix and every right-hand side at once (``out[j]`` is ``F x p``, contiguous):
 
-    .. math::  y_{j+d} \leftarrow y_{j+d} - l_{j+d,j}\, y_j \quad (d = 1..b,\ \text{after
-               the swap of } y_j, y_{\pi_j}), \qquad
-               x_j = y_j / u_{jj}, \quad y_i \leftarrow y_i - u_{ij}\, x_j \quad
-               (j - 2b \le i < j) .
+def band_solve_many(ab: np.ndarray, b: int, x: np.ndarray) -> None:
+    r"""``x <- A^{-1} x`` in place for many right-hand sides (``x``: ``n x p``, C-ordered,
+    complex like ``ab``): :func:`band_factor`, then the compiled substitutions
+    (:func:`substruct.linalg.band_kernel.band_substitute`), each row operation one contiguous
+    loop over the ``p`` right-hand sides.  ``ab`` is overwritten.
 
-    LAPACK solves a right-hand side at a time with a BLAS call a row (``tbsv``), which costs
-    more than the arithmetic for narrow bands; here a NumPy call a row serves ``F p`` entries.
-
-    Args:
-        lu: ``F x (3 b + 1) x n`` factors of :func:`band_factor_batch`.
-        piv: ``F x n`` 0-based pivots.
-        b: half-bandwidth.
-        rhs: ``n x p`` right-hand sides, shared by the ``F`` matrices.
-        out: ``n x F x p`` complex, written (its rows ``out[j]`` must be C-contiguous).
+    Raises:
+        numpy.linalg.LinAlgError: ``A`` is singular.
     """
-    F, _, n = lu.shape
-    kd = 2 * b
-    np.copyto(out, rhs[:, None, :])
-    tmp = np.empty(out.shape[1:], dtype=out.dtype)
-    lower = np.ascontiguousarray(lu[:, kd + 1:, :].transpose(2, 1, 0))[..., None]  # n, b, F, 1
-    upper = np.ascontiguousarray(lu[:, :kd, :].transpose(2, 1, 0))[..., None]  # n, 2b, F, 1
-    inv_diag = np.ascontiguousarray((1.0 / lu[:, kd, :]).T)[..., None]  # n, F, 1
-    shift = piv.T - np.arange(n)[:, None]  # n, F: row j swapped with j + shift
-    swaps: list[list[tuple[int, np.ndarray]]] = [[] for _ in range(n)]
-    for j in np.flatnonzero(shift.any(axis=1)).tolist():
-        for d in range(1, b + 1):
-            mask = shift[j] == d
-            if mask.any():
-                swaps[j].append((d, mask[:, None]))
-    for j in range(n - 1):
-        row = out[j]
-        for d, mask in swaps[j]:
-            np.copyto(tmp, row)
-            np.copyto(row, out[j + d], where=mask)
-            np.copyto(out[j + d], tmp, where=mask)
-        for d in range(min(b, n - 1 - j)):
-            np.multiply(row, lower[j, d], out=tmp)
-            np.subtract(out[j + 1 + d], tmp, out=out[j + 1 + d])
-    used = np.any(upper[..., 0] != 0, axis=2).tolist()  # n x 2b: u_ij != 0 for some f
-    for j in range(n - 1, -1, -1):
-        row = out[j]
-        row *= inv_diag[j]
-        for r, nonzero in enumerate(used[j]):
-            i = j - kd + r
-            if nonzero and i >= 0:
-                np.multiply(row, upper[j, r], out=tmp)
-                np.subtract(out[i], tmp, out=out[i])
+    from substruct.linalg.band_kernel import band_substitute
+    lu, piv = band_factor(ab, b)
+    band_substitute(lu, np.asarray(piv, dtype=np.int64), b, x)
