@@ -106,7 +106,8 @@ class Substructure:
 
     def row(self, where: Any) -> sp.csr_array:
         """Sparse ``1 x n`` row giving the displacement at point ``where``."""
-        r = sp.csr_array(self.locate(where))
+        found = self.locate(where)
+        r = found if isinstance(found, sp.csr_array) else sp.csr_array(found)
         if r.shape != (1, self.n_dof):
             raise ValueError(f"{self.name}: locator returned shape {r.shape}")
         return r

@@ -117,10 +117,20 @@ class Assembly:
                             shape=(1, self.n_dof))
 
     def rows(self, points: Sequence[PointRef]) -> sp.csr_array:
-        """Stacked rows of several points (``k x N``)."""
+        """Stacked rows of several points (``k x N``), built in one piece from the local rows
+        (hundreds of inputs and outputs of a sweep)."""
         if not points:
             return sp.csr_array((0, self.n_dof))
-        return sp.csr_array(sp.vstack([self.row(p) for p in points]))
+        data, cols, counts = [], [], []
+        for p in points:
+            i = self.index(p.substructure)
+            local = self.substructures[i].row(p.where)
+            data.append(local.data)
+            cols.append(local.indices + self.offsets[i])
+            counts.append(local.nnz)
+        indptr = np.concatenate([[0], np.cumsum(counts)])
+        return sp.csr_array((np.concatenate(data), np.concatenate(cols), indptr),
+                            shape=(len(points), self.n_dof))
 
 
 def assemble(substructures: Sequence[Substructure], connections: Sequence[Connection] = (),

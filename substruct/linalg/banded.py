@@ -26,9 +26,10 @@ __all__ = ["BAND_MAX", "KERNEL_MIN_WORK", "band_factor", "band_ordering", "band_
 BAND_MAX = 32
 #: Least work ``n p count`` (unknowns x right-hand sides x matrices) for which the compiled
 #: substitutions of :func:`band_solve_many` are chosen over LAPACK's ``gbsv``: below it the
-#: 0.3 s of loading Numba and its cached code is more than they save (about 25 ns an unknown
-#: and right-hand side with 400 right-hand sides, ``benchmarks/frf_sweep.py``).
-KERNEL_MIN_WORK = 20_000_000
+#: 0.5-0.8 s of CPU that loading Numba and its cached code costs a fresh process is more than
+#: they save (about 23 ns an unknown and right-hand side: 4 against 27 ns with 400 right-hand
+#: sides, ``benchmarks/frf_sweep.py``).
+KERNEL_MIN_WORK = 30_000_000
 
 
 def band_ordering(pattern: sp.sparray | sp.spmatrix) -> tuple[np.ndarray, int]:
