@@ -144,3 +144,22 @@ def test_few_inputs_take_the_per_frequency_band_solve(monkeypatch):
     ref = kkt_inverse(K, M, C, A, w, E, O)
     assert np.abs(H - ref).max() / np.abs(ref).max() < 1e-9
     assert len(called) == 2
+
+
+def test_kernel_compiles_without_a_cache_directory(monkeypatch):
+    """Where Numba finds no writable cache directory it refuses ``cache=True``; the kernel is
+    then compiled in the process and gives the same solution."""
+    from numba.core.dispatcher import Dispatcher
+
+    from substruct.linalg import band_kernel
+
+    def refuse(self, *args, **kwargs):
+        raise RuntimeError("cannot cache function: no locator available")
+    monkeypatch.setattr(Dispatcher, "enable_caching", refuse)
+    kernel = band_kernel.compiled(band_kernel.band_substitute_python)
+    Z = sp.csr_array(sp.diags_array([np.full(5, 1.0 + 1j), np.full(6, 4.0), np.full(5, 1.0)],
+                                    offsets=[-1, 0, 1]))
+    lu, piv = band_factor(band_storage(Z, 1).astype(complex), 1)
+    x = np.eye(6, dtype=complex)
+    kernel(lu, np.asarray(piv, dtype=np.int64), 1, x)
+    np.testing.assert_allclose(x, np.linalg.inv(Z.toarray()), rtol=0, atol=1e-14)

@@ -9,19 +9,29 @@ contiguous loop over the right-hand sides (``benchmarks/frf_sweep.py``: 0.65 ms 
 
 The module is imported only by :func:`substruct.linalg.banded.band_solve_many`, so that Numba
 is loaded by the sweeps that use it; its compiled code is cached beside this file (or in
-Numba's user cache when that is not writable).
+Numba's user cache when that is not writable, or compiled in each process when neither is).
 """
 
 from __future__ import annotations
 
+from typing import Callable
+
 import numpy as np
 from numba import njit
 
-__all__ = ["band_substitute"]
+__all__ = ["band_substitute", "band_substitute_python", "compiled"]
 
 
-@njit(cache=True, nogil=True)
-def band_substitute(lu: np.ndarray, piv: np.ndarray, b: int, x: np.ndarray) -> None:
+def compiled(func: Callable[..., None]) -> Callable[..., None]:
+    """``func`` compiled by Numba, its machine code cached on disk where a cache directory is
+    writable, else compiled anew in each process (Numba refuses ``cache=True`` without one)."""
+    try:
+        return njit(cache=True, nogil=True)(func)  # type: ignore[no-any-return]
+    except RuntimeError:
+        return njit(nogil=True)(func)  # type: ignore[no-any-return]
+
+
+def band_substitute_python(lu: np.ndarray, piv: np.ndarray, b: int, x: np.ndarray) -> None:
     r"""``x <- A^{-1} x`` in place, from LAPACK ``gbtrf``'s factors of ``A`` (``P A = L U``).
 
     ``lu``: band storage of ``gbtrf`` with ``b`` sub- and super-diagonals (``U`` with ``2 b``
@@ -59,3 +69,7 @@ def band_substitute(lu: np.ndarray, piv: np.ndarray, b: int, x: np.ndarray) -> N
                 if upper != 0:
                     for c in range(p):
                         x[i, c] -= upper * x[j, c]
+
+
+#: :func:`band_substitute_python` compiled: the one the solves call.
+band_substitute = compiled(band_substitute_python)
