@@ -166,8 +166,7 @@ def null_space_sparse_sweep(K: sp.sparray, M: sp.sparray, C: sp.sparray | None,
                 Zb = np.asarray(Kb - wk**2 * Mb + (0.0 if Cb is None else 1j * wk * Cb),
                                 dtype=complex)
                 if many:
-                    np.copyto(X, Bc)
-                    band_solve_many(Zb, width, X)
+                    band_solve_many(Zb, width, Bc, X)
                     Xk = X
                 else:
                     Xk = band_solve(Zb, width, Bp)

@@ -31,13 +31,16 @@ def compiled(func: Callable[..., None]) -> Callable[..., None]:
         return njit(nogil=True)(func)  # type: ignore[no-any-return]
 
 
-def band_substitute_python(lu: np.ndarray, piv: np.ndarray, b: int, x: np.ndarray) -> None:
-    r"""``x <- A^{-1} x`` in place, from LAPACK ``gbtrf``'s factors of ``A`` (``P A = L U``).
+def band_substitute_python(lu: np.ndarray, piv: np.ndarray, b: int, rhs: np.ndarray,
+                           x: np.ndarray) -> None:
+    r"""``x = A^{-1} rhs`` from LAPACK ``gbtrf``'s factors of ``A`` (``P A = L U``).
 
     ``lu``: band storage of ``gbtrf`` with ``b`` sub- and super-diagonals (``U`` with ``2 b``
     super-diagonals in rows ``0 .. 2 b``, the multipliers of ``L`` in rows ``2 b + 1 ..
     3 b``); ``piv``: 0-based pivots (row ``j`` swapped with row ``piv[j]`` at step ``j``);
-    ``x``: ``n x p``, C-ordered.  Forward, then back substitution, row by row:
+    ``rhs``, ``x``: ``n x p``, C-ordered (a row of ``rhs`` is copied into ``x`` when the
+    forward substitution first reaches it, while it is in cache).  Forward, then back
+    substitution, row by row:
 
     .. math::  y_j \leftrightarrow y_{\pi_j}, \quad y_{j+d} \leftarrow y_{j+d} -
                l_{j+d,j}\, y_j \ (d = 1..b); \qquad
@@ -46,7 +49,12 @@ def band_substitute_python(lu: np.ndarray, piv: np.ndarray, b: int, x: np.ndarra
     """
     n, p = x.shape
     kd = 2 * b
+    ready = 0  # rows of x holding their right-hand side
     for j in range(n - 1):
+        while ready <= min(j + b, n - 1):
+            for c in range(p):
+                x[ready, c] = rhs[ready, c]
+            ready += 1
         q = piv[j]
         if q != j:
             for c in range(p):
@@ -58,6 +66,10 @@ def band_substitute_python(lu: np.ndarray, piv: np.ndarray, b: int, x: np.ndarra
             if lower != 0:
                 for c in range(p):
                     x[j + d, c] -= lower * x[j, c]
+    while ready < n:
+        for c in range(p):
+            x[ready, c] = rhs[ready, c]
+        ready += 1
     for j in range(n - 1, -1, -1):
         s = 1.0 / lu[kd, j]
         for c in range(p):

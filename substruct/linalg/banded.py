@@ -98,8 +98,8 @@ def kernel_pays(n: int, p: int, count: int) -> bool:
     return n * p * count >= KERNEL_MIN_WORK
 
 
-def band_solve_many(ab: np.ndarray, b: int, x: np.ndarray) -> None:
-    r"""``x <- A^{-1} x`` in place for many right-hand sides (``x``: ``n x p``, C-ordered,
+def band_solve_many(ab: np.ndarray, b: int, rhs: np.ndarray, x: np.ndarray) -> None:
+    r"""``x = A^{-1} rhs`` for many right-hand sides (``rhs``, ``x``: ``n x p``, C-ordered,
     complex like ``ab``): :func:`band_factor`, then the compiled substitutions
     (:func:`substruct.linalg.band_kernel.band_substitute`), each row operation one contiguous
     loop over the ``p`` right-hand sides.  ``ab`` is overwritten.
@@ -109,4 +109,4 @@ def band_solve_many(ab: np.ndarray, b: int, x: np.ndarray) -> None:
     """
     from substruct.linalg.band_kernel import band_substitute
     lu, piv = band_factor(ab, b)
-    band_substitute(lu, np.asarray(piv, dtype=np.int64), b, x)
+    band_substitute(lu, np.asarray(piv, dtype=np.int64), b, rhs, x)
