@@ -163,3 +163,22 @@ def test_kernel_compiles_without_a_cache_directory(monkeypatch):
     x = np.empty((6, 6), dtype=complex)
     kernel(lu, np.asarray(piv, dtype=np.int64), 1, np.eye(6, dtype=complex), x)
     np.testing.assert_allclose(x, np.linalg.inv(Z.toarray()), rtol=0, atol=1e-14)
+
+
+@pytest.mark.parametrize("n_chain", [80, 20])  # 160 coordinates: production path; 40: direct
+def test_constraint_residual_does_not_depend_on_a_row_scale(n_chain):
+    """The reported ``max |D A u| / max |H|`` is that of unit-norm rows: a tie row scaled by
+    1e8 leaves it at round-off, on the production path (more than 100 coordinates) and on
+    the direct formulations (fewer)."""
+    from substruct.analysis.api import receptance_sweep
+    from substruct.analysis.production_sweep import SWEEP_SPARSE_ABOVE
+
+    K, M, C, A = chains(n_chain)
+    n = K.shape[0]
+    w = np.array([3.0, 40.0, 90.0])
+    E, O = sp.eye_array(n, format="csc")[:, :5], sp.eye_array(n, format="csr")[:5]
+    one = receptance_sweep(K, M, C, A, w, E, O)
+    big = receptance_sweep(K, M, C, sp.csr_array(1e8 * A), w, E, O)
+    assert (one.method == "null-space/sparse") == (n > SWEEP_SPARSE_ABOVE)
+    np.testing.assert_allclose(big.H, one.H, rtol=0, atol=1e-10 * np.abs(one.H).max())
+    assert one.constraint_residual < 1e-12 and big.constraint_residual < 1e-12

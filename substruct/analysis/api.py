@@ -52,6 +52,7 @@ from substruct.analysis.production_sweep import (
     sweep_checks,
 )
 from substruct.analysis.results import DEFAULT_TOLERANCE, Receptance
+from substruct.linalg.scaling import equilibrate
 
 __all__ = [
     "Progress",
@@ -161,12 +162,15 @@ def receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
         checked = check_frequencies(w.size)  # the residual's scale where it is measured
         residual = constraint_residual(Ks, Ms, Cs, As, w, forces, _largest(H[checked]))
     else:
-        rows = sp.csr_array(sp.vstack([out_rows, As])) if m else out_rows
+        # the residual's rows scaled to unit norm with their R: its figure is that of D A
+        eq = equilibrate(As, R=Rs, labels=labels) if m else None
+        rows = sp.csr_array(sp.vstack([out_rows, eq.A])) if eq is not None else out_rows
         full = _sweep(Ks, Ms, Cs, As, w, Rs, method, forces, rows, labels, progress)
         scale = _largest(full[:, :k_out])
         residual = 0.0
-        if m and full.size:
-            RE = (Rs @ forces).toarray() if Rs is not None else np.zeros((m, forces.shape[1]))
+        if eq is not None and full.size:
+            RE = (sp.csr_array(eq.R) @ forces).toarray() if eq.R is not None else \
+                np.zeros((m, forces.shape[1]))
             residual = float(np.abs(full[:, k_out:] - RE[None]).max() / scale)
         H = _leading_rows(full, k_out)
     agreement = {}

@@ -31,6 +31,7 @@ import scipy.sparse as sp
 from substruct.analysis.checks import receptance_difference
 from substruct.analysis.coupling import METHODS, receptance
 from substruct.analysis.sparse_sweep import null_space_sparse_sweep
+from substruct.linalg.scaling import equilibrate
 
 __all__ = [
     "CHECK_FREQUENCIES",
@@ -82,12 +83,13 @@ def production_sweep(K: sp.csr_array, M: sp.csr_array, C: sp.csr_array | None,
 def constraint_residual(K: sp.csr_array, M: sp.csr_array, C: sp.csr_array | None,
                         A: sp.csr_array, omegas: np.ndarray, inputs: sp.csc_array,
                         scale: float) -> float:
-    r""":math:`\max |A u| / \text{scale}` of the null-space sweep at :func:`check_frequencies`
-    (``u`` every coordinate's response to each input)."""
+    r""":math:`\max |D A u| / \text{scale}` of the null-space sweep at :func:`check_frequencies`
+    (``u`` every coordinate's response to each input, ``D A`` the rows scaled to unit norm)."""
     idx = check_frequencies(len(omegas))
     if not A.shape[0] or not idx.size:
         return 0.0
-    AH = null_space_sparse_sweep(K, M, C, A, omegas[idx], inputs, A)
+    AH = null_space_sparse_sweep(K, M, C, A, omegas[idx], inputs,
+                                 sp.csr_array(equilibrate(A).A))
     return float(np.abs(AH).max(initial=0.0) / scale)
 
 

@@ -108,7 +108,9 @@ class Receptance:
         H: complex ``(n_omega, n_outputs, n_inputs)``.
         inputs, outputs: the names of the input and output points, verbatim.
         agreement: check formulation -> ``max |H_check - H| / max |H|``.
-        constraint_residual: :math:`\max |A \hat q - R F| / \max |H|` over all frequencies.
+        constraint_residual: :math:`\max |D (A \hat q - R F)| / \max |H|` over all
+            frequencies (``D``: the rows of ``A`` scaled to unit norm; on the sparse null-space
+            path both maxima at the checked frequencies).
         tolerance: the largest ``agreement`` the result was allowed.
         quantity: what ``H`` is: ``"receptance"`` (u / F), ``"mobility"`` (velocity / F) or
             ``"accelerance"`` (acceleration / F) (:mod:`substruct.analysis.frf_quantity`).
