@@ -125,7 +125,8 @@ def print_frf(frf: Any, out: TextIO) -> None:
         f"{len(w)} frequencies, {w.min():g} to {w.max():g} rad/s"
     out.write(f"FRF ({frf.method}): {span}, {len(frf.outputs)} output(s) x "
               f"{len(frf.inputs)} input(s)\n")
-    out.write(f"  constraint residual max|D (A q - R F)| / max|H|: {frf.constraint_residual:.1e}\n")
+    out.write("  constraint residual, rows at unit norm, max|A q - R F| / max|H|: "
+              f"{frf.constraint_residual:.1e}\n")
     if frf.agreement:
         figures = ", ".join(f"{k} {v:.1e}" for k, v in frf.agreement.items())
         out.write(f"  agreement with check formulations (max |H - H_check| / max |H|): "
