@@ -60,13 +60,21 @@ def fresh(tmp_path: Path, files: dict[str, bytes]) -> Path:
     return out
 
 
+def default_ctrl_c() -> None:
+    """Ctrl-C back to its default in the driver: a test session started in the background by
+    a shell without job control (``make test &`` in a script) ignores SIGINT, and a child
+    would inherit that."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def start(point: str, out: Path, *extra: str) -> tuple[subprocess.Popen, int]:
     """The driver paused at ``point``; the pid of the process that paused."""
     env = {**os.environ, "MPLBACKEND": "Agg", "OMP_NUM_THREADS": "1", "PYTHONPATH": str(ROOT)}
     proc = subprocess.Popen([sys.executable, str(DRIVER), point, "run", str(CASE), "--out",
                              str(out), "--force", "--quiet", *NEW, *extra],
                             stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, env=env, cwd=ROOT)
+                            stderr=subprocess.PIPE, env=env, cwd=ROOT,
+                            preexec_fn=default_ctrl_c)
     line = proc.stderr.readline().decode()
     assert line.startswith(f"PAUSED {point} "), line + proc.stderr.read().decode()
     return proc, int(line.split()[-1])
