@@ -182,3 +182,31 @@ def test_constraint_residual_does_not_depend_on_a_row_scale(n_chain):
     assert (one.method == "null-space/sparse") == (n > SWEEP_SPARSE_ABOVE)
     np.testing.assert_allclose(big.H, one.H, rtol=0, atol=1e-10 * np.abs(one.H).max())
     assert one.constraint_residual < 1e-12 and big.constraint_residual < 1e-12
+
+
+def test_checks_solve_a_spread_sample_of_many_inputs_and_catch_a_wrong_column(monkeypatch):
+    """With more than CHECK_INPUTS inputs the check formulations solve that many, the first and
+    last included; a production answer wrong in one sampled column fails the check."""
+    import substruct.analysis.api as api
+    from substruct.analysis.errors import CheckError
+    from substruct.analysis.production_sweep import CHECK_INPUTS, checked_inputs
+
+    cols = checked_inputs(400)
+    assert cols.size == CHECK_INPUTS and cols[0] == 0 and cols[-1] == 399
+    assert np.all(np.diff(cols) >= 6)  # spread, not a block
+    np.testing.assert_array_equal(checked_inputs(10), np.arange(10))
+    K, M, C, A = chains(100)
+    n = K.shape[0]
+    w = np.array([2.0, 30.0, 80.0])
+    E, O = sp.eye_array(n, format="csc"), sp.eye_array(n, format="csr")[:7]
+    res = api.receptance_sweep(K, M, C, A, w, E, O)
+    assert res.agreement["generalized-inverse"] < 1e-10
+    real = api.production_sweep
+
+    def wrong(*args, **kwargs):
+        H = real(*args, **kwargs)
+        H[:, :, checked_inputs(n)[5]] *= 1.001
+        return H
+    monkeypatch.setattr(api, "production_sweep", wrong)
+    with pytest.raises(CheckError, match="generalized-inverse"):
+        api.receptance_sweep(K, M, C, A, w, E, O)
