@@ -20,8 +20,8 @@ coupled resonances), by
 (l) lean LM-FBS in NumPy: the same formula a frequency at a time, with the dense inverses of
     the two 200 x 200 impedances and ``Y B^T`` formed first (no 400 x 400 x 400 product);
 (a) substruct: ``analysis.api.receptance_sweep`` (the production path: the null-space sweep on
-    the master-slave basis, the band LU of ``T^T Z(w) T`` for a batch of frequencies at a time,
-    every input in one solve; its checks at three frequencies included);
+    the master-slave basis, the band LU of ``T^T Z(w) T`` a frequency, every input in one
+    solve by the compiled substitutions; its checks at three frequencies included);
 (b) ``scipy.sparse.linalg.splu`` of the same reduced impedance at each frequency, solved for
     all inputs, ``H = T X``;
 (r) ``substruct run`` of the same model as a case file (two ``matrices`` substructures from
