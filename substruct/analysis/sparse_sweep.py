@@ -159,7 +159,7 @@ def null_space_sparse_sweep(K: sp.sparray, M: sp.sparray, C: sp.sparray | None,
         Kb, Mb = band_storage(Kp, width), band_storage(Mp, width)
         Cb = None if Cp is None else band_storage(Cp, width)
     Bc = np.ascontiguousarray(Bp) if many else Bp  # the kernel's rows: C order
-    X = np.empty(Bp.shape, dtype=complex)
+    X = np.empty(Bp.shape if many else (0, 0), dtype=complex)  # the kernel's solution
     for k, wk in enumerate(w):
         try:
             if banded:
