@@ -126,6 +126,15 @@ class Correction:
         :math:`A x = t`."""
         return x + self.gain @ (target - self.A @ x)
 
+    def apply_both(self, x: np.ndarray, x_target: np.ndarray | float, y: np.ndarray,
+                   y_target: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
+        r""":meth:`apply` to two vectors with one product of the gain (``n x 2``): the gain,
+        ``n x m`` and dense, is read once instead of twice (at 100k coordinates and 1,203
+        rows it is 0.96 GB, read every step)."""
+        misfit = np.column_stack([x_target - self.A @ x, y_target - self.A @ y])
+        step = self.gain @ misfit
+        return x + step[:, 0], y + step[:, 1]
+
 
 class Sink(Protocol):
     """``sink(step, d, v, a)``: called with the state after every ``every``-th step (and at
@@ -189,8 +198,7 @@ def integrate(M: Matrix, C: Matrix | None, K: Matrix, s: Scheme, h: float, n_ste
         d_new = d_star + c3 * a_new
         v_new = v_star + gamma * h * a_new
         if correction is not None:  # remove the rounding that would drift
-            d_new = correction.apply(d_new, target)
-            v_new = correction.apply(v_new, correction.rate(n + 1))
+            d_new, v_new = correction.apply_both(d_new, target, v_new, correction.rate(n + 1))
         if work is not None:
             work.external += float((Bt @ (d_new - d)) @ (0.5 * (f[n + 1] + f[n])))
             if damped:
