@@ -45,8 +45,6 @@ from substruct.analysis.modal_frf import (
 )
 from substruct.analysis.production_sweep import (
     PRODUCTION_SWEEP,
-    check_frequencies,
-    checked_inputs,
     constraint_residual,
     production_sweep,
     production_sweep_applies,
@@ -160,9 +158,7 @@ def receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
     production = production_sweep_applies(n, Rs, method)
     if production:  # the outputs only; the constraint residual at the checked frequencies
         H = production_sweep(Ks, Ms, Cs, As, w, forces, out_rows, progress)
-        # the residual's scale where it is measured
-        checked = H[check_frequencies(w.size)][:, :, checked_inputs(forces.shape[1])]
-        residual = constraint_residual(Ks, Ms, Cs, As, w, forces, _largest(checked))
+        residual = constraint_residual(Ks, Ms, Cs, As, w, forces, H)
     else:
         # the residual's rows scaled to unit norm with their R: its figure is that of D A
         eq = equilibrate(As, R=Rs, labels=labels) if m else None

@@ -99,16 +99,17 @@ def production_sweep(K: sp.csr_array, M: sp.csr_array, C: sp.csr_array | None,
 
 def constraint_residual(K: sp.csr_array, M: sp.csr_array, C: sp.csr_array | None,
                         A: sp.csr_array, omegas: np.ndarray, inputs: sp.csc_array,
-                        scale: float) -> float:
-    r""":math:`\max |D A u| / \text{scale}` of the null-space sweep at :func:`check_frequencies`
-    (``u`` every coordinate's response to each of the :func:`checked_inputs`, ``D A`` the rows
-    scaled to unit norm)."""
+                        H: np.ndarray) -> float:
+    r""":math:`\max |D A u| / \max |H|` of the production sweep ``H``, both at
+    :func:`check_frequencies` and the :func:`checked_inputs` (``u`` every coordinate's response
+    by the null-space sweep, ``D A`` the rows scaled to unit norm)."""
     idx = check_frequencies(len(omegas))
     if not A.shape[0] or not idx.size:
         return 0.0
     cols = checked_inputs(inputs.shape[1])
     AH = null_space_sparse_sweep(K, M, C, A, omegas[idx], sp.csc_array(inputs[:, cols]),
                                  sp.csr_array(equilibrate(A).A))
+    scale = max(float(np.abs(H[idx][:, :, cols]).max(initial=0.0)), 1e-300)
     return float(np.abs(AH).max(initial=0.0) / scale)
 
 

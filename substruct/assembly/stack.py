@@ -110,11 +110,7 @@ class Assembly:
 
     def row(self, point: PointRef) -> sp.csr_array:
         """``1 x N`` row giving the displacement of ``point`` from the stacked coordinates."""
-        i = self.index(point.substructure)
-        local = self.substructures[i].row(point.where)
-        coo = local.tocoo()
-        return sp.csr_array((coo.data, (coo.row, coo.col + self.offsets[i])),
-                            shape=(1, self.n_dof))
+        return self.rows([point])
 
     def rows(self, points: Sequence[PointRef]) -> sp.csr_array:
         """Stacked rows of several points (``k x N``), built in one piece from the local rows
