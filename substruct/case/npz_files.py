@@ -14,6 +14,8 @@ refuses, in one line naming the file, the member and the value:
   than the member holds, or a member that inflates to more than its header says);
 * a compression ratio above :data:`MAX_RATIO` (deflate cannot exceed about 1032:1, so more is
   a crafted archive);
+* a member whose entries cannot become the caller's type without loss of kind (complex or
+  strings where real numbers are asked for);
 * arrays whose sizes, plus the converted copies the caller asks for (``as_dtype``), add up to
   more than :data:`~substruct.case.fields.MEMORY_LIMIT` (whatever the machine has: an input
   file is accepted or refused the same way everywhere).
@@ -52,7 +54,8 @@ class NpzMember:
         key: the array's name (the member without ``.npy``).
         shape: the declared shape.
         dtype: the declared dtype.
-        data_bytes: ``prod(shape) * itemsize``.
+        data_bytes: ``prod(shape) * itemsize``, what the header promises.
+        held: the bytes the zip directory says the member holds after its header.
         stored: the member's compressed size in the zip directory.
     """
 
@@ -60,12 +63,26 @@ class NpzMember:
     shape: tuple[int, ...]
     dtype: np.dtype
     data_bytes: int
+    held: int
     stored: int
 
     @property
     def count(self) -> int:
         """The number of entries, ``prod(shape)``."""
         return int(np.prod(self.shape, dtype=object)) if self.shape else 1
+
+    def check_held(self, name: str) -> None:
+        """Refuse a member whose zip directory size is not its header's promise: a truncated
+        member or a header that lies (less), or a member inflating past it (more).
+
+        Raises:
+            ValueError: naming the file ``name``, the member and both sizes.
+        """
+        if self.held != self.data_bytes:
+            dims = " x ".join(map(str, self.shape)) or "scalar"
+            raise ValueError(f"{name}: member {self.key!r} declares a {dims} array of "
+                             f"{self.dtype} ({self.data_bytes} bytes) but the archive says it "
+                             f"holds {self.held}: a truncated file or a header that lies")
 
 
 def _header(fp: object, name: str, key: str) -> tuple[tuple[int, ...], np.dtype, int]:
@@ -91,7 +108,9 @@ def _header(fp: object, name: str, key: str) -> tuple[tuple[int, ...], np.dtype,
 def npz_members(path: str | os.PathLike, keys: Sequence[str] | None = None
                 ) -> dict[str, NpzMember]:
     """The members ``keys`` (every member if ``None``) of an ``.npz`` archive, from the zip
-    directory and the ``.npy`` headers only, each checked for consistency (see the module).
+    directory and the ``.npy`` headers only: the archive, the members and their dtypes checked
+    (see the module); what the sizes promise is the caller's to check (:func:`read_npz`
+    checks the memory, then :meth:`NpzMember.check_held`).
 
     Raises:
         ValueError: one line naming the file, the member and the value.
@@ -101,8 +120,8 @@ def npz_members(path: str | os.PathLike, keys: Sequence[str] | None = None
     try:
         archive = zipfile.ZipFile(p)
     except (zipfile.BadZipFile, OSError, EOFError, ValueError) as err:
-        raise ValueError(f"{name} is not a readable .npz file "
-                         f"({' '.join(str(err).split())[:120]})") from None
+        raise ValueError(f"{name} is not a zip archive ({type(err).__name__}: "
+                         f"{' '.join(str(err).split())[:120]})") from None
     with archive:
         infos = archive.infolist()
         if len(infos) > MAX_NPZ_MEMBERS:
@@ -139,14 +158,8 @@ def npz_members(path: str | os.PathLike, keys: Sequence[str] | None = None
             count = 1
             for d in shape:
                 count *= d
-            data = count * dtype.itemsize
-            if info.file_size != head + data:
-                dims = " x ".join(map(str, shape)) or "scalar"
-                raise ValueError(f"{name}: member {key!r} declares a {dims} array of {dtype} "
-                                 f"({data} bytes) but the archive says it holds "
-                                 f"{info.file_size - head}: a truncated file or a header that "
-                                 "lies")
-            out[key] = NpzMember(key, shape, dtype, data, info.compress_size)
+            out[key] = NpzMember(key, shape, dtype, count * dtype.itemsize,
+                                 info.file_size - head, info.compress_size)
         return out
 
 
@@ -167,13 +180,20 @@ def read_npz(path: str | os.PathLike, keys: Sequence[str],
     for key, m in members.items():
         need += m.data_bytes
         if key in conv:
-            need += float(m.count) * np.dtype(conv[key]).itemsize
+            target = np.dtype(conv[key])
+            if not np.can_cast(m.dtype, target, casting="same_kind") or \
+                    (m.dtype.kind == "U") != (target.kind == "U"):
+                raise ValueError(f"{p.name}: member {key!r} holds {m.dtype} entries, not "
+                                 f"{'real ' if target.kind == 'f' else ''}numbers")
+            need += float(m.count) * target.itemsize
     cap = MEMORY_LIMIT if limit is None else limit
     if need > cap:
         sizes = ", ".join(f"{k} {' x '.join(map(str, m.shape)) or 'scalar'} {m.dtype}"
                           for k, m in members.items())
         raise ValueError(f"{p.name}: the arrays ({sizes}) would need about {gigabytes(need)} "
                          f"of memory, more than the {gigabytes(cap)} allowed")
+    for m in members.values():
+        m.check_held(p.name)
     out: dict[str, np.ndarray] = {}
     try:
         with np.load(p, allow_pickle=False) as z:
