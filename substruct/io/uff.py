@@ -1,13 +1,16 @@
-r"""Universal File Format export (``pyuff``): receptances as dataset 58, modes as 55, the
-nodes as 15.
+r"""Universal File Format export: receptances as dataset 58 (written here, binary ``58b``),
+modes as 55 and 2414, the nodes of both as 15 (55 and 15 written by ``pyuff``).
 
-* **58** (one function per output/input pair): abscissa in Hz (uneven spacing, the grid as
-  computed), ordinate complex double (``ord_data_type 6``, 13 significant digits in ASCII);
-  ``func_type 4`` (frequency response function), ordinate displacement, velocity or
-  acceleration over force for receptance, mobility or accelerance (spec data types 8, 11, 12
-  over 13).  A point named ``<node>:<dir>`` is written as that node and direction; any other
-  name as node ``k`` (its 1-based place among the points) in direction ``x``, with the
-  names in the id lines (``id4`` response, ``id5`` reference).
+* **58** (one function per output/input pair, :func:`uff58_bytes`): abscissa in Hz (uneven
+  spacing, the grid as computed, one frequency or more), ordinate complex double
+  (``ord_data_type 6``); ``func_type 4`` (frequency response function), ordinate
+  displacement, velocity or acceleration over force for receptance, mobility or accelerance
+  (spec data types 8, 11, 12 over 13).  Response and reference are nodes of the file's
+  dataset 15 (:func:`frf_nodes`): a point that is a coordinate of the model is that
+  coordinate's node (``k + 1``, the node of its value in 55 and 2414), direction ``x``; a
+  coordinate ``<part>@<node>:<dir>`` of an FRF part one node per part and node, in its
+  direction; any other point (a position on a rod) a node of its own after those; the names
+  are in the id lines (``id4`` response, ``id5`` reference).
 * **55** (one dataset per mode): the complex shape, one node per coordinate of the model
   (node ``k`` = coordinate ``k``, value in ``x``; ``data_ch 2``, 3 values a node), with the
   frequency (Hz), the damping ratio and the eigenvalue; the coordinate labels are listed in
@@ -16,8 +19,8 @@ nodes as 15.
   analysis type 3 (complex eigenvalue), data at nodes, data type 6 (double complex), one value
   a node (``x``), written ``2D25.16`` (50 columns: within the 80 of a record); the eigenvalue
   to 17 digits in record 2 (the dataset name), as records 12-13 hold only ``E13.5``.
-* **15**: the nodes ``1 .. n`` of the 55 datasets at ``x = k`` (the model's coordinates are
-  generalized ones, not points in space): integers, exact in ``E13.5`` up to 999,999 nodes;
+* **15**: the nodes ``1 .. N`` of the 55 and 58 datasets at ``x = k`` (the model's
+  coordinates are generalized ones, not points in space): integers, exact in ``E13.5`` up to 999,999 nodes;
   above that the double-precision node dataset **2411** (``3D25.16``) is written instead.
 
 Precision (``docs/frf.md``): dataset 58 is written binary (``58b``), exact; 55 and 15 exist
