@@ -28,7 +28,9 @@ import scipy.sparse as sp
 
 from substruct.assembly.stack import Assembly
 from substruct.builder.model import Model, assemble_case
+from substruct.builder.points import point_uses, resolve_point
 from substruct.case.fields import parse_point
+from substruct.case.frf_files import grid_problem
 from substruct.case.frf_substructure import FrfSpec
 from substruct.case.loader import Case
 from substruct.substructure import Substructure
@@ -153,6 +155,14 @@ def split_frf_case(case: Case) -> FrfSplit:
                 pairs.append((a, b))
             else:
                 fe_chains.append([a, b])
+    specs = {s.name: s for s in case.substructures}
+    for use in point_uses(case):  # the model's points, where the case names them
+        sub, where = parse_point(use.text)
+        if sub not in frf_specs:
+            if sub not in specs:
+                raise case.error(use.loc, f"unknown substructure {sub!r} (known: "
+                                 f"{', '.join(specs)})", use.text)
+            resolve_point(case, specs[sub], where, use)
     for where, points in (("inputs", spec.inputs), ("outputs", spec.outputs)):
         for i, p in enumerate(points):
             sub, lab = parse_point(p)
@@ -172,6 +182,12 @@ def split_frf_case(case: Case) -> FrfSplit:
         model_case = case.model_copy(update={"substructures": others,
                                              "connections": fe_chains, "analysis": analysis})
     parts = []
+    grid = np.asarray(spec.omegas(), dtype=float)
+    for k, s in enumerate(case.substructures):  # before any computation: grids agree
+        if isinstance(s, FrfSpec):
+            problem = grid_problem(s.name, s.data()[0], grid, s.interpolate)
+            if problem is not None:
+                raise case.error(("substructures", k, "interpolate"), problem, s.interpolate)
     for s in frf_specs.values():
         omega, labels, H = s.data()
         parts.append(FrfPart(s.name, omega, labels, -H if s.decouple else H, s.interpolate,

@@ -1,15 +1,25 @@
 r"""Reading receptances from files: NPZ and Universal File Format dataset 58.
 
-* NPZ: ``H`` complex ``(n_omega, n, n)`` (``H[k, i, j] = u_i / F_j``), ``labels`` (``n``
+* NPZ (:func:`substruct.case.npz_files.read_npz`: headers and sizes checked before reading):
+  ``H`` ``(n_omega, n, n)`` of numbers (``H[k, i, j] = u_i / F_j``), ``labels`` (``n``
   strings), and ``omega`` (rad/s) or ``freq_hz``;
-* UFF 58 (read with ``pyuff``): one function per (response, reference) pair, labelled
-  ``"<node>:<dir>"`` with the directions ``1..6`` as ``x, y, z, rx, ry, rz``; a negative
-  direction flips the sign; the abscissa in Hz.  Every pair of the square matrix must be
-  there.  The ASCII form stores the abscissa with 6 significant digits and the values with
-  13: a grid is given in values that 6 digits hold exactly (``common_grid`` compares to
-  :data:`GRID_DIGITS_RTOL`).
+* UFF 58 (:func:`substruct.case.uff_records.read_uff_records`, ASCII or binary ``58b``): one
+  function per (response, reference) pair, labelled ``"<node>:<dir>"`` with the directions
+  ``1..6`` as ``x, y, z, rx, ry, rz``; a negative direction flips the sign.  Every pair of the
+  square matrix must be there.  The header codes are honoured or refused
+  (:func:`_as_receptance`): function type 4 (FRF) only; load case 0; abscissa data type 18
+  (frequency) in Hz; ordinate displacement (8), velocity (11) or acceleration (12) over
+  excitation force (13), the last two turned into receptances exactly,
+  :math:`H = V / (i\omega)`, :math:`H = A / (i\omega)^2`, with :math:`\omega = 2\pi f > 0`;
+  a real ordinate (data types 2, 4) is a receptance with no imaginary part.  A function given
+  twice (the same response and reference, after the sign of the directions) is read once if
+  both copies are equal and refused otherwise.  If the file has node datasets (15, 2411),
+  every response and reference node must be one of them.  The ASCII form stores the abscissa
+  with 6 significant digits and the values with 13: a grid is given in values that 6 digits
+  hold exactly (:func:`grid_problem` compares to :data:`GRID_DIGITS_RTOL`).
 
-Both give ``(omega, labels, H)``; any problem is a ``ValueError`` of one line.
+Both give ``(omega, labels, H)``; any problem is a ``ValueError`` of one line naming the file,
+and for UFF the dataset, record and value.
 """
 
 from __future__ import annotations
@@ -20,8 +30,11 @@ from pathlib import Path
 
 import numpy as np
 
+from substruct.case.npz_files import npz_members, read_npz
+from substruct.case.uff_records import Uff58, read_uff_records
+
 __all__ = ["DIRECTIONS", "MAX_FRF_FILE", "GRID_DIGITS_RTOL", "read_frf_file", "uff_label",
-           "label_node_dir"]
+           "label_node_dir", "grid_problem", "FUNCTION_TYPES", "ORDINATES"]
 
 #: UFF direction codes 1..6.
 DIRECTIONS = ("x", "y", "z", "rx", "ry", "rz")
@@ -65,47 +78,98 @@ def _check_file(path: Path) -> None:
 
 
 def _read_npz(path: Path) -> tuple[np.ndarray, list[str], np.ndarray]:
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            keys = set(z.files)
-            if "H" not in keys or "labels" not in keys or not keys & {"omega", "freq_hz"}:
-                raise ValueError(f"{path.name} needs arrays H, labels and omega (or freq_hz); "
-                                 f"it has {', '.join(sorted(keys)) or 'none'}")
-            H = np.asarray(z["H"])
-            labels = [str(s) for s in np.asarray(z["labels"]).ravel()]
-            omega = np.asarray(z["omega"], dtype=float) if "omega" in keys else \
-                2 * np.pi * np.asarray(z["freq_hz"], dtype=float)
-    except (OSError, EOFError) as err:
-        raise ValueError(f"{path.name} is not a readable .npz file ({err})") from None
-    if not np.issubdtype(H.dtype, np.number):
-        raise ValueError(f"{path.name}: H is not numeric")
-    return omega, labels, H.astype(complex)
+    names = npz_members(path)
+    if "H" not in names or "labels" not in names or not names.keys() & {"omega", "freq_hz"}:
+        raise ValueError(f"{path.name} needs arrays H, labels and omega (or freq_hz); "
+                         f"it has {', '.join(sorted(names)) or 'none'}")
+    grid = "omega" if "omega" in names else "freq_hz"
+    for key, kinds in (("H", "biufc"), (grid, "biuf"), ("labels", "U")):
+        if names[key].dtype.kind not in kinds:
+            raise ValueError(f"{path.name}: {key} holds {names[key].dtype} entries, not "
+                             f"{'strings' if key == 'labels' else 'numbers'}")
+    z = read_npz(path, ["H", "labels", grid], {"H": np.complex128, grid: np.float64})
+    labels = [str(s) for s in z["labels"].ravel()]
+    if z[grid].ndim != 1 or z["labels"].ndim != 1:
+        raise ValueError(f"{path.name}: {grid} and labels must be 1-D arrays, they have the "
+                         f"shapes {list(z[grid].shape)} and {list(z['labels'].shape)}")
+    omega = z[grid] if grid == "omega" else 2 * np.pi * z[grid]
+    return omega, labels, z["H"]
+
+
+#: UFF 58 function types (record 6 field 1), for the messages.
+FUNCTION_TYPES = {0: "general or unknown", 1: "time response", 2: "auto spectrum",
+                  3: "cross spectrum", 4: "frequency response function",
+                  5: "transmissibility", 6: "coherence", 9: "power spectral density"}
+#: The ordinates (record 9 field 1, over 13, excitation force) read and the power ``p`` of
+#: ``i omega`` that turns each into a receptance: ``H = Y / (i omega)^p``.
+ORDINATES = {8: ("displacement", 0), 11: ("velocity", 1), 12: ("acceleration", 2)}
+
+
+def _as_receptance(f: Uff58) -> np.ndarray:
+    """The receptance of one function: its header codes checked (or refused), a mobility
+    divided by ``i omega``, an accelerance by ``(i omega)^2``, ``omega = 2 pi x > 0``."""
+    w = f.where
+    if f.func_type != 4:
+        what = FUNCTION_TYPES.get(f.func_type, "another function")
+        raise ValueError(f"{w}: record 6 field 1, function type {f.func_type} ({what}): only "
+                         "4 (frequency response function) is coupled")
+    if f.load_case != 0:
+        raise ValueError(f"{w}: record 6 field 4, load case {f.load_case}: only 0 (single "
+                         "point excitation) has a reference coordinate")
+    if f.abscissa != 18:
+        raise ValueError(f"{w}: record 8 field 1, abscissa data type {f.abscissa}: only 18 "
+                         "(frequency, in Hz) is read")
+    if f.abscissa_units.upper() not in ("", "NONE", "HZ"):
+        raise ValueError(f"{w}: record 8 field 6, abscissa units {f.abscissa_units!r}: the "
+                         "abscissa is read in Hz")
+    if f.numerator not in ORDINATES or f.denominator != 13:
+        raise ValueError(f"{w}: records 9-10 field 1, ordinate {f.numerator} over "
+                         f"{f.denominator}: only displacement, velocity or acceleration (8, "
+                         "11, 12) over excitation force (13) is read")
+    if f.spacing == 1 and not f.x_inc > 0:
+        raise ValueError(f"{w}: record 7 field 5, abscissa increment {f.x_inc:g}: even "
+                         "spacing needs a positive increment")
+    power = ORDINATES[f.numerator][1]
+    if power == 0:
+        return f.y
+    if not np.all(f.x > 0):
+        raise ValueError(f"{w}: record 12, frequency {float(f.x.min()):g} Hz: a "
+                         f"{ORDINATES[f.numerator][0]} over force is turned into a receptance "
+                         "by dividing by (i omega)^p, which needs omega > 0")
+    return f.y / (1j * 2 * np.pi * f.x) ** power
 
 
 def _read_uff58(path: Path) -> tuple[np.ndarray, list[str], np.ndarray]:
-    import pyuff
-
-    try:
-        sets = pyuff.UFF(str(path)).read_sets()
-    except Exception as err:  # pyuff raises plain Exceptions
-        raise ValueError(f"{path.name} is not a readable UFF file ({' '.join(str(err).split())})"
-                         ) from None
-    sets = [sets] if isinstance(sets, dict) else list(sets)
-    frfs = [s for s in sets if s.get("type") == 58]
+    read = read_uff_records(path)
+    frfs = read.functions
     if not frfs:
         raise ValueError(f"{path.name} holds no UFF 58 function")
-    x = np.asarray(frfs[0]["x"], dtype=float)
-    entries: dict[tuple[str, str], np.ndarray] = {}
+    x = frfs[0].x
+    entries: dict[tuple[str, str], tuple[np.ndarray, str]] = {}
     order: list[str] = []
-    for s in frfs:
-        rsp = uff_label(s["rsp_node"], s["rsp_dir"])
-        ref = uff_label(s["ref_node"], s["ref_dir"])
-        sign = np.sign(s["rsp_dir"]) * np.sign(s["ref_dir"])
-        data = np.asarray(s["data"])
-        if data.shape != x.shape or not np.allclose(s["x"], x, rtol=1e-12, atol=0):
-            raise ValueError(f"{path.name}: the function {rsp}/{ref} has another abscissa "
-                             "than the first")
-        entries[(rsp, ref)] = sign * data.astype(complex)
+    for f in frfs:
+        for node, which in ((f.rsp_node, "6 (response node)"), (f.ref_node,
+                                                                 "9 (reference node)")):
+            if read.nodes is not None and node not in read.nodes:
+                raise ValueError(f"{f.where}: record 6 field {which} {node} is not a node of "
+                                 "the file's datasets 15/2411")
+        try:
+            rsp = uff_label(f.rsp_node, f.rsp_dir)
+            ref = uff_label(f.ref_node, f.ref_dir)
+        except ValueError as err:
+            raise ValueError(f"{f.where}: record 6: {err}") from None
+        if f.x.shape != x.shape or not np.allclose(f.x, x, rtol=1e-12, atol=0):
+            raise ValueError(f"{f.where}: the function {rsp}/{ref} has another abscissa "
+                             f"than the first ({f.x.size} vs {x.size} points)")
+        sign = np.sign(f.rsp_dir) * np.sign(f.ref_dir)
+        data = sign * _as_receptance(f)
+        if (rsp, ref) in entries:
+            first, where = entries[(rsp, ref)]
+            if not np.array_equal(first, data):
+                raise ValueError(f"{f.where}: the function {rsp}/{ref} is also in {where}, "
+                                 "with other values")
+            continue  # an identical copy
+        entries[(rsp, ref)] = (data, f.where.split(": ", 1)[1])
         for lab in (rsp, ref):
             if lab not in order:
                 order.append(lab)
@@ -116,8 +180,26 @@ def _read_uff58(path: Path) -> tuple[np.ndarray, list[str], np.ndarray]:
             if (rsp, ref) not in entries:
                 raise ValueError(f"{path.name} lacks the function of response {rsp} to "
                                  f"reference {ref}: coupling needs the whole square matrix")
-            H[:, i, j] = entries[(rsp, ref)]
+            H[:, i, j] = entries[(rsp, ref)][0]
     return 2 * np.pi * x, order, H
+
+
+def grid_problem(name: str, omega: np.ndarray, grid: np.ndarray, interpolate: str
+                 ) -> str | None:
+    """Why the receptances of ``name`` on ``omega`` cannot be put on the analysis ``grid``
+    (rad/s), or ``None``: the grids agree to :data:`GRID_DIGITS_RTOL`, or ``interpolate`` is
+    ``"linear"`` and ``omega`` covers ``grid`` (no extrapolation)."""
+    if omega.shape == grid.shape and np.allclose(omega, grid, rtol=GRID_DIGITS_RTOL, atol=0):
+        return None
+    if interpolate != "linear":
+        return (f"the frequency grid of {name} differs from analysis.frf.omega ({len(omega)} "
+                f"vs {len(grid)} frequencies); give interpolate: linear to interpolate {name} "
+                "onto it")
+    lo, hi = float(omega.min()), float(omega.max())
+    if grid.min() < lo * (1 - GRID_DIGITS_RTOL) or grid.max() > hi * (1 + GRID_DIGITS_RTOL):
+        return (f"{name} covers {lo:g} to {hi:g} rad/s, not the grid of analysis.frf.omega "
+                f"({grid.min():g} to {grid.max():g}): no extrapolation")
+    return None
 
 
 def read_frf_file(path: str | os.PathLike) -> tuple[np.ndarray, list[str], np.ndarray]:

@@ -4,7 +4,7 @@ r"""A substructure known only by its receptances: ``type: frf``.
 
     - name: meas
       type: frf
-      file: measured.uff        # UFF 58 (pyuff) or .npz (H, labels, omega | freq_hz)
+      file: measured.uff        # UFF 58 (or 58b) or .npz (H, labels, omega | freq_hz)
       interpolate: none         # or linear: onto the grid of analysis.frf
       decouple: false           # true: a known part removed from the assembly it is joined to
 

@@ -18,7 +18,6 @@ from __future__ import annotations
 import os
 import re
 import stat
-import zipfile
 from pathlib import Path
 from typing import Annotated, Any, Literal, Mapping
 
@@ -43,6 +42,7 @@ from substruct.case.fields import (
     StrictModel,
     gigabytes,
 )
+from substruct.case.npz_files import npz_members, read_npz
 from substruct.case.numbers import array_problem, number_problem
 
 __all__ = ["MatrixSpec", "MatrixSource", "load_matrix"]
@@ -198,14 +198,16 @@ def _check_header(field: str, file: str, path: Path, suffix: str, key: str | Non
         with open(path, "rb") as fp:
             shape, dtype = _npy_header(fp)
             left = os.fstat(fp.fileno()).st_size - fp.tell()
-    else:
-        with zipfile.ZipFile(path) as archive:
-            member = f"{key}.npy"
-            if member not in archive.namelist():
-                return  # reported with the list of keys by np.load below
-            with archive.open(member) as fp:
-                shape, dtype = _npy_header(fp)
-                left = archive.getinfo(member).file_size - fp.tell()
+    else:  # the zip directory and the .npy headers only (substruct.case.npz_files)
+        try:
+            members = npz_members(path)
+        except ValueError as err:
+            raise FieldError((field, "file"), f"cannot read matrix ({err})", file) from None
+        if key not in members:
+            raise FieldError((field, "key"), f"no array {key!r} in {path.name} (it has "
+                             f"{', '.join(members) or 'none'})", key)
+        shape, dtype = members[key].shape, members[key].dtype
+        left = members[key].held
     if any(not isinstance(d, int) or d < 0 for d in shape):
         raise FieldError((field, "file"), "not an .npy array: its shape is not a list of "
                          "sizes", file)
@@ -263,12 +265,8 @@ def load_matrix(field: str, value: Any, base: Path, parameters: Mapping[str, flo
         if suffix == ".npy":
             arr = np.asarray(np.load(path, allow_pickle=False), dtype=float)
         else:
-            with np.load(path, allow_pickle=False) as data:
-                key = field if key is None else key
-                if key not in data.files:
-                    raise FieldError((field, "key"), f"no array {key!r} in {path.name} "
-                                     f"(it has {', '.join(data.files) or 'none'})", key)
-                arr = np.asarray(data[key], dtype=float)
+            key = field if key is None else key
+            arr = read_npz(path, [key], {key: np.float64})[key]
     except FieldError:
         raise
     except Exception as err:  # unreadable file: a bad input, reported in one line

@@ -28,6 +28,7 @@ from pydantic import Field, model_validator
 
 from substruct.case.errors import FieldError
 from substruct.case.expressions import compile_expression
+from substruct.case.npz_files import npz_members, read_npz
 from substruct.case.fields import (
     MEMORY_LIMIT,
     Count,
@@ -120,12 +121,13 @@ def read_table(path: Path) -> tuple[np.ndarray, np.ndarray]:
     if not path.is_file():
         raise ValueError(f"no such table file {path.name!r}")
     if path.suffix == ".npz":
-        with np.load(path, allow_pickle=False) as z:
-            if "t" not in z or "value" not in z:
-                raise ValueError("an NPZ table needs arrays t and value")
-            if z["t"].size > MAX_TABLE_ROWS:
-                raise ValueError(f"more than {MAX_TABLE_ROWS} rows")
-            t, v = np.asarray(z["t"], float).ravel(), np.asarray(z["value"], float).ravel()
+        members = npz_members(path)
+        if "t" not in members or "value" not in members:
+            raise ValueError("an NPZ table needs arrays t and value")
+        if max(members["t"].count, members["value"].count) > MAX_TABLE_ROWS:
+            raise ValueError(f"more than {MAX_TABLE_ROWS} rows")
+        z = read_npz(path, ["t", "value"], {"t": np.float64, "value": np.float64})
+        t, v = z["t"].ravel(), z["value"].ravel()
     elif path.suffix == ".csv":
         if path.stat().st_size > 64 * MAX_TABLE_ROWS:
             raise ValueError(f"more than {MAX_TABLE_ROWS} rows")

@@ -1,13 +1,16 @@
-r"""Universal File Format export (``pyuff``): receptances as dataset 58, modes as 55, the
-nodes as 15.
+r"""Universal File Format export: receptances as dataset 58 (written here, binary ``58b``),
+modes as 55 and 2414, the nodes of both as 15 (55 and 15 written by ``pyuff``).
 
-* **58** (one function per output/input pair): abscissa in Hz (uneven spacing, the grid as
-  computed), ordinate complex double (``ord_data_type 6``, 13 significant digits in ASCII);
-  ``func_type 4`` (frequency response function), ordinate displacement, velocity or
-  acceleration over force for receptance, mobility or accelerance (spec data types 8, 11, 12
-  over 13).  A point named ``<node>:<dir>`` is written as that node and direction; any other
-  name as node ``k`` (its 1-based place among the points) in direction ``x``, with the
-  names in the id lines (``id4`` response, ``id5`` reference).
+* **58** (one function per output/input pair, :func:`uff58_bytes`): abscissa in Hz (uneven
+  spacing, the grid as computed, one frequency or more), ordinate complex double
+  (``ord_data_type 6``); ``func_type 4`` (frequency response function), ordinate
+  displacement, velocity or acceleration over force for receptance, mobility or accelerance
+  (spec data types 8, 11, 12 over 13).  Response and reference are nodes of the file's
+  dataset 15 (:func:`frf_nodes`): a point that is a coordinate of the model is that
+  coordinate's node (``k + 1``, the node of its value in 55 and 2414), direction ``x``; a
+  coordinate ``<part>@<node>:<dir>`` of an FRF part one node per part and node, in its
+  direction; any other point (a position on a rod) a node of its own after those; the names
+  are in the id lines (``id4`` response, ``id5`` reference).
 * **55** (one dataset per mode): the complex shape, one node per coordinate of the model
   (node ``k`` = coordinate ``k``, value in ``x``; ``data_ch 2``, 3 values a node), with the
   frequency (Hz), the damping ratio and the eigenvalue; the coordinate labels are listed in
@@ -16,8 +19,8 @@ nodes as 15.
   analysis type 3 (complex eigenvalue), data at nodes, data type 6 (double complex), one value
   a node (``x``), written ``2D25.16`` (50 columns: within the 80 of a record); the eigenvalue
   to 17 digits in record 2 (the dataset name), as records 12-13 hold only ``E13.5``.
-* **15**: the nodes ``1 .. n`` of the 55 datasets at ``x = k`` (the model's coordinates are
-  generalized ones, not points in space): integers, exact in ``E13.5`` up to 999,999 nodes;
+* **15**: the nodes ``1 .. N`` of the 55 and 58 datasets at ``x = k`` (the model's
+  coordinates are generalized ones, not points in space): integers, exact in ``E13.5`` up to 999,999 nodes;
   above that the double-precision node dataset **2411** (``3D25.16``) is written instead.
 
 Precision (``docs/frf.md``): dataset 58 is written binary (``58b``), exact; 55 and 15 exist
@@ -31,7 +34,7 @@ from __future__ import annotations
 
 import os
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
@@ -40,7 +43,7 @@ from substruct.case.frf_files import label_node_dir
 from substruct.io.hdf5 import atomic_path
 from substruct.run.result import Result
 
-__all__ = ["QUANTITY_CODES", "uff58_sets", "uff55_sets", "uff15_set", "uff2411_set",
+__all__ = ["QUANTITY_CODES", "uff58_sets", "uff58_bytes", "uff55_sets", "uff15_set", "uff2411_set",
            "uff2414_text", "modes_from_2414", "write_uff", "read_uff", "frf_nodes", "uff_path",
            "export_uff", "E13_EXACT_NODES"]
 
@@ -51,39 +54,112 @@ E13_EXACT_NODES = 999_999
 QUANTITY_CODES = {"receptance": 8, "mobility": 11, "accelerance": 12}
 
 
-def frf_nodes(names: Sequence[str]) -> list[tuple[int, int]]:
-    """``(node, direction)`` of each point name: ``<node>:<dir>`` as such, any other name
-    as its 1-based place in ``names``, direction ``x``."""
-    out = []
-    for k, name in enumerate(names):
-        try:
-            out.append(label_node_dir(name))
-        except ValueError:
-            out.append((k + 1, 1))
-    return out
+def frf_nodes(points: Sequence[str], coordinates: Sequence[str] = ()
+              ) -> tuple[dict[str, tuple[int, int]], int]:
+    """``(node, direction)`` of each point name, and the number of nodes ``N`` (dataset 15
+    defines the nodes ``1 .. N``):
+
+    * coordinate ``k`` of the model (``coordinates[k]``, ``"P.q1"``) is node ``k + 1``, the
+      node of its value in the 55 and 2414 datasets, so a point that is a coordinate
+      (``"P@q1"``) is that node, direction ``x`` (1);
+    * a label ``"<node>:<dir>"`` (an FRF file's coordinate, no ``@``) is that node and
+      direction;
+    * a point ``"<part>@<node>:<dir>"`` (a coordinate of an FRF part) is one new node for each
+      ``(part, node)``, in that direction;
+    * any other point (a position along a rod) is a new node, direction ``x``.
+
+    New nodes are numbered after the coordinates and the given nodes, in the order of
+    ``points``; distinct names never share a node and direction.
+    """
+    where = {lab: k + 1 for k, lab in enumerate(coordinates)}
+    given: dict[str, tuple[int, int]] = {}
+    for name in points:
+        if "@" not in name:
+            try:
+                given[name] = label_node_dir(name)
+            except ValueError:
+                pass
+    last = max([len(coordinates), *(n for n, _ in given.values())])
+    part_nodes: dict[tuple[str, int], int] = {}
+    out: dict[str, tuple[int, int]] = {}
+    for name in points:
+        if name in out:
+            continue
+        sub, at, local = name.partition("@")
+        if name in given:
+            out[name] = given[name]
+        elif at and f"{sub}.{local}" in where:
+            out[name] = (where[f"{sub}.{local}"], 1)
+        else:
+            try:
+                node, direction = label_node_dir(local) if at else (0, 0)
+            except ValueError:
+                node, direction = 0, 0
+            if node:
+                if (sub, node) not in part_nodes:
+                    last += 1
+                    part_nodes[(sub, node)] = last
+                out[name] = (part_nodes[(sub, node)], direction)
+            else:
+                last += 1
+                out[name] = (last, 1)
+    return out, last
 
 
 def uff58_sets(omega: np.ndarray, H: np.ndarray, outputs: Sequence[str],
-               inputs: Sequence[str], quantity: str = "receptance") -> list[dict[str, Any]]:
+               inputs: Sequence[str], quantity: str = "receptance",
+               nodes: Mapping[str, tuple[int, int]] | None = None) -> list[dict[str, Any]]:
     """The UFF 58 datasets of ``H[k, i, j]`` (output ``i`` per input ``j``) at ``omega``
-    (rad/s; written in Hz)."""
-    import pyuff
-
+    (rad/s; written in Hz), the points numbered by ``nodes`` (:func:`frf_nodes` of the points
+    alone if ``None``).  Written by :func:`uff58_bytes` (``pyuff`` cannot write a function of
+    one point)."""
+    if nodes is None:
+        nodes = frf_nodes([*outputs, *inputs])[0]
     x = np.asarray(omega, dtype=float) / (2 * np.pi)
-    rsp, ref = frf_nodes(outputs), frf_nodes(inputs)
-    sets = []
+    sets: list[dict[str, Any]] = []
     for i, out in enumerate(outputs):
         for j, inp in enumerate(inputs):
-            sets.append(pyuff.prepare_58(
-                binary=1, func_type=4, ver_num=0, load_case_id=0,
-                id1="substruct FRF", id2=quantity, id3="", id4=f"response {out}"[:80],
-                id5=f"reference {inp}"[:80], rsp_ent_name="resp", rsp_node=rsp[i][0],
-                rsp_dir=rsp[i][1], ref_ent_name="ref", ref_node=ref[j][0], ref_dir=ref[j][1],
-                ord_data_type=6, abscissa_spacing=0, abscissa_min=0.0, abscissa_inc=0.0,
-                z_axis_value=0.0, abscissa_spec_data_type=18,
-                ordinate_spec_data_type=QUANTITY_CODES[quantity], orddenom_spec_data_type=13,
-                z_axis_spec_data_type=0, data=np.asarray(H[:, i, j], dtype=complex), x=x))
+            rsp, ref = nodes[out], nodes[inp]
+            sets.append({
+                "type": 58, "binary": 1, "func_type": 4, "func_id": len(sets) + 1,
+                "ver_num": 0, "load_case_id": 0, "id1": "substruct FRF", "id2": quantity,
+                "id3": "NONE", "id4": f"response {out}", "id5": f"reference {inp}",
+                "rsp_ent_name": "resp", "rsp_node": rsp[0], "rsp_dir": rsp[1],
+                "ref_ent_name": "ref", "ref_node": ref[0], "ref_dir": ref[1],
+                "ord_data_type": 6, "abscissa_spacing": 0, "abscissa_spec_data_type": 18,
+                "ordinate_spec_data_type": QUANTITY_CODES[quantity],
+                "orddenom_spec_data_type": 13, "z_axis_spec_data_type": 0,
+                "data": np.asarray(H[:, i, j], dtype=complex), "x": x})
     return sets
+
+
+def uff58_bytes(dset: Mapping[str, Any]) -> bytes:
+    """One function of :func:`uff58_sets` as a binary dataset 58 (``58b``): little endian,
+    IEEE 754 doubles, complex ordinate with uneven abscissa (record 12: ``x, Re y, Im y`` a
+    point); the id line declares the bytes that follow the 11 header records."""
+    x = np.asarray(dset["x"], dtype=float)
+    y = np.asarray(dset["data"], dtype=complex)
+    table = np.empty((x.size, 3))
+    table[:, 0], table[:, 1], table[:, 2] = x, y.real, y.imag
+    data = table.astype("<f8").tobytes()
+
+    def ident(text: str) -> str:
+        return f"{(text or 'NONE')[:80]:<80}"
+
+    def axis(code: int, label: str, units: str) -> str:
+        return f"{code:10d}{0:5d}{0:5d}{0:5d} {label:<20.20} {units:<20.20}"
+
+    head = [f"{-1:6d}", f"{58:6d}b{1:6d}{2:6d}{11:12d}{len(data):12d}{0:6d}{0:6d}{0:12d}{0:12d}",
+            *(ident(str(dset[k])) for k in ("id1", "id2", "id3", "id4", "id5")),
+            f"{4:5d}{dset['func_id']:10d}{0:5d}{0:10d} {dset['rsp_ent_name']:<10.10}"
+            f"{dset['rsp_node']:10d}{dset['rsp_dir']:4d} {dset['ref_ent_name']:<10.10}"
+            f"{dset['ref_node']:10d}{dset['ref_dir']:4d}",
+            f"{6:10d}{x.size:10d}{0:10d}{0.0:13.5e}{0.0:13.5e}{0.0:13.5e}",
+            axis(18, "Frequency", "Hz"),
+            axis(int(dset["ordinate_spec_data_type"]), str(dset["id2"]), "NONE"),
+            axis(13, "Force", "NONE"), axis(0, "NONE", "NONE")]
+    text = "\n".join(head) + "\n"
+    return text.encode("ascii", errors="replace") + data + f"{-1:6d}\n".encode("ascii")
 
 
 def uff55_sets(modes: Modes, name: str = "") -> list[dict[str, Any]]:
@@ -184,7 +260,8 @@ def modes_from_2414(sets: Sequence[dict[str, Any]]) -> tuple[np.ndarray, np.ndar
 
 def write_uff(path: str | os.PathLike, sets: Sequence[dict[str, Any]],
               text: str = "") -> Path:
-    """Write the datasets to ``path`` (replacing it), then the datasets already written as
+    """Write the datasets to ``path`` (replacing it) in their order (58 by
+    :func:`uff58_bytes`, the others by ``pyuff``), then the datasets already written as
     ``text`` (:func:`uff2414_text`), and return it.
 
     Raises:
@@ -194,9 +271,14 @@ def write_uff(path: str | os.PathLike, sets: Sequence[dict[str, Any]],
 
     p = Path(path)
     p.unlink(missing_ok=True)
+    p.touch()
     try:  # "add" to a new file: pyuff's "overwrite" truncates the header of binary 58 sets
-        if sets:
-            pyuff.UFF(str(p)).write_sets(list(sets), mode="add")
+        for s in sets:
+            if s.get("type") == 58:
+                with open(p, "ab") as fh:
+                    fh.write(uff58_bytes(s))
+            else:
+                pyuff.UFF(str(p)).write_sets([s], mode="add")
     except Exception as err:  # pyuff raises plain Exceptions
         p.unlink(missing_ok=True)
         raise ValueError(f"UFF export of {p.name}: {' '.join(str(err).split())}") from None
@@ -222,9 +304,10 @@ def uff_path(result: Result, out: str | os.PathLike) -> Path:
 
 
 def export_uff(result: Result, out: str | os.PathLike, force: bool = False) -> Path:
-    """Write the result's receptances (58), modes (55, and 2414 in double precision) and their
-    nodes (15, or 2411 above :data:`E13_EXACT_NODES`) to one UFF file (:func:`uff_path`),
-    atomically; return its path.
+    """Write the result's receptances (58), modes (55, and 2414 in double precision) and the
+    nodes of both (15, or 2411 above :data:`E13_EXACT_NODES`: the model's coordinates, then
+    the other points of the receptances, :func:`frf_nodes`) to one UFF file
+    (:func:`uff_path`), atomically; return its path.
 
     Raises:
         FileExistsError: the file exists and ``force`` is not set.
@@ -235,16 +318,20 @@ def export_uff(result: Result, out: str | os.PathLike, force: bool = False) -> P
         raise FileExistsError(f"{path} exists; use --force to overwrite it")
     sets: list[dict[str, Any]] = []
     text = ""
-    if result.modes is not None and len(result.modes):
-        n = result.modes.shapes.shape[0]
-        sets.append(uff15_set(n) if n <= E13_EXACT_NODES else uff2411_set(n))
-        sets += uff55_sets(result.modes, result.case_name)
-        text = uff2414_text(result.modes, result.case_name)
-    frf = result.frf
+    modes, frf = result.modes, result.frf
+    coordinates = list(result.model.dof_labels)
+    if modes is not None and modes.shapes.shape[0] != len(coordinates):
+        coordinates = [f"coordinate {k + 1}" for k in range(modes.shapes.shape[0])]
+    points = [] if frf is None else [*frf.outputs, *frf.inputs]
+    nodes, n = frf_nodes(points, coordinates)
+    if modes is not None and len(modes):
+        sets += uff55_sets(modes, result.case_name)
+        text = uff2414_text(modes, result.case_name)
     if frf is not None:
-        sets += uff58_sets(frf.omega, frf.H, frf.outputs, frf.inputs, frf.quantity)
+        sets += uff58_sets(frf.omega, frf.H, frf.outputs, frf.inputs, frf.quantity, nodes)
     if not sets:
         raise ValueError(f"{result.case_name}: no modes and no receptances to export")
+    sets.insert(0, uff15_set(n) if n <= E13_EXACT_NODES else uff2411_set(n))
     with atomic_path(path, suffix=".uff") as tmp:
         write_uff(tmp, sets, text)
     return path
