@@ -165,8 +165,9 @@ def frame(name: str, nodes: Mapping[int, Sequence[float]], beams: Sequence[Beam]
 
     Returns:
         A substructure with coordinates ``"<node>:<component>"`` of the unsupported
-        coordinates, node by node (the nodes as given, then those made by ``divisions``); ``meta`` holds ``node_ids``, ``node_xyz``,
-        ``n_elements``, ``elements`` (pairs of node indices), ``h_max`` and ``dim = 3``.
+        coordinates, node by node (the nodes as given, then those made by ``divisions``);
+        ``meta`` holds ``node_ids``, ``node_xyz``, ``n_elements``, ``elements`` (pairs of node
+        indices), ``h_max`` and ``dim = 3``.
 
     Raises:
         ValueError: unknown nodes, a bad property, a degenerate element or orientation.
