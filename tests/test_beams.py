@@ -14,6 +14,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import scipy.linalg as sla
@@ -233,3 +235,63 @@ def test_bad_members_are_refused(kwargs, match):
     args = {"nodes": (1, 2), "section": SEC, "material": MAT, "orientation": (0, 1, 0), **kwargs}
     with pytest.raises(ValueError, match=match):
         frame("bad", {1: (0, 0, 0), 2: (1, 0, 0)}, [Beam(**args)])
+
+
+# ------------------------------------------------------------------- the case door
+
+
+def cantilever_case(**member) -> dict:
+    """A cantilever as a ``type: frame`` case, carrying a point mass at its tip."""
+    return {
+        "name": "frame_cantilever",
+        "substructures": [
+            {"name": "c", "type": "frame", "nodes": {1: [0, 0, 0], 2: [L, 0, 0]},
+             "materials": {"steel": {"E": MAT.E, "G": MAT.G, "rho": MAT.rho}},
+             "sections": {"s": {"A": SEC.A, "Iy": SEC.Iy, "Iz": SEC.Iz, "J": SEC.J}},
+             "members": [{"nodes": [1, 2], "section": "s", "material": "steel",
+                          "orientation": [0, 1, 0], "divisions": 16, **member}],
+             "supports": {1: "123456"}},
+            {"name": "tip", "type": "mass", "mass": 5.0}],
+        "connections": [["c@2:uz", "tip"]],
+        "analysis": {"modes": {"count": 4, "check": ["null-space", "kkt"]}},
+    }
+
+
+def test_a_frame_case_is_the_cantilever_with_a_tip_mass():
+    """The lowest x-z bending frequency with a tip mass ``m_t`` against the root of the
+    Euler-Bernoulli frequency equation
+    ``1 + cos b cosh b + (m_t / (rho A L)) b (cos b sinh b - sin b cosh b) = 0``."""
+    import yaml
+    from scipy.optimize import brentq
+
+    from substruct.case.loader import parse_case
+    from substruct.run.runner import run_case
+
+    case = parse_case(yaml.safe_dump(cantilever_case(), sort_keys=False), "cases/x.yaml",
+                      Path("."), ())
+    res = run_case(case).modes
+    ratio = 5.0 / (MAT.rho * SEC.A * L)
+    beta = brentq(lambda b: 1 + np.cos(b) * np.cosh(b) + ratio * b * (
+        np.cos(b) * np.sinh(b) - np.sin(b) * np.cosh(b)), 0.5, 1.875)
+    # x-y plane (Iz, no tip mass on it) and x-z plane (Iy, with the tip mass)
+    expect = sorted([bending(np.array([beta]), SEC.Iy)[0], bending(CANTILEVER[:1], SEC.Iz)[0]])
+    assert np.all(abs(res.omega[:2] / expect - 1) < 1e-5), res.omega[:2] / expect - 1
+
+
+@pytest.mark.parametrize("change, field, problem", [
+    ({"section": "t"}, "substructures.c.members[0].section: no section", "got 't'"),
+    ({"orientation": [1, 0, 0]}, "substructures.c.members[0]: orientation", "parallel"),
+    ({"pin_a": "7"}, "substructures.c.members[0].pin_a: pin flags", "got '7'"),
+    ({"pin_a": "4", "pin_b": "4", "divisions": 1}, "members[0]: releasing", "mechanism"),
+])
+def test_bad_frame_cases_name_the_field(change, field, problem):
+    import yaml
+
+    from substruct.case.loader import CaseError, parse_case
+    from substruct.run.runner import build_model
+
+    with pytest.raises(CaseError) as info:
+        build_model(parse_case(yaml.safe_dump(cantilever_case(**change), sort_keys=False),
+                               "cases/x.yaml", Path("."), ()))
+    message = str(info.value)
+    assert "\n" not in message and field in message and problem in message, message
