@@ -9,6 +9,7 @@ from typing import Any, Collection, Mapping
 import numpy as np
 import scipy.sparse as sp
 
+from substruct.builder.frames import build_frame
 from substruct.builder.solids import build_solid
 from substruct.case.loader import (
     Case,
@@ -17,6 +18,7 @@ from substruct.case.loader import (
     MatrixSpec,
     RodSpec,
 )
+from substruct.case.frames import FrameSpec
 from substruct.case.solids import SolidSpec
 from substruct.case.substructures import MassSpec, SpringSpec
 from substruct.models.discrete import fixed_free, free_free, point_mass, spring
@@ -126,6 +128,8 @@ def make_substructures(case: Case, positions: dict[str, list[float]],
             subs.append(build_solid(case, i, spec))
         elif isinstance(spec, MatrixSpec):
             subs.append(_matrices_substructure(spec))
+        elif isinstance(spec, FrameSpec):
+            subs.append(build_frame(case, i, spec))
         # type: frf has no matrices: split off by substruct.builder.frf_parts
     return subs
 

@@ -69,6 +69,7 @@ from substruct.case.fields import (
 from substruct.case.frf_substructure import FrfSpec
 from substruct.case.matrices import MatrixSpec
 from substruct.case.numbers import find_problem
+from substruct.case.frames import FrameSpec
 from substruct.case.solids import InterfaceSpec, SolidSpec
 from substruct.case.study import StudySpec
 from substruct.case.substructures import (
@@ -122,7 +123,7 @@ __all__ = [
 MAX_CASE_FILE = 200_000
 
 SubstructureSpec = Annotated[Union[RodSpec, DiscreteSpec, SpringSpec, MassSpec, MatrixSpec,
-                                   SolidSpec, FrfSpec],
+                                   SolidSpec, FrfSpec, FrameSpec],
                              Field(discriminator="type")]
 
 
