@@ -32,7 +32,7 @@ def converge_command(args: argparse.Namespace) -> int:
     """
     from substruct.case.loader import load_case
     from substruct.studies.convergence import VARIANTS, study_variants
-    from substruct.studies.convergence_case import spec_from_case
+    from substruct.builder.rod_system_case import spec_from_case
     from substruct.studies.levels import parse_levels
     report = optional_module("io.convergence_report")
 

@@ -30,7 +30,7 @@ from substruct.io.hdf5 import atomic_path
 from substruct.studies.convergence import VARIANTS, Progress, convergence_study, dofs_to_reach
 from substruct.studies.convergence_results import ConvergenceResult, SeriesResult, VariantResult
 from substruct.studies.levels import StudyLevels, parse_levels
-from substruct.studies.rod_system import RodSystemSpec
+from substruct.builder.rod_system import RodSystemSpec
 
 __all__ = [
     "output_paths",
