@@ -10,12 +10,15 @@ import scipy.sparse as sp
 import substruct.studies.convergence as convergence
 import substruct.builder.rod_system as rod_system
 import substruct.builder.rod_system_case as convergence_case
+import substruct.cli.convergence_summary as convergence_summary
 import substruct.io.convergence_report as convergence_report
+import substruct.viz.convergence_picture as convergence_picture
 import substruct.models.enrichment as enrichment
 from substruct.studies.convergence import convergence_study, dofs_to_reach, lowest_modes
 from substruct.studies.levels import StudyLevels, parse_levels
 from substruct.builder.rod_system import Attachment, RodSystemSpec, paper_rod_spec
-from substruct.io.convergence_report import load_h5, print_table, run_convergence, save_h5
+from substruct.cli.convergence_summary import print_table, run_convergence
+from substruct.io.convergence_report import load_h5, save_h5
 from substruct.models.enrichment import rod_assumed_modes_enriched, static_shapes
 from substruct.models.rod import paper_taper, rod_assumed_modes, rod_fe, uniform_rod_frequencies
 from substruct.analysis.dense_modes import coupled_modes
@@ -356,8 +359,9 @@ def test_study_variants():
         convergence.study_variants(spec, ["x"])
 
 
-@pytest.mark.parametrize("module", [convergence, convergence_report, convergence_case,
-                                    rod_system, enrichment])
+@pytest.mark.parametrize("module", [convergence, convergence_report, convergence_summary,
+                                    convergence_picture, convergence_case, rod_system,
+                                    enrichment])
 def test_public_names_exist_and_are_documented(module):
     for name in module.__all__:
         obj = getattr(module, name)
