@@ -16,8 +16,8 @@ from substruct import cli
 from substruct.case.loader import CaseError, load_case
 from substruct.studies.convergence import dofs_to_reach
 from substruct.studies.levels import StudyLevels
-from substruct.studies.rod_system import paper_rod_spec
-from substruct.studies.convergence_case import spec_from_case
+from substruct.builder.rod_system import paper_rod_spec
+from substruct.builder.rod_system_case import spec_from_case
 from substruct.io.convergence_report import load_h5
 from cli_helpers import run, assert_one_line_error
 

@@ -8,13 +8,17 @@ import pytest
 import scipy.sparse as sp
 
 import substruct.studies.convergence as convergence
-import substruct.studies.convergence_case as convergence_case
+import substruct.builder.rod_system as rod_system
+import substruct.builder.rod_system_case as convergence_case
+import substruct.cli.convergence_summary as convergence_summary
 import substruct.io.convergence_report as convergence_report
+import substruct.viz.convergence_picture as convergence_picture
 import substruct.models.enrichment as enrichment
 from substruct.studies.convergence import convergence_study, dofs_to_reach, lowest_modes
 from substruct.studies.levels import StudyLevels, parse_levels
-from substruct.studies.rod_system import Attachment, RodSystemSpec, paper_rod_spec
-from substruct.io.convergence_report import load_h5, print_table, run_convergence, save_h5
+from substruct.builder.rod_system import Attachment, RodSystemSpec, paper_rod_spec
+from substruct.cli.convergence_summary import print_table, run_convergence
+from substruct.io.convergence_report import load_h5, save_h5
 from substruct.models.enrichment import rod_assumed_modes_enriched, static_shapes
 from substruct.models.rod import paper_taper, rod_assumed_modes, rod_fe, uniform_rod_frequencies
 from substruct.analysis.dense_modes import coupled_modes
@@ -257,12 +261,12 @@ def test_each_rod_model_is_built_once_per_study(monkeypatch):
     """The sines serve both assumed-modes series and the constrained and unconstrained variants
     (same points); the bare rod has no points, so its sines are built again."""
     calls = []
-    build = convergence.rod_assumed_modes
+    build = rod_system.rod_assumed_modes
 
     def counting(*args, **kwargs):
         calls.append(args[4])
         return build(*args, **kwargs)
-    monkeypatch.setattr(convergence, "rod_assumed_modes", counting)
+    monkeypatch.setattr(rod_system, "rod_assumed_modes", counting)
     levels = StudyLevels(assumed=(4, 8), fixed_g=4, enriched=(2,), fe_p1=(8,), fe_p2=(4, 8))
     res = convergence_study(dataclasses.replace(paper_rod_spec(), n_modes=3), levels)
     assert sorted(calls) == [4, 4, 8, 8]
@@ -355,7 +359,8 @@ def test_study_variants():
         convergence.study_variants(spec, ["x"])
 
 
-@pytest.mark.parametrize("module", [convergence, convergence_report, convergence_case,
+@pytest.mark.parametrize("module", [convergence, convergence_report, convergence_summary,
+                                    convergence_picture, convergence_case, rod_system,
                                     enrichment])
 def test_public_names_exist_and_are_documented(module):
     for name in module.__all__:

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
-from substruct.assembly.reduced_coupling import couple_reduced, reduced_modes
+from reference_reduced_coupling import couple_reduced, reduced_modes
 from substruct.models.craig_bampton import craig_bampton
 from substruct.models.interface_basis import interface_basis, polynomial_fields
 from substruct.models.interface_box import (

@@ -8,7 +8,7 @@ import scipy.sparse as sp
 from matplotlib import image as mpimg
 
 from substruct.viz import plotting
-from substruct.viz.frf_picture import frf_figure
+from substruct.viz.frf_picture import draw_frf
 from substruct.viz.layout import MIN_SPRING, aligned, deformed, layout
 from substruct.builder.drawing import Drawing
 from substruct.analysis.results import Modes, Receptance
@@ -203,7 +203,7 @@ def test_frf_png(tmp_path):
 
 def test_frf_many_pairs_are_limited(tmp_path):
     result = frf_result(n_omega=50, n_out=4, n_in=4)  # 16 pairs
-    fig = frf_figure(result, max_curves=9)
+    fig = draw_frf(result, max_curves=9)
     ax_mag, ax_phase = fig.axes[:2]
     curves = [line for line in ax_mag.get_lines() if "\u2190" in line.get_label()]
     # the first nine pairs, outputs varying slowest: out0 <- rod@0 .. rod@3, out1 <- ..., out2

@@ -335,7 +335,7 @@ def test_spring_with_a_free_end_warns_on_one_line_and_carries_no_force(tmp_path,
 
 
 def test_convergence_study_rejects_springs_and_masses():
-    from substruct.studies.convergence_case import spec_from_case
+    from substruct.builder.rod_system_case import spec_from_case
     case = case_of(rod_case(8, {"name": "tip", "type": "mass", "mass": 0.5}, ["rod@1", "tip"]))
     with pytest.raises(CaseError) as info:
         spec_from_case(case)

@@ -9,8 +9,8 @@ the solid) stay physical (``R = I``), and the solid is reduced by
 to node rows; on the reduced solids they read
 :math:`R_a(x_k)\, \xi_a - R_b(x_k)\, \xi_b = 0` for every node and component, ``3 N``
 rows of rank ``r`` (both bases span the same fields), which the constraint handling reduces
-to the ``r`` independent ones: the same coupling as shared interface coordinates
-(:mod:`substruct.assembly.reduced_coupling`).
+to the ``r`` independent ones: the same coupling as shared interface coordinates (the
+reference of the tests, ``tests/reference_reduced_coupling.py``).
 """
 
 from __future__ import annotations

@@ -30,11 +30,13 @@ def converge_command(args: argparse.Namespace) -> int:
 
     The arguments, the case and the output files are checked before any level is computed.
     """
+    from substruct.builder.rod_system_case import spec_from_case
     from substruct.case.loader import load_case
+    from substruct.cli.convergence_summary import print_table
     from substruct.studies.convergence import VARIANTS, study_variants
-    from substruct.studies.convergence_case import spec_from_case
     from substruct.studies.levels import parse_levels
     report = optional_module("io.convergence_report")
+    picture = optional_module("viz.convergence_picture")
 
     variants = [v.strip() for v in args.variants.split(",") if v.strip()]
     if not variants or any(v not in VARIANTS for v in variants):
@@ -75,17 +77,19 @@ def converge_command(args: argparse.Namespace) -> int:
             bar(done, total, f"{label:<{width}s}")  # one width: \r overwrites it all
         return progress
     result, h5, png = _study_locked(out, spec, levels, variants, progress_bar, args,
-                                    report)
+                                    report, picture)
     if args.json:
-        print(json.dumps(report.summary_json(result, args.tol, [h5, png]), indent=1))
+        print(json.dumps(report.convergence_summary_json(result, args.tol, [h5, png]),
+                         indent=1))
     elif not args.quiet:
-        report.print_table(result, tol=args.tol)
+        print_table(result, tol=args.tol)
         print(f"written: {h5}, {png}")
     return 0
 
 
 def _study_locked(out: Path, spec: Any, levels: Any, variants: list[str], progress_bar: Any,
-                  args: argparse.Namespace, report: Any) -> tuple[Any, Path, Path]:
+                  args: argparse.Namespace, report: Any, picture: Any
+                  ) -> tuple[Any, Path, Path]:
     """The study computed in a child under the lock of ``out``; its file and picture
     committed as one set."""
     from substruct.io.file_set import BusyError, OutputDir
@@ -99,7 +103,7 @@ def _study_locked(out: Path, spec: Any, levels: Any, variants: list[str], progre
             staging = target.stage(spec.name)
             h5_part, png_part = report.output_paths(staging, spec.name)
             report.save_h5(result, h5_part)
-            report.plot(result, png_part, tol=args.tol)
+            picture.plot_convergence(result, png_part, tol=args.tol)
             target.commit(staging)
     except BusyError as err:  # raised on entering: nothing was computed
         raise InputError(str(err)) from None

@@ -7,8 +7,9 @@ truncation and the fixed-interface modes of Craig-Bampton in :mod:`substruct.mod
 
 solved by ARPACK's Lanczos iteration (``scipy.sparse.linalg.eigsh``) in shift-invert mode with
 ``OPinv`` a solve chosen from the factorization registry (:mod:`substruct.linalg.factorize`),
-never one that ``eigsh`` makes for itself (DESIGN.md section 6), then a Rayleigh-Ritz step on
-the vectors it returns.
+never one that ``eigsh`` makes for itself (SuperLU with partial pivoting; the registry's choice,
+measured, is in docs/performance.md, "The factorization: measured, and the default"), then a
+Rayleigh-Ritz step on the vectors it returns.
 """
 
 from __future__ import annotations

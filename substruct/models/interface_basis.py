@@ -25,9 +25,10 @@ coordinate is constant, the polynomials in it are dependent and the rank step ke
 motions.  Because ``R`` is the same function of the coordinates on both sides of an interface
 whose nodes match, the two parts share one set of coordinates :math:`\xi` and the coupling is
 *conforming*: the global reduced space is a subspace of the monolithic finite-element space
-(:mod:`substruct.assembly.reduced_coupling`).  As ``p`` grows the basis spans every interface
-displacement (``p >= n - 1`` on an ``n x n`` grid of nodes), and the reduction becomes classical
-Craig-Bampton; ``degree=None`` gives that limit directly, ``R = I``.
+(the parts coupled by shared interface coordinates in ``tests/reference_reduced_coupling.py``).
+As ``p`` grows the basis spans every interface displacement (``p >= n - 1`` on an ``n x n``
+grid of nodes), and the reduction becomes classical Craig-Bampton; ``degree=None`` gives that
+limit directly, ``R = I``.
 """
 
 from __future__ import annotations

@@ -10,7 +10,8 @@ Small problems (``n <= dense_limit``) are solved densely (``scipy.linalg.eigh``)
 by shift-invert Lanczos (``scipy.sparse.linalg.eigsh``) with an explicit ``OPinv`` built from a
 factorization of the registry (:func:`substruct.linalg.factorize.factorizer`: CHOLMOD when
 installed, else SuperLU in symmetric mode; or the callable given), never one that ``eigsh``
-makes for itself (DESIGN.md section 6).
+makes for itself (SuperLU with partial pivoting; the registry's choice, measured, is in
+docs/performance.md, "The factorization: measured, and the default").
 """
 
 from __future__ import annotations

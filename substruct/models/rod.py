@@ -126,7 +126,7 @@ def rod_assumed_modes(name: str, length: float, EA: Profile | float, m: Profile 
       :class:`PointError`.  After modal reduction ``q = \\Phi y`` (eq 21) the row becomes
       :math:`\\Phi_{j,:}`, the paper's :math:`\\phi_{ij}` read as "entry ``j`` of the
       ``i``-th eigenvector" (eq 53), as if the assumed-mode amplitudes were nodal displacements
-      at ``x = jL/8``.  See DESIGN.md section 2.
+      at ``x = jL/8``.  See docs/verification.md, section 3 (how Table 1 was computed).
 
     Args:
         name: substructure name.

@@ -1,7 +1,7 @@
 r"""Convergence study of a constrained rod: assumed modes vs finite elements, side by side.
 
 A rod (any length, :math:`EA(x)`, :math:`m(x)`, supports) carries spring-mass attachments and
-extra linear constraints on its points (a :class:`~substruct.studies.rod_system.RodSystemSpec`).
+extra linear constraints on its points (a :class:`~substruct.builder.rod_system.RodSystemSpec`).
 The same system is discretized by
 
 * ``assumed``: the uniform-rod eigenfunctions (eq 51) with ``g = n`` (no modal reduction);
@@ -42,18 +42,20 @@ a kink has coefficients :math:`\sim i^{-2}`, energy error :math:`\sim n^{-1/2}`,
 error :math:`\sim n^{-1}`); the enriched basis represents the kinks exactly and converges at a
 high algebraic rate.
 
-**Solving.**  Each level is assembled
-(:meth:`~substruct.studies.rod_system.RodSystemSpec.assemble`) and its roots come from the one
+**Solving.**  Each level is built by the builder
+(:func:`substruct.builder.rod_system.rod_model`, assembled by
+:meth:`~substruct.builder.rod_system.RodSystemSpec.assemble`) and its roots come from the one
 analysis entry point, :func:`substruct.analysis.api.modes`, in the null-space form
 :math:`u = T p`, :math:`A T = 0` (:func:`lowest_modes`): dense up to ``dense_limit``
-coordinates, shift-invert Lanczos (undamped) or Arnoldi (damped) on the sparse factorization
-above (DESIGN.md section 6).
+coordinates, above it shift-invert Lanczos (undamped) or Arnoldi (damped) with the inverse
+applied by a sparse factorization of the factorization registry, never one that ARPACK makes
+for itself (docs/performance.md, "The factorization: measured, and the default").
 
-**Elsewhere.**  The system: :mod:`substruct.studies.rod_system`; the levels:
+**Elsewhere.**  The system and its rod at each level: :mod:`substruct.builder.rod_system`; a
+system from a case file: :mod:`substruct.builder.rod_system_case`; the levels:
 :mod:`substruct.studies.levels`; rates and Richardson limits: :mod:`substruct.studies.rates`;
 the results: :mod:`substruct.studies.convergence_results`; the table, the HDF5 file and the plot:
-:mod:`substruct.io.convergence_report`; a system from a case file:
-:mod:`substruct.studies.convergence_case`; the command ``substruct converge``: :mod:`substruct.cli`.
+:mod:`substruct.io.convergence_report`; the command ``substruct converge``: :mod:`substruct.cli`.
 """
 
 from __future__ import annotations
@@ -66,10 +68,8 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from substruct.analysis.api import Progress, modes
-from substruct.assembly.stack import Assembly
-from substruct.models.enrichment import rod_assumed_modes_enriched
-from substruct.models.reduction import modal_truncation
-from substruct.models.rod import rod_assumed_modes, rod_fe
+from substruct.builder import Assembly, Substructure
+from substruct.builder.rod_system import RodSystemSpec, reduced_rod, rod_model
 from substruct.studies.convergence_results import (
     ConvergenceResult,
     SeriesResult,
@@ -77,8 +77,6 @@ from substruct.studies.convergence_results import (
 )
 from substruct.studies.levels import StudyLevels
 from substruct.studies.rates import fit_order, observed_order, richardson
-from substruct.studies.rod_system import RodSystemSpec
-from substruct.substructure import Substructure
 
 __all__ = [
     "VARIANTS",
@@ -88,7 +86,6 @@ __all__ = [
     "dofs_to_reach",
 ]
 
-ROD = "rod"
 #: The versions of the system a study can run (see :func:`study_variants`).
 VARIANTS = ("constrained", "unconstrained", "bare")
 
@@ -153,24 +150,23 @@ class _Rods:
 
 def _methods(spec: RodSystemSpec, levels: StudyLevels, smooth: bool,
              rods: _Rods | None = None) -> list[_Method]:
+    """The series of a study, each building its rod through
+    :func:`substruct.builder.rod_system.rod_model` (a model shared by key: the
+    discretization, the level and the points, which are all that the rod depends on within one
+    study)."""
     pts = spec.points
-    L, EA, m, sup = spec.length, spec.EA, spec.m, spec.support
     rods = rods or _Rods()
 
-    def sines(n: int) -> tuple[Substructure, float]:
-        return rods.get(("sines", n, pts),
-                        lambda: rod_assumed_modes(ROD, L, EA, m, n, sup, nodes_at=pts))
+    def made(discretization: str) -> Callable[[int], tuple[Substructure, float]]:
+        return lambda n: rods.get((discretization, n, pts),
+                                  lambda: rod_model(spec, discretization, n))
 
     def truncated(n: int, g: int) -> tuple[Substructure, float]:
-        rod, charge = sines(n)
-        return modal_truncation(rod, g), charge
-
-    def made(key: tuple[Any, ...], make: Callable[[], Substructure]
-             ) -> tuple[Substructure, float]:
-        return rods.get(key + (pts,), make)
+        rod, charge = made("sines")(n)
+        return reduced_rod(rod, g), charge
 
     out = [_Method("assumed", "assumed modes (g = n)", tuple(levels.assumed),
-                   np.nan if smooth else 1.0, sines)]
+                   np.nan if smooth else 1.0, made("sines"))]
     g = levels.fixed_g
     if g is not None:
         out.append(_Method(f"assumed-g{g}", f"assumed modes (g = {g})",
@@ -178,14 +174,9 @@ def _methods(spec: RodSystemSpec, levels: StudyLevels, smooth: bool,
                            lambda n: truncated(n, g)))
     if pts:
         out.append(_Method("enriched", "enriched assumed modes", tuple(levels.enriched), np.nan,
-                           lambda n: made(("enriched", n), lambda: rod_assumed_modes_enriched(
-                               ROD, L, EA, m, n, pts, sup))))
-    out.append(_Method("fe-p1", "FE P1", tuple(levels.fe_p1), 2.0,
-                       lambda n: made(("p1", n), lambda: rod_fe(ROD, L, EA, m, n, 1, sup,
-                                                                nodes_at=pts))))
-    out.append(_Method("fe-p2", "FE P2", tuple(levels.fe_p2), 4.0,
-                       lambda n: made(("p2", n), lambda: rod_fe(ROD, L, EA, m, n, 2, sup,
-                                                                nodes_at=pts))))
+                           made("enriched")))
+    out.append(_Method("fe-p1", "FE P1", tuple(levels.fe_p1), 2.0, made("fe-p1")))
+    out.append(_Method("fe-p2", "FE P2", tuple(levels.fe_p2), 4.0, made("fe-p2")))
     return [mt for mt in out if mt.levels]
 
 

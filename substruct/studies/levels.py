@@ -7,13 +7,14 @@ import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
-__all__ = ["StudyLevels", "parse_levels", "MAX_RITZ", "MAX_ELEMENTS"]
+__all__ = ["StudyLevels", "parse_levels", "MAX_RITZ", "MAX_LEVEL_ELEMENTS"]
 
 #: Largest number of sine functions a level may ask for (the mass and stiffness quadrature is
 #: dense: about ``1250 n^2`` bytes, 1.3 GB at this size).
 MAX_RITZ = 1024
-#: Largest number of elements a level may ask for.
-MAX_ELEMENTS = 1_000_000
+#: Largest number of finite elements a level of the study may ask for (not the case file's own
+#: limit on the elements of a rod or a mesh, ``MAX_ELEMENTS`` of the case layer).
+MAX_LEVEL_ELEMENTS = 1_000_000
 
 
 @dataclass(frozen=True)
@@ -77,7 +78,7 @@ def parse_levels(text: str | None, *, fixed_g: int | None = 4) -> StudyLevels:
 
     Raises:
         ValueError: an unknown key, a value that is not a positive integer, a range ``a:b``
-            with ``a > b``, more than :data:`MAX_RITZ` functions or :data:`MAX_ELEMENTS`
+            with ``a > b``, more than :data:`MAX_RITZ` functions or :data:`MAX_LEVEL_ELEMENTS`
             elements.
     """
     if fixed_g is not None:
@@ -109,7 +110,7 @@ def parse_levels(text: str | None, *, fixed_g: int | None = 4) -> StudyLevels:
                 vals.append(vals[-1] * 2)
         else:
             vals = [_positive_int(v, item) for v in value.split(",") if v.strip()]
-        most = MAX_RITZ if field_name in ("assumed", "enriched") else MAX_ELEMENTS
+        most = MAX_RITZ if field_name in ("assumed", "enriched") else MAX_LEVEL_ELEMENTS
         if vals and max(vals) > most:
             what = "functions" if most == MAX_RITZ else "elements"
             raise ValueError(f"levels: {max(vals)} in {item!r} is more than the {most} {what} "

@@ -20,6 +20,7 @@ import logging
 from dataclasses import dataclass
 from typing import Any, Callable, Mapping, Sequence
 
+from substruct.builder import Substructure
 from substruct.studies.study_task import (
     PartJob,
     SampleRecord,
@@ -27,7 +28,6 @@ from substruct.studies.study_task import (
     make_part,
     run_sample,
 )
-from substruct.substructure import Substructure
 
 __all__ = ["Backend", "BackendError", "Session", "execute", "RETRIES"]
 

@@ -25,12 +25,12 @@ import numpy as np
 
 from typing import Mapping
 
+from substruct.builder import Substructure
 from substruct.builder.parts import reduced_part
 from substruct.case.loader import parse_case
 from substruct.case.study import Collect
 from substruct.run.result import Result
 from substruct.run.runner import build_model, run_case
-from substruct.substructure import Substructure
 
 __all__ = ["SampleTask", "SampleRecord", "PartJob", "make_part", "run_sample", "collect",
            "mac_diagonal", "record_fields", "COMPLEX_FIELDS"]

@@ -19,7 +19,7 @@ from substruct.viz.units import frf_axis_label
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["plot_frf", "frf_figure", "MAX_CURVES", "MAGNITUDES", "case_magnitude", "decibels"]
+__all__ = ["plot_frf", "draw_frf", "MAX_CURVES", "MAGNITUDES", "case_magnitude", "decibels"]
 
 #: Output/input pairs drawn by default (the first ones, outputs varying slowest).
 MAX_CURVES = 9
@@ -52,9 +52,10 @@ def case_magnitude(result: Result) -> str:
     return value if value in MAGNITUDES else "log"
 
 
-def frf_figure(result: Result, *, max_curves: int = MAX_CURVES,
-               magnitude: str | None = None) -> Figure:
-    """The receptance figure of ``result``, not yet written (see :func:`plot_frf`).
+def draw_frf(result: Result, *, max_curves: int = MAX_CURVES,
+             magnitude: str | None = None) -> Figure:
+    """The receptance figure of ``result``, drawn and not written (see :func:`plot_frf`; the
+    public :func:`substruct.viz.plotting.frf_figure` returns it and writes it on request).
 
     ``magnitude``: ``"log"`` or ``"db"`` (:func:`decibels`); ``None`` takes the case's
     ``analysis.frf.magnitude`` (:func:`case_magnitude`).
@@ -104,7 +105,7 @@ def plot_frf(result: Result, png_path: str | os.PathLike, *,
     Raises:
         ValueError: the result holds no FRF.
     """
-    fig = frf_figure(result, max_curves=max_curves, magnitude=magnitude)
+    fig = draw_frf(result, max_curves=max_curves, magnitude=magnitude)
     path = Path(png_path)
     with atomic_path(path, suffix=".png.part") as tmp:
         fig.savefig(tmp, format="png")

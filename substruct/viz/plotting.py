@@ -23,8 +23,7 @@ from typing import TYPE_CHECKING
 
 from substruct.io.hdf5 import atomic_path
 from substruct.run.result import Result
-from substruct.viz import frf_picture
-from substruct.viz.frf_picture import MAX_CURVES, plot_frf
+from substruct.viz.frf_picture import MAX_CURVES, draw_frf, plot_frf
 from substruct.viz.layout import SCALE_FRACTION
 from substruct.viz.mode_picture import plot_modes, render_modes, save_png
 
@@ -35,14 +34,15 @@ __all__ = ["plot_modes", "plot_frf", "modes_figure", "frf_figure", "SCALE_FRACTI
 
 
 def frf_figure(result: Result, png_path: str | os.PathLike | None = None, *,
-               max_curves: int = MAX_CURVES) -> Figure:
+               max_curves: int = MAX_CURVES, magnitude: str | None = None) -> Figure:
     """The receptance figure of :func:`plot_frf`, returned; written to ``png_path`` as well
-    when one is given.
+    when one is given.  ``magnitude``: ``"log"`` or ``"db"``; ``None`` takes the case's
+    ``analysis.frf.magnitude`` (:func:`substruct.viz.frf_picture.draw_frf`).
 
     Raises:
         ValueError: the result holds no FRF.
     """
-    fig = frf_picture.frf_figure(result, max_curves=max_curves)
+    fig = draw_frf(result, max_curves=max_curves, magnitude=magnitude)
     if png_path is not None:
         with atomic_path(Path(png_path), suffix=".png.part") as tmp:
             fig.savefig(tmp, format="png")

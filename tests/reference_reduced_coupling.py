@@ -1,4 +1,10 @@
-r"""Coupling parts reduced with interface bases: shared interface coordinates, dense modes.
+r"""A reference for the tests and ``benchmarks/cb_assembly.py``: parts reduced with interface
+bases coupled by shared interface coordinates, dense modes.
+
+The program couples such parts through constraint rows instead (a case file's
+``reduce: {method: craig-bampton, interface_degree: p}``,
+:mod:`substruct.builder.interface_reduced`, then the coupled modes of the assembly); this
+primal assembly is the independent formulation those rows are checked against.
 
 Each part ``k`` (:class:`~substruct.models.interface_reduction.ReducedPart`) has coordinates
 :math:`q_k = [\eta_k; \xi_k^{(1)}; \dots]`.  An interface joins the parts that list it by

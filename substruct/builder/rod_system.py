@@ -1,12 +1,17 @@
 r"""The system a convergence study refines: a rod with spring-mass attachments and point
-constraints (:class:`RodSystemSpec`), and the paper's tapered rod of section 6
-(:func:`paper_rod_spec`, DESIGN.md section 2).
+constraints (:class:`RodSystemSpec`), the paper's tapered rod of section 6
+(:func:`paper_rod_spec`, docs/verification.md section 3), and its rod at each level of a
+discretization (:func:`rod_model`, :func:`reduced_rod`).
 
-A :class:`RodSystemSpec` holds no discretization: :meth:`RodSystemSpec.assemble` stacks any rod
-model of it (assumed modes, enriched, finite elements) with the attachments (eqs 17-20) and
-builds the constraint rows, the compatibility ones (eqs 23-27) and the extra ones,
+A :class:`RodSystemSpec` holds no discretization: :func:`rod_model` makes the rod of one level
+(assumed modes, eq 51; enriched assumed modes; finite elements with nodes at the attachment and
+constraint points), and :meth:`RodSystemSpec.assemble` stacks it with the attachments
+(eqs 17-20) and builds the constraint rows, the compatibility ones (eqs 23-27) and the extra
+ones,
 
 .. math::  \sum_k c_k\, u(x_k) = 0 \qquad \text{(eq 52)}.
+
+The rod system of a case file: :func:`substruct.builder.rod_system_case.spec_from_case`.
 """
 
 from __future__ import annotations
@@ -21,10 +26,19 @@ from substruct.assembly.stack import (
     assemble,
 )
 from substruct.models.discrete import fixed_free, free_free
-from substruct.models.rod import Profile, paper_taper
+from substruct.models.enrichment import rod_assumed_modes_enriched
+from substruct.models.reduction import modal_truncation
+from substruct.models.rod import Profile, paper_taper, rod_assumed_modes, rod_fe
 from substruct.substructure import Substructure
 
-__all__ = ["Attachment", "PointConstraint", "RodSystemSpec", "paper_rod_spec"]
+__all__ = ["ROD", "DISCRETIZATIONS", "Attachment", "PointConstraint", "RodSystemSpec",
+           "paper_rod_spec", "rod_model", "reduced_rod"]
+
+#: The rod's name in the assembled system.
+ROD = "rod"
+#: The discretizations of the rod :func:`rod_model` makes: the uniform-rod eigenfunctions
+#: (eq 51), the same plus static shapes at the points, Lagrange elements of degree 1 and 2.
+DISCRETIZATIONS = ("sines", "enriched", "fe-p1", "fe-p2")
 
 
 @dataclass(frozen=True)
@@ -125,7 +139,7 @@ class RodSystemSpec:
 
 
 def paper_rod_spec() -> RodSystemSpec:
-    r"""The tapered rod of section 6 (Table 1, DESIGN.md section 2).
+    r"""The tapered rod of section 6 (Table 1; docs/verification.md section 3).
 
     :math:`L = 200`, :math:`EA(x) = \frac65\, 6\cdot 10^6 [1 - (x/L)^2/2]`,
     :math:`m(x) = \frac65 [1 - (x/L)^2/2]` (eq 50), fixed-free; ``a``, ``b`` fixed-free at
@@ -141,3 +155,38 @@ def paper_rod_spec() -> RodSystemSpec:
            Attachment("d", L, "free-free", 1.0, 3000.0))
     eq52 = PointConstraint(((L / 4, 2.0), (L / 2, -5.0), (3 * L / 4, -4.0), (L, 3.0)), "eq52")
     return RodSystemSpec("tapered_rod", L, EA, m, "fixed-free", att, (eq52,), 6)
+
+
+def rod_model(spec: RodSystemSpec, discretization: str, n: int) -> Substructure:
+    r"""The rod of ``spec`` (named :data:`ROD`) at level ``n`` of a discretization.
+
+    * ``"sines"``: ``n`` uniform-rod eigenfunctions of ``spec.support`` (eq 51,
+      :func:`substruct.models.rod.rod_assumed_modes`);
+    * ``"enriched"``: the same ``n`` sines plus the static shapes of unit loads at
+      ``spec.points`` (:func:`substruct.models.enrichment.rod_assumed_modes_enriched`);
+    * ``"fe-p1"``, ``"fe-p2"``: about ``n`` Lagrange elements of degree 1 or 2
+      (:func:`substruct.models.rod.rod_fe`),
+
+    each with the mass and stiffness of :math:`EA(x)`, :math:`m(x)` and a node (or a row
+    ``u(x) = r q``) at every point of ``spec.points``.
+
+    Raises:
+        ValueError: a discretization not in :data:`DISCRETIZATIONS`, or a level the model
+            refuses.
+    """
+    L, EA, m, sup, pts = spec.length, spec.EA, spec.m, spec.support, spec.points
+    if discretization == "sines":
+        return rod_assumed_modes(ROD, L, EA, m, n, sup, nodes_at=pts)
+    if discretization == "enriched":
+        return rod_assumed_modes_enriched(ROD, L, EA, m, n, pts, sup)
+    if discretization in ("fe-p1", "fe-p2"):
+        return rod_fe(ROD, L, EA, m, n, int(discretization[-1]), sup, nodes_at=pts)
+    raise ValueError(f"unknown discretization {discretization!r}; expected one of "
+                     f"{', '.join(DISCRETIZATIONS)}")
+
+
+def reduced_rod(rod: Substructure, g: int) -> Substructure:
+    r"""``rod`` reduced to its ``g`` lowest undamped modes (eqs 21-22,
+    :func:`substruct.models.reduction.modal_truncation`): :math:`q = \Phi_g \eta`."""
+    return modal_truncation(rod, g)
+

@@ -32,7 +32,7 @@ from __future__ import annotations
 from substruct.builder.points import PointUse, rod_position
 from substruct.case.loader import Case, DiscreteSpec, MatrixSpec, RodSpec, parse_point
 from substruct.case.substructures import MassSpec, SpringSpec
-from substruct.studies.rod_system import Attachment, PointConstraint, RodSystemSpec
+from substruct.builder.rod_system import Attachment, PointConstraint, RodSystemSpec
 
 __all__ = ["spec_from_case", "DEFAULT_MODES"]
 
