@@ -39,7 +39,7 @@ from pathlib import Path
 from types import TracebackType
 from typing import Iterable, Iterator
 
-from substruct.io.paths import WriteError, plain_name, resolved_dir, write_errors
+from substruct.io.paths import TEMP_PREFIX, WriteError, plain_name, resolved_dir, write_errors
 
 try:
     import fcntl
@@ -51,8 +51,6 @@ __all__ = ["BusyError", "WriteError", "OutputDir", "LOCK_NAME", "TEMP_PREFIX",
 
 #: The lock file in an output directory that cannot be locked itself (removed when done).
 LOCK_NAME = ".substruct.lock"
-#: Every temporary file or folder substruct makes in an output directory starts with this.
-TEMP_PREFIX = ".substruct-"
 _JOURNAL = ".substruct-journal"
 
 

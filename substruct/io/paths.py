@@ -27,8 +27,11 @@ import unicodedata
 from pathlib import Path
 from typing import Iterator
 
-__all__ = ["STEM_BYTES", "WRITE_ERRNOS", "WriteError", "safe_stem", "plain_name",
-           "resolved_dir", "same_file", "write_errors"]
+__all__ = ["STEM_BYTES", "TEMP_PREFIX", "WRITE_ERRNOS", "WriteError", "safe_stem",
+           "plain_name", "resolved_dir", "same_file", "describe", "write_errors"]
+
+#: Every temporary file or folder substruct makes in an output directory starts with this.
+TEMP_PREFIX = ".substruct-"
 
 #: Longest file stem made from a name read from a file, in bytes of UTF-8 (a file name of the
 #: stem, a suffix such as ``_modes_<variant>.vtu`` and a temporary name stays under the 255
@@ -49,8 +52,9 @@ class WriteError(Exception):
 def safe_stem(name: str, fallback: str = "case") -> str:
     """``name`` (read from inside a file) as a file stem that stays in its directory.
 
-    Every run of characters other than letters, digits, ``_``, ``.``, ``+`` and ``-`` becomes
-    one ``_`` (so ``/``, ``\\``, NUL, control and format characters go); leading and trailing
+    Every run of characters other than letters, digits, ``_``, ``.``, ``+`` and ``-`` (a run of
+    two or more dots counts as one of them) becomes one ``_`` (so ``/``, ``\\``, ``..``, NUL, control and
+    format characters go; ``a/../../b`` is ``a_b``); leading and trailing
     dots and underscores are stripped (no hidden file, no ``.`` or ``..``); the result is cut
     to :data:`STEM_BYTES` bytes of UTF-8 on a character boundary; an empty result is
     ``fallback``.
@@ -61,7 +65,7 @@ def safe_stem(name: str, fallback: str = "case") -> str:
     """
     text = unicodedata.normalize("NFC", str(name))
     text = "".join(c if unicodedata.category(c)[0] != "C" else "_" for c in text)
-    stem = re.sub(r"[^\w.+-]+", "_", text, flags=re.UNICODE).strip("._")
+    stem = re.sub(r"(?:[^\w.+-]|\.\.+)+", "_", text, flags=re.UNICODE).strip("._")
     raw = stem.encode("utf-8")[:STEM_BYTES]
     stem = raw.decode("utf-8", errors="ignore").strip("._")
     return stem or fallback
@@ -93,9 +97,11 @@ def same_file(a: str | os.PathLike, b: str | os.PathLike) -> bool:
 
 
 def describe(err: OSError, where: str | os.PathLike) -> str:
-    """One line for a failed write: the file (``err.filename`` if set, else ``where``) and the
-    reason."""
+    """One line for a failed write: the file (``err.filename`` if set and not a temporary name,
+    else ``where``) and the reason."""
     target = err.filename if isinstance(err.filename, (str, bytes, os.PathLike)) else where
+    if any(part.startswith(TEMP_PREFIX) for part in Path(os.fsdecode(target)).parts):
+        target = where  # the user knows the file by its final name
     reason = err.strerror or (os.strerror(err.errno) if err.errno else str(err))
     return f"cannot write {os.fsdecode(target)}: {' '.join(str(reason).split())}"
 
