@@ -173,12 +173,12 @@ def test_compare_never_draws_over_its_inputs(result, tmp_path, capsys):
     before = a.read_bytes()
     for extra in ([], ["--force"]):
         assert_one_line_error(*run(capsys, "compare", a, result, "--image", a, *extra),
-                              f"{a} is {a}, which this command reads")
+                              f"{a} is a file this command reads")
         assert a.read_bytes() == before
     link = tmp_path / "link.png"
     link.symlink_to(a)
     assert_one_line_error(*run(capsys, "compare", a, result, "--image", link, "--force"),
-                          "which this command reads")
+                          f"{link} (the same file as {a}) is a file this command reads")
     assert a.read_bytes() == before and tree(tmp_path) == ["a.png", "link.png"]
 
 
@@ -215,7 +215,7 @@ def test_export_never_overwrites_the_result_it_reads(rod, tmp_path, capsys):
         if fmt == "uff":  # a UFF target that is a hard link to the result
             os.link(src, out)
         code, _, err = run(capsys, "export", src, "--format", fmt, "--out", out, "--force")
-        assert code == 2 and "which this command reads" in err and err.count("\n") == 1, err
+        assert code == 2 and "is a file this command reads" in err and err.count("\n") == 1, err
         assert src.read_bytes() == before
         out.unlink(missing_ok=True)
 

@@ -134,7 +134,9 @@ def check_targets(out: Path, names: Iterable[str], inputs: Iterable[str | os.Pat
         path = out / name
         for read in inputs:
             if same_file(path, read):
-                raise InputError(f"{path} is {read}, which this command reads; write into "
+                also = "" if Path(os.path.abspath(path)) == Path(os.path.abspath(read)) \
+                    else f" (the same file as {read})"
+                raise InputError(f"{path}{also} is a file this command reads; write into "
                                  "another file or directory")
         if path.is_dir():
             raise InputError(f"{path} is a directory")
