@@ -158,6 +158,24 @@ def test_uff_export_never_leaves_the_out_directory(name, stem, rod, tmp_path, ca
     assert (outside.is_absolute() and outside.exists()) == existed
 
 
+@pytest.mark.parametrize("name", ["../x", "/tmp/x", "a/../../x", "..", "\x00x"])
+def test_the_library_export_paths_stay_in_their_directory(name, rod, tmp_path):
+    """The same policy without the command line: every path the export functions derive from
+    the stored case name is a direct child of the directory given."""
+    from substruct.io import export, hdf5, transient_export, uff
+
+    res = hdf5.load(rod)
+    res.case_name = name
+    res.variants = {"../v": res.variants["without_eq52"]}  # a variant name read from a file
+    out = tmp_path / "o"
+    paths = [uff.uff_path(res, out), *export.export_paths(res, out, "vtu"),
+             *export.export_paths(res, out, "xdmf", variant="../v")]
+    for p in paths:
+        assert p.parent == out and plain_name(p.name) and not p.name.startswith("."), p
+    with pytest.raises(ValueError, match="holds no transient response"):
+        transient_export.transient_export_paths(res, out)
+
+
 def test_xdmf_export_of_a_hostile_name_stays_in_its_directory(rod, tmp_path, capsys):
     src = doctored(rod, tmp_path / "in", case_name="../../up")
     code, _, err = run(capsys, "export", src, "--format", "xdmf", "--out", tmp_path / "o")
