@@ -8,7 +8,12 @@ prints ``PAUSED <POINT> <pid>`` on stderr (the pid of the process that pauses) a
 - ``compute-short``: in the analysis, 3 s of sleep (for the concurrency test);
 - ``write``: in the middle of writing the result file, after ``/model``;
 - ``pictures``: after the pictures are drawn into the staging folder;
-- ``commit``: after the first file of the set has moved into place.
+- ``commit``: after the first file of the set has moved into place (3 s: SIGINT and SIGTERM
+  are held there);
+- ``exit``: after the command returned, in an exit handler of the interpreter;
+- ``study-write``: after the study file is written into its staging folder.
+
+The command runs as the ``substruct`` program does (``main()`` reading ``sys.argv``).
 """
 
 import os
@@ -29,7 +34,7 @@ def pause() -> None:
         for _ in range(3):
             scipy.linalg.eig(a, a.T)
     else:
-        time.sleep(3 if POINT == "compute-short" else 120)
+        time.sleep(3 if POINT in ("compute-short", "commit") else 120)
 
 
 if POINT.startswith("compute"):
@@ -72,6 +77,22 @@ elif POINT == "commit":
                 pause()
     os.replace = replace
 
+elif POINT == "study-write":
+    from substruct.io import study_file
+
+    real_save = study_file.save_study
+
+    def save_study(result, path):
+        done = real_save(result, path)
+        pause()
+        return done
+    study_file.save_study = save_study
+
 from substruct.cli import main  # noqa: E402
 
-sys.exit(main(sys.argv[2:]))
+if POINT == "exit":
+    import atexit
+
+    atexit.register(pause)  # registered after substruct's own: runs before it
+sys.argv = ["substruct", *sys.argv[2:]]
+sys.exit(main())

@@ -168,7 +168,7 @@ def test_bad_input_is_one_line_exit_2_and_writes_nothing(tmp_path, capsys, case_
 @pytest.mark.parametrize("args, fragment", [
     (["run", "nope.yaml"], "nope.yaml: no such case file"),
     (["run"], "the following arguments are required: CASE.yaml"),
-    ([], "choose a command: run, converge, info or export"),
+    ([], "choose a command: run, converge, info, export, compare or study"),
     (["frobnicate"], "invalid choice: 'frobnicate'"),
     (["run", CASES / "three_dof_frf.yaml", "--bogus"], "unrecognized arguments: --bogus"),
     (["info", "nope.h5"], "nope.h5: no such file"),

@@ -187,3 +187,48 @@ def test_sigterm_while_writing_removes_the_partial_file(tmp_path, capsys, monkey
     assert sorted(p.name for p in out.iterdir()) == [f"{NAME}.h5"]  # ... and is gone
     assert (out / f"{NAME}.h5").read_bytes() == before
     assert signal.getsignal(signal.SIGTERM) == handler  # cli.main restored the handler
+
+
+@pytest.mark.parametrize("point", ["commit", "exit"])
+def test_sigterm_after_the_commit_began_exits_143_with_its_line(point, tmp_path, earlier):
+    """SIGTERM once the commit is under way (held until it is done) or once the command has
+    returned (the interpreter shutting down): the new set stands whole, and the process still
+    says why it ends: ``substruct: terminated``, exit code 143 (never a silent death by the
+    default action)."""
+    out = fresh(tmp_path, earlier)
+    proc, _ = start(point, out)
+    code, err, _ = stop(proc, signal.SIGTERM)
+    assert (code, err) == (143, "substruct: terminated\n"), (code, err)
+    assert sorted(p.name for p in out.iterdir()) == sorted(earlier)  # no leftovers
+    assert consistent(out) == [f"{NAME}_frf.png", f"{NAME}_modes.png"]
+    with h5py.File(out / f"{NAME}.h5", "r") as f:
+        assert "k3=40" in f.attrs["overrides"]  # the new set, committed before the exit
+
+
+STUDY_CASE = ROOT / "cases" / "tapered_rod_tuning.yaml"
+STUDY_SMALL = ["--set", "study.grid.parameters[0]={parameter: kc, values: [1140.0, 1160.0]}",
+               "--set", "study.grid.parameters[1]={parameter: cc, values: [3.5, 4.0]}",
+               "--set", "analysis.frf.omega={start: 30, stop: 39, num: 61, spacing: linear}"]
+
+
+def test_a_killed_study_leaves_no_file_and_the_next_writer_removes_its_part(tmp_path):
+    """A study SIGKILLed after its file was written (into the staging folder, not yet
+    committed) leaves no study file, only hidden ``.substruct-*`` leftovers; the next study
+    into the directory removes them under the lock and writes its set."""
+    out = tmp_path / "out"
+    env = {**os.environ, "MPLBACKEND": "Agg", "OMP_NUM_THREADS": "1", "PYTHONPATH": str(ROOT)}
+    proc = subprocess.Popen([sys.executable, str(DRIVER), "study-write", "study",
+                             str(STUDY_CASE), "--out", str(out), "--quiet", *STUDY_SMALL],
+                            stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, env=env, cwd=ROOT)
+    line = proc.stderr.readline().decode()
+    assert line.startswith("PAUSED study-write "), line + proc.stderr.read().decode()
+    code, _, _ = stop(proc, signal.SIGKILL)
+    assert code == -signal.SIGKILL
+    leftovers = sorted(p.name for p in out.iterdir())
+    assert leftovers and all(n.startswith(".substruct-") for n in leftovers), leftovers
+    parts = [p for p in out.iterdir() if p.name.endswith(".part")]
+    assert any(f.name == "tapered_rod_tuning_study.h5" for p in parts for f in p.iterdir())
+    assert cli.main(["study", str(STUDY_CASE), "--out", str(out), "--quiet", "--no-pictures",
+                     *STUDY_SMALL]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["tapered_rod_tuning_study.h5"]

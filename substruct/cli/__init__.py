@@ -1,4 +1,5 @@
-"""The ``substruct`` command: ``run``, ``converge``, ``info`` and ``export``.
+"""The ``substruct`` command: ``run``, ``converge``, ``info``, ``export``, ``compare`` and
+``study``.
 
 ::
 
@@ -8,7 +9,11 @@
                        [--set key.path=value ...] [--tol 1e-6] [--reference richardson|finest]
                        [--force] [--quiet] [--json]
     substruct info RESULT.h5 [--json]
-    substruct export RESULT.h5 --format vtu|xdmf [--modes 1-6] [--variant NAME] [--out DIR]
+    substruct export RESULT.h5 --format vtu|xdmf|uff [--modes 1-6] [--variant NAME] [--out DIR]
+                     [--force]
+    substruct compare A.h5 B.h5 [--variant-a NAME] [--variant-b NAME] [--image MAC.png]
+                      [--force] [--json]
+    substruct study CASE.yaml [--workers N | --scheduler tcp://HOST:PORT] [--out DIR] [--force]
 
 Exit codes (:mod:`substruct.cli.main`): 0 success; 2 bad input (one line
 ``substruct: error: <message>`` on stderr, no traceback, nothing written); 1 a result that

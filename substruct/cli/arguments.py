@@ -1,6 +1,6 @@
-"""The command line's arguments: one parser for ``run``, ``converge``, ``info`` and ``export``,
-whose errors are :class:`~substruct.cli.errors.InputError` (one line, exit code 2) instead of
-argparse's exit."""
+"""The command line's arguments: one parser for ``run``, ``converge``, ``info``, ``export``,
+``compare`` and ``study``, whose errors are :class:`~substruct.cli.errors.InputError` (one
+line, exit code 2) instead of argparse's exit."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from substruct.cli.errors import InputError
 __all__ = ["COMMANDS", "build_parser"]
 
 #: The commands, in the order ``--help`` lists them.
-COMMANDS = ("run", "converge", "info", "export")
+COMMANDS = ("run", "converge", "info", "export", "compare", "study")
 
 
 class ArgumentParser(argparse.ArgumentParser):

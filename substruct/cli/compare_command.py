@@ -5,6 +5,13 @@ MAC, :mod:`substruct.analysis.mac`; by order when no coordinates are shared) and
 matrix; ``--image PNG`` draws the matrix (:mod:`substruct.viz.mac_picture`), ``--json`` prints
 all of it as JSON.  The shapes are compared on the coordinates the two models share by label
 (all of them for two variants or two runs of one case).
+
+A result whose frequencies or mode shapes are not finite (NaN, inf) is refused (one line,
+exit code 2): a corrupt file, not a table of ``nan``.  The picture follows the path policy of
+every writer (:mod:`substruct.cli.files`): it ends in ``.png``, ``.svg`` or ``.pdf``, is never
+one of the two results (even with ``--force``), replaces an existing file only with
+``--force``, and is written under the folder's lock and renamed into place, so a full disk or
+a read-only folder leaves no file (one line, exit code 2).
 """
 
 from __future__ import annotations
@@ -18,7 +25,7 @@ import numpy as np
 
 from substruct.analysis.mac import mac_matrix, pair_modes
 from substruct.cli.errors import InputError
-from substruct.cli.files import load_result, optional_module
+from substruct.cli.files import check_out_file, check_targets, load_result, optional_module
 
 __all__ = ["add_compare_parser", "compare_command", "compare_modes"]
 
@@ -30,7 +37,9 @@ def add_compare_parser(sub: Any) -> None:
     p.add_argument("second", metavar="B.h5")
     p.add_argument("--variant-a", default=None, help="the modes of this variant of A")
     p.add_argument("--variant-b", default=None, help="the modes of this variant of B")
-    p.add_argument("--image", default=None, metavar="PNG", help="draw the MAC matrix")
+    p.add_argument("--image", default=None, metavar="PNG",
+                   help="draw the MAC matrix into this file (.png, .svg or .pdf)")
+    p.add_argument("--force", action="store_true", help="replace an existing --image file")
     p.add_argument("--json", action="store_true", help="machine-readable output")
 
 
@@ -40,10 +49,21 @@ def _modes(path: str, variant: str | None) -> tuple[Any, Any]:
         if variant not in result.variants:
             known = ", ".join(result.variants) or "none"
             raise InputError(f"{path} has no variant {variant!r} (it has {known})")
-        return result, result.variants[variant]
+        return result, _finite(path, f"variants.{variant}", result.variants[variant])
     if result.modes is None:
         raise InputError(f"{path} holds no modes")
-    return result, result.modes
+    return result, _finite(path, "modes", result.modes)
+
+
+def _finite(path: str, where: str, modes: Any) -> Any:
+    """``modes``, unless a frequency or a shape of it is not finite (a corrupt file)."""
+    for field, values in (("omega", modes.omega), ("shapes", modes.shapes)):
+        bad = ~np.isfinite(np.asarray(values))
+        if bad.any():
+            first = np.asarray(values)[bad].ravel()[0]
+            raise InputError(f"{path}: {where}.{field}: must be finite, got {first} "
+                             f"({int(bad.sum())} value(s))")
+    return modes
 
 
 def compare_modes(a: Any, ma: Any, b: Any, mb: Any) -> dict[str, Any]:
@@ -72,17 +92,18 @@ def compare_modes(a: Any, ma: Any, b: Any, mb: Any) -> dict[str, Any]:
 
 def compare_command(args: argparse.Namespace) -> int:
     """Print the comparison of the modes of ``args.first`` and ``args.second``; return 0."""
+    image = check_out_file(args.image, "--image", _PICTURES) if args.image is not None \
+        else None
     a, ma = _modes(args.first, args.variant_a)
     b, mb = _modes(args.second, args.variant_b)
     data = compare_modes(a, ma, b, mb)
     name_a = args.first + (f" ({args.variant_a})" if args.variant_a else "")
     name_b = args.second + (f" ({args.variant_b})" if args.variant_b else "")
-    if args.image is not None:
+    if image is not None:
         if data["mac"] is None:
             raise InputError("the results share no coordinate: no MAC matrix to draw")
-        optional_module("viz.mac_picture").mac_picture(
-            np.array(data["mac"]), Path(args.image),
-            (Path(name_a).name, Path(name_b).name), ma.freq_hz, mb.freq_hz)
+        _draw(image, args, np.array(data["mac"]), (Path(name_a).name, Path(name_b).name),
+              ma.freq_hz, mb.freq_hz)
     if args.json:
         print(json.dumps({"a": name_a, "b": name_b, **data}, indent=1))
         return 0
@@ -104,6 +125,27 @@ def compare_command(args: argparse.Namespace) -> int:
         print("MAC matrix (rows: A, columns: B):")
         for row in data["mac"]:
             print("  " + " ".join(f"{v:5.3f}" for v in row))
-    if args.image is not None:
-        print(f"written: {args.image}")
+    if image is not None:
+        print(f"written: {image[0] / image[1]}")
     return 0
+
+
+#: The endings of ``--image`` (the formats the picture is written in).
+_PICTURES = (".png", ".svg", ".pdf")
+
+
+def _draw(image: tuple[Path, str], args: argparse.Namespace, mac: np.ndarray,
+          labels: tuple[str, str], freq_a: Any, freq_b: Any) -> None:
+    """Draw the MAC picture into a staging folder beside ``image`` and move it into place,
+    under the folder's lock (:class:`~substruct.io.file_set.OutputDir`)."""
+    from substruct.io.file_set import OutputDir
+    from substruct.io.paths import write_errors
+
+    folder, name = image
+    picture = optional_module("viz.mac_picture")
+    with OutputDir(folder) as target:
+        check_targets(folder, [name], [args.first, args.second], args.force)
+        staging = target.stage(Path(name).stem)
+        with write_errors(folder / name):
+            picture.mac_picture(mac, staging / name, labels, freq_a, freq_b)
+        target.commit(staging)

@@ -12,13 +12,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
 import sys
 from pathlib import Path
 from typing import Any, Callable, TextIO
 
 from substruct.cli.errors import InputError
-from substruct.cli.files import check_out_dir, load_result, optional_module
+from substruct.cli.files import check_out_dir, check_out_file, check_targets, load_result, \
+    optional_module
 from substruct.cli.summary import print_summary, summary_json
 
 __all__ = ["info_command", "export_command", "EscapedText"]
@@ -77,13 +77,6 @@ def info_command(args: argparse.Namespace) -> int:
     return 0
 
 
-def _same_file(a: Path, b: Path) -> bool:
-    try:
-        return os.path.samefile(a, b)
-    except OSError:
-        return a.resolve() == b.resolve()
-
-
 def _export_transient(args: argparse.Namespace, result: Any) -> int:
     """``export --format xdmf --transient``: the stored fields of the transient response as
     an XDMF time series (:mod:`substruct.io.transient_export`), with the checks of
@@ -92,14 +85,13 @@ def _export_transient(args: argparse.Namespace, result: Any) -> int:
         raise InputError("--transient exports the stored fields as --format xdmf; --modes and "
                          "--variant do not apply")
     export = optional_module("io.transient_export")
-    out = args.out if args.out is not None else str(Path(args.result).parent)
+    out = _out(args, (".xdmf",))
     try:
-        paths = export.transient_export_paths(result, Path(out) if out else Path("."))
+        paths = export.transient_export_paths(result, out)
     except ValueError as err:
         raise InputError(" ".join(str(err).split())) from None
-    _check_targets(args, out, paths, (".xdmf",))
-    return _write(lambda: export.export_transient(result, Path(out) if out else Path("."),
-                                                  force=args.force))
+    _check_targets(args, paths)
+    return _write(lambda: export.export_transient(result, out, force=args.force))
 
 
 def _write(export: Callable[[], list[Path]]) -> int:
@@ -118,19 +110,24 @@ def _write(export: Callable[[], list[Path]]) -> int:
     return 0
 
 
-def _check_targets(args: argparse.Namespace, out: str, paths: list[Path],
-                   file_suffixes: tuple[str, ...]) -> None:
-    """Every file an export will write: its folder writable (``out`` itself, or its parent when
-    ``out`` names a file), none the result read (even with ``--force``), none existing unless
-    ``--force``."""
-    as_file = Path(out).suffix.lower() in file_suffixes
-    check_out_dir(str(Path(out).parent) if as_file else out, "--out", [p.name for p in paths])
+def _out(args: argparse.Namespace, file_suffixes: tuple[str, ...]) -> Path:
+    """``--out`` checked (:func:`~substruct.cli.files.check_out_dir`, or
+    :func:`~substruct.cli.files.check_out_file` when it names a file by its ending): the
+    directory, or the file; the result's folder without ``--out``."""
+    if args.out is None:
+        return check_out_dir(str(Path(args.result).parent), "--out")
+    if Path(args.out).suffix.lower() in file_suffixes:
+        folder, name = check_out_file(args.out, "--out", file_suffixes)
+        return folder / name
+    return check_out_dir(args.out, "--out")
+
+
+def _check_targets(args: argparse.Namespace, paths: list[Path]) -> None:
+    """Every file an export will write: its folder can hold it, none is the result read (even
+    with ``--force``), none exists unless ``--force`` (checked again under the lock)."""
+    check_out_dir(str(paths[0].parent), "--out", [p.name for p in paths])
     for p in paths:
-        if p.exists() and _same_file(p, Path(args.result)):
-            raise InputError(f"{p} is the result being exported; export into another "
-                             "--out directory")
-        if p.exists() and not args.force:
-            raise InputError(f"{p} exists; use --force to overwrite it")
+        check_targets(p.parent, [p.name], [args.result], args.force)
 
 
 def export_command(args: argparse.Namespace) -> int:
@@ -143,13 +140,13 @@ def export_command(args: argparse.Namespace) -> int:
     if getattr(args, "transient", False):
         return _export_transient(args, result)
     export = optional_module("io.export")
-    out = args.out if args.out is not None else str(Path(args.result).parent)
+    out = _out(args, (".vtu", ".xdmf"))
     try:
-        paths = export.export_paths(result, Path(out) if out else Path("."), args.format,
-                                    args.modes, variant=args.variant)
+        paths = export.export_paths(result, out, args.format, args.modes,
+                                    variant=args.variant)
     except ValueError as err:
         text = " ".join(str(err).split())
         raise InputError("--" + text if text.startswith("modes: ") else text) from None
-    _check_targets(args, out, paths, (".vtu", ".xdmf"))
+    _check_targets(args, paths)
     return _write(lambda: export.export_modes(result, out, args.format, args.modes,
                                               variant=args.variant, force=args.force))

@@ -9,22 +9,24 @@ The order of a run:
 3. the model is built and analysed in a child process (:func:`~substruct.cli.isolated.
    call_isolated`), so that SIGTERM and Ctrl-C act at once even inside a long dense solve;
 4. the pictures (optional: ``--no-pictures``, ``output: {pictures: false}``) are drawn, also
-   in a child, into a staging folder, then the result file beside them;
-5. the set is committed: the new files move into place together and the previous set's
-   pictures that the new set does not have are removed.  Interrupted at any point, the
-   directory holds the previous set or the new one, never a mix.
+   in a child, into a staging folder, then the result file beside them, then the transient
+   animation;
+5. the report (table or ``--json``) is rendered, then the set is committed: the new files
+   move into place together and the previous set's pictures that the new set does not have
+   are removed.  Interrupted or failed at any point before, the directory holds the previous
+   set; after, the new one; never a mix.
 """
 
 from __future__ import annotations
 
 import argparse
+import io
 import json
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from substruct.cli.errors import InputError
-from substruct.cli.files import check_out_dir, optional_module
+from substruct.cli.files import check_out_dir, check_targets, input_files, optional_module
 from substruct.cli.isolated import call_isolated
 from substruct.cli.progress import PhaseLog, ProgressBar, phases_wanted
 from substruct.cli.summary import print_summary, summary_json
@@ -50,70 +52,72 @@ def run_command(args: argparse.Namespace) -> int:
 
     The output directory and every file the run may write are checked before anything is
     computed; the result file is written only once every analysis (and its cross-checks)
-    has passed, and together with its pictures.
+    has passed, together with its pictures and animation, and the set is committed only once
+    its report is ready: an error before the commit leaves no file of the set.
     """
     from substruct.case.loader import load_case
-    from substruct.io.file_set import BusyError, OutputDir
+    from substruct.io.file_set import OutputDir
 
     case = load_case(args.case, args.set)
     pictures = case.output.pictures and not getattr(args, "no_pictures", False)
     h5_name = f"{case.name}.h5"
     candidates = [p.name for p in picture_paths(case, Path("."))]
     out = check_out_dir(args.out, "--out", [h5_name, *candidates])
-    try:
-        with OutputDir(out) as target:
-            files, result = _run_locked(case, args, target, out, h5_name, candidates,
-                                        pictures)
-    except BusyError as err:  # raised on entering: nothing was computed
-        raise InputError(str(err)) from None
-    _report(args, case, result, files)
+    with OutputDir(out) as target:  # BusyError on entering: nothing was computed
+        report = _run_locked(case, args, target, out, h5_name, candidates, pictures)
+    sys.stdout.write(report)
     return 0
 
 
 def _run_locked(case: Any, args: argparse.Namespace, target: Any, out: Path, h5_name: str,
-                candidates: list[str], pictures: bool) -> tuple[list[Path], Result]:
+                candidates: list[str], pictures: bool) -> str:
+    """Check the targets, compute, stage the set, render the report, commit; the report."""
+    from substruct.io.paths import write_errors
+
     results = optional_module("io.hdf5")
-    for name in [h5_name, *(candidates if pictures else [])]:
-        path = out / name
-        if path.is_dir():
-            raise InputError(f"{path} is a directory")
-        if path.exists() and not args.force:
-            raise InputError(f"{path} exists; use --force to overwrite it")
+    check_targets(out, [h5_name, *(candidates if pictures else [])], input_files(case),
+                  args.force)
     old = results.listed_pictures(out / h5_name) if (out / h5_name).exists() else []
     result = call_isolated(lambda: compute(case, args.quiet))
     staging = target.stage(case.name)
     drawn: list[Path] = []
-    if pictures:
-        drawn = call_isolated(lambda: write_pictures(result, staging, case.name))
-    result.attrs["pictures"] = "\n".join(p.name for p in drawn)
-    results.save(result, staging / h5_name)
-    new = {h5_name, *(p.name for p in drawn)}
+    with write_errors(out):
+        if pictures:
+            drawn = call_isolated(lambda: write_pictures(result, staging, case.name))
+        result.attrs["pictures"] = "\n".join(p.name for p in drawn)
+        results.save(result, staging / h5_name)
+        tr = result.transient
+        if pictures and tr is not None and len(tr.snapshot_t) and result.model.drawings:
+            movie = optional_module("viz.transient_animation")
+            gif = staging / f"{case.name}_transient.gif"
+            call_isolated(lambda: movie.write_transient_gif(result, gif))
+            drawn.append(gif)
+    new = [h5_name, *(p.name for p in drawn)]
+    staged = sorted(p.name for p in staging.iterdir())
+    if staged != sorted(new):
+        raise RuntimeError(f"the run staged {staged}, expected {sorted(new)}")
+    order = [out / name for name in new]
+    report = _report(args, case, result, order)  # before the commit: a failure leaves nothing
     gone = [n for n in {*candidates, *old} if n not in new and n.startswith(f"{case.name}_")
             and (out / n).is_file()]
-    placed = target.commit(staging, remove=gone)
-    order = [out / h5_name] + [out / p.name for p in drawn]
-    assert sorted(placed) == sorted(order), (placed, order)
-    tr = result.transient
-    if pictures and tr is not None and len(tr.snapshot_t) and result.model.drawings:
-        # the animation, slow, only once the result is in place: a set of its own
-        movie = optional_module("viz.transient_animation")
-        staging = target.stage(f"{case.name}_transient")
-        gif = staging / f"{case.name}_transient.gif"
-        call_isolated(lambda: movie.write_transient_gif(result, gif))
-        order += target.commit(staging)
-    return order, result
+    target.commit(staging, remove=gone)
+    return report
 
 
-def _report(args: argparse.Namespace, case: Any, result: Result, files: list[Path]) -> None:
+def _report(args: argparse.Namespace, case: Any, result: Result, files: list[Path]) -> str:
+    """What the run prints (the table, ``--json`` or nothing), as text."""
+    text = io.StringIO()
     if args.json:
-        print(json.dumps(summary_json(result, files), indent=1))
+        print(json.dumps(summary_json(result, files), indent=1), file=text)
     elif not args.quiet:
         modes = case.analysis.modes
         drops = {v.name: list(v.drop) for v in modes.variants} if modes else {}
-        print_summary(result, sys.stdout, modes.count if modes else None, drops)
+        print_summary(result, text, modes.count if modes else None, drops)
         if any(b != 0 for b in result.model.b):
-            print("note: constant right-hand sides (rhs) do not enter modes or receptances")
-        print("written: " + ", ".join(str(f) for f in files))
+            print("note: constant right-hand sides (rhs) do not enter modes or receptances",
+                  file=text)
+        print("written: " + ", ".join(str(f) for f in files), file=text)
+    return text.getvalue()
 
 
 def picture_paths(case: Any, out: Path) -> list[Path]:

@@ -1,8 +1,15 @@
 """What the command does when it is stopped from outside: SIGTERM unwinds like Ctrl-C (so that
-partly written files are removed on the way out), and a closed pipe on stdout ends quietly."""
+partly written files are removed on the way out), and a closed pipe on stdout ends quietly.
+
+SIGTERM has one answer for the whole life of the ``substruct`` process, also once the command
+is done (its set committed, its table printed) and the interpreter shuts down: the line
+``substruct: terminated`` and exit code 143 (:func:`terminate_until_exit`).  Before, a SIGTERM
+in that window killed the process by the default action: exit status 143 to the shell, without
+the line."""
 
 from __future__ import annotations
 
+import atexit
 import os
 import signal
 import sys
@@ -10,7 +17,12 @@ import threading
 from types import FrameType
 from typing import Callable
 
-__all__ = ["Terminated", "terminate_on_sigterm", "silence_stdout"]
+__all__ = ["Terminated", "terminate_on_sigterm", "terminate_until_exit", "silence_stdout",
+           "TERMINATED_LINE"]
+
+#: What a terminated command writes on stderr (its exit code is 143).
+TERMINATED_LINE = "substruct: terminated\n"
+_armed = False
 
 
 class Terminated(BaseException):
@@ -40,3 +52,45 @@ def silence_stdout() -> None:
         os.dup2(devnull, sys.stdout.fileno())
     except (OSError, ValueError):
         pass
+
+
+def _exit_terminated() -> None:
+    """Write :data:`TERMINATED_LINE`, flush what the command printed, end with 143 at once."""
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except Exception:  # noqa: BLE001 - a closed pipe: nothing more to say there
+            pass
+    try:
+        os.write(2, TERMINATED_LINE.encode())
+    except OSError:
+        pass
+    os._exit(143)
+
+
+def terminate_until_exit() -> None:
+    """From now until the process ends, SIGTERM writes ``substruct: terminated`` and exits with
+    143 (the command has returned; nothing is left to clean up).
+
+    Python runs signal handlers only between bytecodes, and stops running them partway
+    through its shutdown; so the last exit handler blocks SIGTERM and answers a pending one
+    itself.  A SIGTERM after that moment (the interpreter freeing its modules) is held and
+    dropped with the process: the command ends with its own exit code.  Only the main thread
+    of the process that runs the command calls this (``substruct`` itself, not a program that
+    calls :func:`substruct.cli.main` with arguments)."""
+    global _armed
+    if threading.current_thread() is not threading.main_thread():
+        return
+    signal.signal(signal.SIGTERM, lambda signum, frame: _exit_terminated())
+    _armed = True
+
+
+def _at_exit() -> None:
+    if not _armed or not hasattr(signal, "pthread_sigmask"):
+        return
+    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGTERM})
+    if signal.SIGTERM in signal.sigpending():
+        _exit_terminated()
+
+
+atexit.register(_at_exit)  # registered at import, before the libraries: it runs last

@@ -1,7 +1,11 @@
 """``substruct study CASE.yaml``: the samples of the case's ``study:`` block
 (:mod:`substruct.studies.study_run`), in this process (default), on a LocalCluster
 (``--workers N``) or on an existing Dask cluster (``--scheduler tcp://host:port``); written as
-``DIR/<name>_study.h5`` (:mod:`substruct.io.study_file`) and pictures beside it.
+``DIR/<name>_study.h5`` (:mod:`substruct.io.study_file`) and pictures beside it, as one set
+under the lock of ``DIR`` like ``run`` (:mod:`substruct.io.file_set`): a second study into the
+same ``DIR`` is refused while the first runs ("another run is writing DIR"), and after it
+unless ``--force``; a study killed at any point leaves the previous set, and the next writer
+removes its temporary files.
 
 Progress bars (tqdm: done, elapsed, ETA) for the shared reductions and the samples are drawn
 on stderr when it is a terminal and ``--quiet`` is not given.
@@ -10,6 +14,8 @@ on stderr when it is a terminal and ``--quiet`` is not given.
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
 import json
 import sys
 import time
@@ -20,7 +26,7 @@ import numpy as np
 
 from substruct.cli.errors import InputError
 from substruct.cli.progress import CountBar
-from substruct.cli.files import writable_dir
+from substruct.cli.files import check_out_dir, check_targets, input_files
 
 __all__ = ["study_command", "add_study_parser"]
 
@@ -79,9 +85,8 @@ def study_command(args: argparse.Namespace) -> int:
     """Run the study of ``args.case``; return the exit code (0, also when samples failed:
     they are recorded in the file and listed in the summary)."""
     from substruct.case.loader import load_case
-    from substruct.io.study_file import save_study
-    from substruct.studies.study_backend import Backend, BackendError
-    from substruct.studies.study_run import run_study, study_of
+    from substruct.io.file_set import OutputDir
+    from substruct.studies.study_run import study_of
 
     if args.workers is not None and not 1 <= args.workers <= 1024:
         raise InputError(f"--workers: between 1 and 1024, got {args.workers}")
@@ -90,13 +95,30 @@ def study_command(args: argparse.Namespace) -> int:
                          f"{args.scheduler!r}")
     case = load_case(args.case, args.set)
     study_of(case)
-    out = Path(args.out)
-    writable_dir(out, "--out")
-    target = out / f"{case.name}_study.h5"
-    if target.is_dir():
-        raise InputError(f"{target} is a directory")
-    if target.exists() and not args.force:
-        raise InputError(f"{target} exists; use --force to overwrite it")
+    names = [f"{case.name}_study.h5", *(f"{case.name}_study_{kind}.png" for kind in _PICTURES)]
+    out = check_out_dir(args.out, "--out", names)
+    with OutputDir(out) as held:  # BusyError on entering (exit 2): nothing was computed
+        check_targets(out, names if not args.no_pictures and case.output.pictures
+                      else names[:1], input_files(case), args.force)
+        return _study_locked(args, case, out, held, names)
+
+
+#: The pictures a study may draw (:func:`substruct.viz.study_picture.study_pictures`).
+_PICTURES = ("frequencies", "histogram", "tuning")
+
+
+def _study_locked(args: argparse.Namespace, case: Any, out: Path, held: Any,
+                  names: list[str]) -> int:
+    """The study computed, its file and pictures staged, its report rendered, then the set
+    committed under the lock ``held`` of ``out`` (a failure before the commit leaves nothing;
+    pictures of the previous study of the case that the new one does not draw are removed
+    with the commit)."""
+    from substruct.io.paths import write_errors
+    from substruct.io.study_file import save_study
+    from substruct.studies.study_backend import Backend, BackendError
+    from substruct.studies.study_run import run_study
+
+    target = out / names[0]
     show = not args.quiet and bool(getattr(sys.stderr, "isatty", lambda: False)())
     samples = CountBar(sys.stderr, "study", "sample", show)
     parts = CountBar(sys.stderr, "reductions", "part", show)
@@ -110,16 +132,33 @@ def study_command(args: argparse.Namespace) -> int:
         parts.close()
         samples.close()
     seconds = time.perf_counter() - start
-    save_study(result, target)
+    staging = held.stage(f"{case.name}_study")
     pictures = []
     tuning = _den_hartog(case)
-    if not args.no_pictures and case.output.pictures:
-        from substruct.viz.study_picture import study_pictures
+    with write_errors(out):
+        save_study(result, staging / target.name)
+        if not args.no_pictures and case.output.pictures:
+            from substruct.viz.study_picture import study_pictures
 
-        marked = None if tuning is None else (
-            tuning[1].k_opt, tuning[1].c_opt,
-            f"Den Hartog ({tuning[1].k_opt:.5g}, {tuning[1].c_opt:.4g})")
-        pictures = study_pictures(result, out, marked=marked)
+            marked = None if tuning is None else (
+                tuning[1].k_opt, tuning[1].c_opt,
+                f"Den Hartog ({tuning[1].k_opt:.5g}, {tuning[1].c_opt:.4g})")
+            pictures = [out / p.name for p in study_pictures(result, staging, marked=marked)]
+    text = io.StringIO()
+    with contextlib.redirect_stdout(text):  # the report, ready before the commit
+        _report(args, result, seconds, tuning, target, pictures)
+    staged = sorted(p.name for p in staging.iterdir())
+    if staged != sorted([target.name, *(p.name for p in pictures)]):
+        raise RuntimeError(f"the study staged {staged}")
+    held.commit(staging, remove=[n for n in names[1:] if n not in staged
+                                 and (out / n).is_file()])
+    sys.stdout.write(text.getvalue())
+    return 0
+
+
+def _report(args: argparse.Namespace, result: Any, seconds: float, tuning: Any, target: Path,
+            pictures: list[Path]) -> None:
+    """Print the summary of the study (``--json``, the table, or nothing)."""
     summary = _summary(result, seconds)
     if tuning is not None:
         summary["den_hartog"] = {"absorber": tuning[0], "mu": tuning[1].mu,
@@ -144,4 +183,3 @@ def study_command(args: argparse.Namespace) -> int:
             print(f"sample {fail['sample']} failed: {fail['error']}")
         for f in summary["files"]:
             print(f"wrote {f}")
-    return 0

@@ -36,6 +36,7 @@ import scipy.sparse as sp
 from substruct.analysis.results import Modes
 from substruct.builder.drawing import Drawing
 from substruct.io.file_set import OutputDir
+from substruct.io.paths import safe_stem, write_errors
 from substruct.io.hdf5 import atomic_path
 from substruct.io.result_reader import CELL_NODES
 from substruct.io.xdmf_export import check_xdmf, write_xdmf
@@ -192,8 +193,8 @@ def _target(result: Result, out: str | os.PathLike, fmt: str, variant: str | Non
         if out.suffix.lower() != f".{fmt}":
             raise ValueError(f"export path {str(out)!r} does not end in .{fmt} (format {fmt!r})")
         return out
-    tail = f"_{_safe(variant)}" if variant is not None else ""
-    return out / f"{_safe(result.case_name)}_modes{tail}.{fmt}"
+    tail = f"_{safe_stem(variant, 'variant')}" if variant is not None else ""
+    return out / f"{safe_stem(result.case_name)}_modes{tail}.{fmt}"
 
 
 def export_paths(result: Result, out: str | os.PathLike, fmt: str = "vtu",
@@ -213,11 +214,6 @@ def export_paths(result: Result, out: str | os.PathLike, fmt: str = "vtu",
     stem = path.stem[: -len("_modes")] if path.stem.endswith("_modes") else path.stem
     return [path] + ([path.with_name(f"{stem}_mode_{k}.vtu") for k in numbers]
                      if per_mode else [])
-
-
-def _safe(name: str) -> str:
-    """A file-name-safe version of a case name."""
-    return re.sub(r"[^\w.+-]+", "_", name).strip("._") or "case"
 
 
 def export_modes(result: Result, out: str | os.PathLike, fmt: str = "vtu",
@@ -250,20 +246,21 @@ def export_modes(result: Result, out: str | os.PathLike, fmt: str = "vtu",
         raise ValueError(f"drawings expect {mesh.interp.shape[1]} coordinates, the mode shapes "
                          f"have {mr.shapes.shape[0]}")
     paths = export_paths(result, out, fmt, numbers, variant=variant, per_mode=per_mode)
-    for p in paths:
-        if p.is_dir() or (p.exists() and not force):
-            raise FileExistsError(f"{p} exists; use --force to overwrite it" if not p.is_dir()
-                                  else f"{p} is a directory")
     disp = {k: mesh.displacement(mr.shapes[:, k - 1]) for k in numbers}
     with OutputDir(paths[0].parent) as target:
+        for p in paths:  # under the lock: no other writer adds one before the commit
+            if p.is_dir() or (p.exists() and not force):
+                raise FileExistsError(f"{p} exists; use --force to overwrite it"
+                                      if not p.is_dir() else f"{p} is a directory")
         staging = target.stage(paths[0].stem)
         here = staging / paths[0].name
-        if fmt == "vtu":
-            written = _write_vtu(here, mesh, mr, numbers, disp, per_mode)
-        else:
-            written = write_xdmf(here, mesh.points, mesh.cells, numbers, disp)
-            check_xdmf(here, len(mesh.points), sum(len(c) for _, c in mesh.cells),
-                       len(numbers))
+        with write_errors(paths[0].parent):
+            if fmt == "vtu":
+                written = _write_vtu(here, mesh, mr, numbers, disp, per_mode)
+            else:
+                written = write_xdmf(here, mesh.points, mesh.cells, numbers, disp)
+                check_xdmf(here, len(mesh.points), sum(len(c) for _, c in mesh.cells),
+                           len(numbers))
         if sorted(p.name for p in written) != sorted(p.name for p in paths):
             raise RuntimeError(f"export wrote {written}, expected {paths}")
         target.commit(staging)

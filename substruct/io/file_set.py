@@ -19,6 +19,12 @@ export and its companions) follows four steps:
    completes before anything else: readers see the previous set or the new one.
 4. Leaving the ``with`` block releases the lock; on an error the staging folder is removed,
    and so are the directories the block created if they stayed empty.
+
+A failure of the file system while the set is staged or committed (a full disk, a folder made
+read-only or removed meanwhile) is a :class:`~substruct.io.paths.WriteError` (one line); the
+staged files go with the staging folder, so nothing of the new set is left.  Only a failure in
+the middle of step 3 (past the point of no return) leaves the ``.commit`` folder, which the
+next writer completes.
 """
 
 from __future__ import annotations
@@ -33,18 +39,18 @@ from pathlib import Path
 from types import TracebackType
 from typing import Iterable, Iterator
 
+from substruct.io.paths import TEMP_PREFIX, WriteError, plain_name, resolved_dir, write_errors
+
 try:
     import fcntl
 except ImportError:  # pragma: no cover - not POSIX: no locking
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["BusyError", "OutputDir", "LOCK_NAME", "TEMP_PREFIX", "signals_held",
-           "remove_stale"]
+__all__ = ["BusyError", "WriteError", "OutputDir", "LOCK_NAME", "TEMP_PREFIX",
+           "signals_held", "remove_stale"]
 
 #: The lock file in an output directory that cannot be locked itself (removed when done).
 LOCK_NAME = ".substruct.lock"
-#: Every temporary file or folder substruct makes in an output directory starts with this.
-TEMP_PREFIX = ".substruct-"
 _JOURNAL = ".substruct-journal"
 
 
@@ -67,10 +73,6 @@ def signals_held() -> Iterator[None]:
         signal.pthread_sigmask(signal.SIG_SETMASK, old)
 
 
-def _plain_name(name: str) -> bool:
-    return bool(name) and "/" not in name and "\0" not in name and name not in (".", "..")
-
-
 def _roll_forward(folder: Path, out: Path) -> list[Path]:
     """Finish the commit recorded in ``folder``: remove the journal's names, move its files."""
     journal = folder / _JOURNAL
@@ -80,7 +82,7 @@ def _roll_forward(folder: Path, out: Path) -> list[Path]:
                    key=lambda p: (p.suffix == ".h5", p.name))  # the result file last
     new = {p.name for p in files}
     for name in gone:
-        if _plain_name(name) and name not in new:
+        if plain_name(name) and name not in new:
             with contextlib.suppress(FileNotFoundError, IsADirectoryError):
                 (out / name).unlink()
     for p in files:
@@ -122,7 +124,7 @@ class OutputDir:
     """
 
     def __init__(self, path: str | os.PathLike):
-        self.path = Path(path)
+        self.path = resolved_dir(path)
         self.created: list[Path] = []
         self.stale: list[str] = []
         self._fd: int | None = None
@@ -135,12 +137,18 @@ class OutputDir:
         while not probe.exists() and probe.parent != probe:
             missing.append(probe)
             probe = probe.parent
-        for d in reversed(missing):
-            d.mkdir()
-            self.created.append(d)
         try:
-            self._lock()
-            self.stale = remove_stale(self.path)
+            with write_errors(self.path):
+                for d in reversed(missing):
+                    d.mkdir()
+                    self.created.append(d)
+        except BaseException:
+            self._remove_created()
+            raise
+        try:
+            with write_errors(self.path):
+                self._lock()
+                self.stale = remove_stale(self.path)
         except BaseException:
             self._remove_created()
             raise
@@ -207,19 +215,26 @@ class OutputDir:
     def stage(self, name: str) -> Path:
         """A new, empty staging folder for the set called ``name`` (removed on exit unless
         committed)."""
-        folder = Path(tempfile.mkdtemp(dir=self.path, prefix=f"{TEMP_PREFIX}{name}.",
-                                       suffix=".part"))
+        with write_errors(self.path):
+            folder = Path(tempfile.mkdtemp(dir=self.path, prefix=f"{TEMP_PREFIX}{name}.",
+                                           suffix=".part"))
         self._staging.append(folder)
         return folder
 
     def commit(self, folder: Path, remove: Iterable[str] = ()) -> list[Path]:
         """Move every file of the staging ``folder`` into the directory and remove the names
         ``remove`` (files of the previous set that the new set does not have), as one step;
-        return the paths now in place."""
-        gone = sorted({n for n in remove if _plain_name(n)})
-        (folder / _JOURNAL).write_text("".join(f"{n}\n" for n in gone), encoding="utf-8")
+        return the paths now in place.
+
+        Raises:
+            WriteError: the file system refused a step (nothing moved if it refused before
+                the point of no return; else the next writer completes the commit).
+        """
+        gone = sorted({n for n in remove if plain_name(n)})
         done = folder.with_name(folder.name.removesuffix(".part") + ".commit")
-        with signals_held():
-            os.rename(folder, done)
-            self._staging.remove(folder)
-            return _roll_forward(done, self.path)
+        with write_errors(self.path):
+            (folder / _JOURNAL).write_text("".join(f"{n}\n" for n in gone), encoding="utf-8")
+            with signals_held():
+                os.rename(folder, done)
+                self._staging.remove(folder)
+                return _roll_forward(done, self.path)

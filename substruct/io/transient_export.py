@@ -15,11 +15,11 @@ with ``force``.
 from __future__ import annotations
 
 import os
-import re
 from pathlib import Path
 
 from substruct.io.export import combined_mesh
 from substruct.io.file_set import OutputDir
+from substruct.io.paths import safe_stem
 from substruct.io.xdmf_export import check_xdmf_series, write_xdmf_series
 from substruct.run.result import Result
 
@@ -45,7 +45,7 @@ def transient_export_paths(result: Result, out: str | os.PathLike) -> list[Path]
             raise ValueError(f"export path {str(out)!r} does not end in .xdmf (format 'xdmf')")
         path = out
     else:
-        stem = re.sub(r"[^\w.+-]+", "_", result.case_name).strip("._") or "case"
+        stem = safe_stem(result.case_name)
         path = out / f"{stem}_transient.xdmf"
     return [path, path.with_suffix(".h5")]
 

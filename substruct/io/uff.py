@@ -298,9 +298,12 @@ def read_uff(path: str | os.PathLike) -> list[dict[str, Any]]:
 
 def uff_path(result: Result, out: str | os.PathLike) -> Path:
     """Where :func:`export_uff` writes: ``out`` if it ends in ``.uff``, else
-    ``out/<case>.uff``."""
+    ``out/<case>.uff`` (the case name read from the result through
+    :func:`~substruct.io.paths.safe_stem`: never a path outside ``out``)."""
+    from substruct.io.paths import safe_stem
+
     p = Path(out)
-    return p if p.suffix.lower() == ".uff" else p / f"{result.case_name}.uff"
+    return p if p.suffix.lower() == ".uff" else p / f"{safe_stem(result.case_name)}.uff"
 
 
 def export_uff(result: Result, out: str | os.PathLike, force: bool = False) -> Path:

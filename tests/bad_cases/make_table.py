@@ -142,7 +142,7 @@ The message column leaves out the `substruct: error: tests/bad_cases/<file>.yaml
 every line.
 """
 
-#: ``substruct run`` refusals that are not about the case file: (situation, arguments).
+#: Refusals of the commands that are not about the case file: (situation, arguments).
 OTHERS = [
     ("`--out` is a file", ["run", "case.yaml", "--out", "somefile"]),
     ("`--out` is below a file", ["run", "case.yaml", "--out", "somefile/sub"]),
@@ -166,6 +166,15 @@ OTHERS = [
      ["export", "results/three_dof_frf.h5", "--format", "vtu"]),
     ("an export over its own input (even with `--force`)",
      ["export", "three_dof_frf_modes.h5", "--format", "xdmf", "--force"]),
+    ("`export --out ''`", ["export", "results/three_dof_frf.h5", "--format", "uff", "--out", ""]),
+    ("a `compare` picture over one of the results (even with `--force`)",
+     ["compare", "results/three_dof_frf.h5", "mac.png", "--image", "mac.png", "--force"]),
+    ("a `compare` picture that is not a picture", ["compare", "results/three_dof_frf.h5",
+                                                   "results/three_dof_frf.h5", "--image",
+                                                   "results/three_dof_frf.h5"]),
+    ("`compare` of a result with a NaN frequency",
+     ["compare", "results/three_dof_frf.h5", "nan.h5"]),
+    ("another study writes into `--out`", ["study", "tuning.yaml", "--out", "busy"]),
 ]
 
 
@@ -193,6 +202,14 @@ def other_messages() -> list[tuple[str, str]]:
             Path("results/three_dof_frf_modes.vtu").write_text("someone's file\n")
             Path("three_dof_frf_modes.h5").write_bytes(Path("results/three_dof_frf.h5")
                                                        .read_bytes())
+            Path("mac.png").write_bytes(Path("results/three_dof_frf.h5").read_bytes())
+            Path("nan.h5").write_bytes(Path("results/three_dof_frf.h5").read_bytes())
+            import h5py
+
+            with h5py.File("nan.h5", "r+") as f:
+                f["modes/omega"][0] = float("nan")
+            Path("tuning.yaml").write_bytes((ROOT / "cases" / "tapered_rod_tuning.yaml")
+                                            .read_bytes())
             from substruct.io.file_set import OutputDir
 
             with OutputDir("busy"):
