@@ -41,7 +41,10 @@ def add_study_parser(sub: Any) -> None:
     where.add_argument("--workers", type=int, default=None, metavar="N",
                        help="start a Dask LocalCluster of N worker processes (1 thread each)")
     where.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
-                       help="run on an existing Dask cluster")
+                       help="run on an existing Dask cluster (tcp:// only)")
+    study.add_argument("--connect-timeout", type=float, default=None, metavar="SECONDS",
+                       help="with --scheduler: seconds to reach the scheduler and receive its "
+                       "handshake (default: 5)")
     study.add_argument("--force", action="store_true", help="overwrite an existing study file")
     study.add_argument("--no-pictures", action="store_true", help="write the study file only")
     study.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
@@ -75,19 +78,37 @@ def _den_hartog(case: Any) -> Any:
         return None
 
 
+def _backend(args: argparse.Namespace) -> Any:
+    """The :class:`~substruct.studies.study_backend.Backend` of the options, the scheduler's
+    address, its protocol and the timeout checked (nothing is connected yet)."""
+    from substruct.studies.study_backend import CONNECT_TIMEOUT, Backend, BackendError
+    from substruct.studies.scheduler_probe import connect_timeout, scheduler_address
+
+    if args.connect_timeout is not None and args.scheduler is None:
+        raise InputError(f"--connect-timeout: only with --scheduler, got "
+                         f"{args.connect_timeout!r}")
+    if args.scheduler is None:
+        return Backend(workers=args.workers)
+    try:
+        address = scheduler_address(args.scheduler)
+        timeout = connect_timeout(CONNECT_TIMEOUT if args.connect_timeout is None
+                                  else args.connect_timeout)
+    except BackendError as err:
+        raise InputError(str(err)) from None
+    return Backend(scheduler=str(address), connect_timeout=timeout)
+
+
 def study_command(args: argparse.Namespace) -> int:
     """Run the study of ``args.case``; return the exit code (0, also when samples failed:
     they are recorded in the file and listed in the summary)."""
     from substruct.case.loader import load_case
     from substruct.io.study_file import save_study
-    from substruct.studies.study_backend import Backend, BackendError
+    from substruct.studies.study_backend import BackendError
     from substruct.studies.study_run import run_study, study_of
 
     if args.workers is not None and not 1 <= args.workers <= 1024:
         raise InputError(f"--workers: between 1 and 1024, got {args.workers}")
-    if args.scheduler is not None and "://" not in args.scheduler:
-        raise InputError(f"--scheduler: an address such as tcp://host:8786, got "
-                         f"{args.scheduler!r}")
+    backend = _backend(args)
     case = load_case(args.case, args.set)
     study_of(case)
     out = Path(args.out)
@@ -102,8 +123,7 @@ def study_command(args: argparse.Namespace) -> int:
     parts = CountBar(sys.stderr, "reductions", "part", show)
     start = time.perf_counter()
     try:
-        result = run_study(case, Backend(workers=args.workers, scheduler=args.scheduler),
-                           samples, parts_tick=parts)
+        result = run_study(case, backend, samples, parts_tick=parts)
     except BackendError as err:
         raise InputError(str(err)) from None
     finally:
