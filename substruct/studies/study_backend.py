@@ -19,6 +19,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import shutil
+import signal
 import tempfile
 from dataclasses import dataclass
 from typing import Any, Callable, Iterator, Mapping, Sequence
@@ -131,22 +132,54 @@ def _connect(backend: Backend) -> Any:
     raise BackendError(message)
 
 
-def _local_cluster(workers: int, scratch: str) -> Any:
+def _local_cluster(workers: int, scratch: str, stack: contextlib.ExitStack) -> Any:
     """A LocalCluster of ``workers`` processes (one thread each) on 127.0.0.1 (its dashboard
     on a free port), its scratch space in ``scratch`` and each worker's output in a log file
-    there (:mod:`substruct.studies.dask_worker`)."""
+    there (:mod:`substruct.studies.dask_worker`); its closing pushed on ``stack``.
+
+    SIGINT is blocked in this thread while the cluster starts: the cluster's event-loop
+    thread, created meanwhile, inherits the mask, and so does every worker process it spawns
+    (now or when a worker is restarted), so a Ctrl-C of the terminal, sent to the whole
+    process group, reaches this process only.  A Ctrl-C during the start is delivered here
+    once the cluster exists and is on ``stack``.
+    """
     try:
         import dask
         from distributed import LocalCluster
     except ImportError:
         raise BackendError("--workers needs dask.distributed: "
                            "pip install 'substruct[dask]'") from None
-    with dask.config.set({"temporary-directory": scratch}):
-        return LocalCluster(n_workers=int(workers), threads_per_worker=1, processes=True,
-                            host="127.0.0.1", dashboard_address="127.0.0.1:0",
-                            silence_logs=logging.CRITICAL, local_directory=scratch,
-                            preload=["substruct.studies.dask_worker"],
-                            env={"OMP_NUM_THREADS": "1"})
+    from multiprocessing import resource_tracker
+
+    # started here first: starting it unblocks SIGINT in the thread that does
+    resource_tracker.ensure_running()
+    mask = getattr(signal, "pthread_sigmask", None)
+    old = mask(signal.SIG_BLOCK, {signal.SIGINT}) if mask is not None else None
+    try:
+        cluster = LocalCluster.__new__(LocalCluster)  # held here, closed if its start fails
+        stack.callback(_close_quietly, cluster)
+        with dask.config.set({"temporary-directory": scratch}):
+            LocalCluster.__init__(cluster, n_workers=int(workers), threads_per_worker=1,
+                                  processes=True, host="127.0.0.1",
+                                  dashboard_address="127.0.0.1:0",
+                                  silence_logs=logging.CRITICAL, local_directory=scratch,
+                                  preload=["substruct.studies.dask_worker"],
+                                  env={"OMP_NUM_THREADS": "1"})
+    finally:
+        if mask is not None and old is not None:
+            mask(signal.SIG_SETMASK, old)
+    return cluster
+
+
+def _close_quietly(cluster: Any) -> None:
+    """Close ``cluster``, also one whose start was interrupted (then Dask's own clean-up at
+    exit would fail on it: it is taken off Dask's list of clusters to close)."""
+    try:
+        cluster.close()
+    except Exception:  # a cluster that never finished starting
+        instances = getattr(type(cluster), "_instances", None)
+        if instances is not None:
+            instances.discard(cluster)
 
 
 def _on_dask(client: Any, tasks: Sequence[SampleTask], tick: Tick | None,
@@ -199,8 +232,8 @@ class Session:
             else:
                 self.scratch = tempfile.mkdtemp(prefix=SCRATCH_PREFIX)
                 stack.callback(shutil.rmtree, self.scratch, ignore_errors=True)
-                self.cluster = _local_cluster(int(self.backend.workers or 1), self.scratch)
-                stack.callback(self.cluster.close)
+                self.cluster = _local_cluster(int(self.backend.workers or 1), self.scratch,
+                                              stack)
                 from distributed import Client
 
                 self.client = Client(self.cluster)
