@@ -56,7 +56,7 @@ class SchedulerAddress(str):
 
 
 def _shown(text: str) -> str:
-    text = printable(text)
+    """``text`` quoted, its control and format characters escaped (``repr``), shortened."""
     return repr(text if len(text) <= 80 else text[:77] + "...")
 
 
