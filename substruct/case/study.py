@@ -39,6 +39,7 @@ from pydantic import BeforeValidator, Field, model_validator
 
 from substruct.case.errors import FieldError
 from substruct.case.fields import (
+    MEMORY_LIMIT,
     Count,
     Name,
     NonNegative,
@@ -46,13 +47,17 @@ from substruct.case.fields import (
     Point,
     Positive,
     StrictModel,
+    gigabytes,
 )
 
 __all__ = ["GridAxis", "Grid", "RandomParameter", "RandomSamples", "Collect", "StudySpec",
-           "PeakSpec", "MAX_SAMPLES"]
+           "PeakSpec", "MAX_SAMPLES", "SAMPLE_OVERHEAD", "collect_text"]
 
-#: Most samples a study may ask for.
+#: Most samples a study may ask for (a grid's product, a zip, a random count, an axis).
 MAX_SAMPLES = 1_000_000
+#: Bytes a sample takes before what it collects: its row of the table, its task (the
+#: overrides as text) and its record (:func:`StudySpec.memory`).
+SAMPLE_OVERHEAD = 512
 
 
 class GridAxis(StrictModel):
@@ -77,8 +82,15 @@ class GridAxis(StrictModel):
             if self.spacing == "log" and (self.start or 0) <= 0:
                 raise FieldError("start", "a log range starts above 0", self.start)
             if (self.num or 0) > MAX_SAMPLES:
-                raise FieldError("num", f"at most {MAX_SAMPLES} values", self.num)
+                raise FieldError("num", f"at most {MAX_SAMPLES:,} values", self.num)
+        elif len(self.values) > MAX_SAMPLES:
+            raise FieldError("values", f"{len(self.values):,} values, at most "
+                             f"{MAX_SAMPLES:,}", f"a list of {len(self.values):,} numbers")
         return self
+
+    def count(self) -> int:
+        """The number of values of the axis (from ``values`` or ``num``; none computed)."""
+        return len(self.values) if self.values is not None else int(self.num or 0)
 
 
 class Grid(StrictModel):
@@ -86,6 +98,32 @@ class Grid(StrictModel):
 
     combine: Literal["product", "zip"] = "product"
     parameters: Annotated[list[GridAxis], Field(min_length=1)]
+
+    @model_validator(mode="after")
+    def _size(self) -> "Grid":
+        r"""A product grid's size :math:`\prod_i n_i` from the declared counts (Python
+        integers, nothing allocated), at most :data:`MAX_SAMPLES`; the axis where the running
+        product first passes the limit is named, the whole product shown."""
+        if self.combine != "product":
+            return self
+        counts = [axis.count() for axis in self.parameters]
+        total = 1
+        for n in counts:
+            total *= n
+        if total <= MAX_SAMPLES:
+            return self
+        shown = " x ".join(map(str, counts[:8])) + (" x ..." if len(counts) > 8 else "")
+        size = f"{total:,}" if total < 10 ** 30 else \
+            f"about 10^{int(total.bit_length() * 0.30103)}"
+        running = 1
+        for k, axis in enumerate(self.parameters):
+            running *= counts[k]
+            if running > MAX_SAMPLES:
+                key = "num" if axis.values is None else "values"
+                raise FieldError(("parameters", k, key), f"the product grid {shown} is {size} "
+                                 f"samples, at most {MAX_SAMPLES:,}",
+                                 axis.num if axis.values is None else axis.values)
+        return self
 
 
 class RandomParameter(StrictModel):
@@ -202,6 +240,13 @@ class StudySpec(StrictModel):
                              f"{modes.count} modes of analysis.modes.count",
                              collect.frequencies)
         frf = case.analysis.frf
+        n_omega = len(frf.omega.grid()) if frf is not None and collect.frf else 0
+        need = self.memory(n_omega)
+        if need > MEMORY_LIMIT:
+            what = collect_text(collect, n_omega)
+            raise FieldError(("study",), f"{self.size():,} samples collecting {what} would "
+                             f"need about {gigabytes(need)} of memory, at most "
+                             f"{gigabytes(MEMORY_LIMIT)}: fewer samples, or less collected")
         for key, k, peak in [("frf_peaks", k, p) for k, p in enumerate(collect.frf_peaks)] + \
                 [("frf", k, p) for k, p in enumerate(collect.frf)]:
             where: tuple[str | int, ...] = ("study", "collect", key, k)
@@ -216,15 +261,42 @@ class StudySpec(StrictModel):
                                  f"({', '.join(frf.inputs)})", peak.input)
 
     def size(self) -> int:
-        """The number of samples."""
+        """The number of samples (from the declared counts, Python integers)."""
         if self.random is not None:
             return int(self.random.count)
         assert self.grid is not None
-        sizes = [len(a.values) if a.values is not None else int(a.num or 0)
-                 for a in self.grid.parameters]
+        sizes = [a.count() for a in self.grid.parameters]
         if self.grid.combine == "zip":
             return min(sizes)
         total = 1
         for s in sizes:
             total *= s
         return total
+
+    def memory(self, n_omega: int = 0) -> int:
+        r"""Bytes the study holds for its samples, from the declared counts: per sample its
+        parameters and time (8 bytes each), :data:`SAMPLE_OVERHEAD`, 8 bytes a collected real
+        (frequencies, damping ratios, MAC, peaks and where they are, the sweep's
+        ``n_omega`` frequencies) and 16 a complex (``n_omega`` per collected curve),
+
+        .. math::  S \left(8 (p + 1) + o + 8 (3 f + 2 q + n_\omega)
+                   + 16\, c\, n_\omega\right) .
+        """
+        c = self.collect
+        per = 8 * (len(self.parameter_names()) + 1) + SAMPLE_OVERHEAD \
+            + 8 * (3 * c.frequencies + 2 * len(c.frf_peaks)) \
+            + (8 * n_omega + 16 * len(c.frf) * n_omega if c.frf else 0)
+        return self.size() * per
+
+
+def collect_text(collect: Collect, n_omega: int) -> str:
+    """What each sample keeps, in words, for a message (``"4 frequencies and 2 curves of 181
+    frequencies"``)."""
+    parts = []
+    if collect.frequencies:
+        parts.append(f"{collect.frequencies} frequencies")
+    if collect.frf_peaks:
+        parts.append(f"{len(collect.frf_peaks)} peaks")
+    if collect.frf:
+        parts.append(f"{len(collect.frf)} FRF curves of {n_omega:,} frequencies")
+    return " and ".join(parts) or "nothing"

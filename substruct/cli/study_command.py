@@ -47,7 +47,10 @@ def add_study_parser(sub: Any) -> None:
     where.add_argument("--workers", type=int, default=None, metavar="N",
                        help="start a Dask LocalCluster of N worker processes (1 thread each)")
     where.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
-                       help="run on an existing Dask cluster")
+                       help="run on an existing Dask cluster (tcp:// only)")
+    study.add_argument("--connect-timeout", type=float, default=None, metavar="SECONDS",
+                       help="with --scheduler: seconds to reach the scheduler and receive its "
+                       "handshake (default: 5)")
     study.add_argument("--force", action="store_true", help="overwrite an existing study file")
     study.add_argument("--no-pictures", action="store_true", help="write the study file only")
     study.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
@@ -81,6 +84,26 @@ def _den_hartog(case: Any) -> Any:
         return None
 
 
+def _backend(args: argparse.Namespace) -> Any:
+    """The :class:`~substruct.studies.study_backend.Backend` of the options, the scheduler's
+    address, its protocol and the timeout checked (nothing is connected yet)."""
+    from substruct.studies.study_backend import CONNECT_TIMEOUT, Backend, BackendError
+    from substruct.studies.scheduler_probe import connect_timeout, scheduler_address
+
+    if args.connect_timeout is not None and args.scheduler is None:
+        raise InputError(f"--connect-timeout: only with --scheduler, got "
+                         f"{args.connect_timeout!r}")
+    if args.scheduler is None:
+        return Backend(workers=args.workers)
+    try:
+        address = scheduler_address(args.scheduler)
+        timeout = connect_timeout(CONNECT_TIMEOUT if args.connect_timeout is None
+                                  else args.connect_timeout)
+    except BackendError as err:
+        raise InputError(str(err)) from None
+    return Backend(scheduler=str(address), connect_timeout=timeout)
+
+
 def study_command(args: argparse.Namespace) -> int:
     """Run the study of ``args.case``; return the exit code (0, also when samples failed:
     they are recorded in the file and listed in the summary)."""
@@ -90,9 +113,7 @@ def study_command(args: argparse.Namespace) -> int:
 
     if args.workers is not None and not 1 <= args.workers <= 1024:
         raise InputError(f"--workers: between 1 and 1024, got {args.workers}")
-    if args.scheduler is not None and "://" not in args.scheduler:
-        raise InputError(f"--scheduler: an address such as tcp://host:8786, got "
-                         f"{args.scheduler!r}")
+    backend = _backend(args)
     case = load_case(args.case, args.set)
     study_of(case)
     names = [f"{case.name}_study.h5", *(f"{case.name}_study_{kind}.png" for kind in _PICTURES)]
@@ -100,14 +121,14 @@ def study_command(args: argparse.Namespace) -> int:
     with OutputDir(out) as held:  # BusyError on entering (exit 2): nothing was computed
         check_targets(out, names if not args.no_pictures and case.output.pictures
                       else names[:1], input_files(case), args.force)
-        return _study_locked(args, case, out, held, names)
+        return _study_locked(args, case, backend, out, held, names)
 
 
 #: The pictures a study may draw (:func:`substruct.viz.study_picture.study_pictures`).
 _PICTURES = ("frequencies", "histogram", "tuning")
 
 
-def _study_locked(args: argparse.Namespace, case: Any, out: Path, held: Any,
+def _study_locked(args: argparse.Namespace, case: Any, backend: Any, out: Path, held: Any,
                   names: list[str]) -> int:
     """The study computed, its file and pictures staged, its report rendered, then the set
     committed under the lock ``held`` of ``out`` (a failure before the commit leaves nothing;
@@ -115,7 +136,7 @@ def _study_locked(args: argparse.Namespace, case: Any, out: Path, held: Any,
     with the commit)."""
     from substruct.io.paths import write_errors
     from substruct.io.study_file import save_study
-    from substruct.studies.study_backend import Backend, BackendError
+    from substruct.studies.study_backend import BackendError
     from substruct.studies.study_run import run_study
 
     target = out / names[0]
@@ -124,8 +145,7 @@ def _study_locked(args: argparse.Namespace, case: Any, out: Path, held: Any,
     parts = CountBar(sys.stderr, "reductions", "part", show)
     start = time.perf_counter()
     try:
-        result = run_study(case, Backend(workers=args.workers, scheduler=args.scheduler),
-                           samples, parts_tick=parts)
+        result = run_study(case, backend, samples, parts_tick=parts)
     except BackendError as err:
         raise InputError(str(err)) from None
     finally:

@@ -109,10 +109,7 @@ def run_distributed(case: Case, backend: Backend = Backend(), chunks: int = 1,
         pieces = [ChunkJob(case.text, case.source, str(case.base_dir),
                            tuple(float(v) for v in grid[a:b]))
                   for a, b in chunk_bounds(len(grid), chunks)]
-        if session.client is None:
-            received = session.map(sweep_chunk, pieces, [model] * len(pieces), tick=tick)
-        else:
-            shared = session.client.scatter([model], broadcast=True, hash=False)[0]
-            received = session.map(sweep_chunk, pieces, [shared] * len(pieces), tick=tick)
+        shared = session.scatter(model)
+        received = session.map(sweep_chunk, pieces, [shared] * len(pieces), tick=tick)
         result.frf = join_chunks(received)
     return result

@@ -16,11 +16,22 @@ handed to every sample task.
 
 from __future__ import annotations
 
+import contextlib
 import logging
+import shutil
+import signal
+import tempfile
 from dataclasses import dataclass
-from typing import Any, Callable, Mapping, Sequence
+from typing import Any, Callable, Iterator, Mapping, Sequence
 
 from substruct.builder import Substructure
+from substruct.case.errors import printable
+from substruct.studies.scheduler_probe import (
+    BackendError,
+    connect_timeout,
+    probe,
+    scheduler_address,
+)
 from substruct.studies.study_task import (
     PartJob,
     SampleRecord,
@@ -29,27 +40,32 @@ from substruct.studies.study_task import (
     run_sample,
 )
 
-__all__ = ["Backend", "BackendError", "Session", "execute", "RETRIES"]
+__all__ = ["Backend", "BackendError", "Session", "execute", "RETRIES", "CONNECT_TIMEOUT",
+           "SCRATCH_PREFIX", "QUIET_LOGGERS"]
 
 #: How many times Dask runs a task again after it failed (a killed worker included).
 RETRIES = 3
+#: Default seconds to reach a scheduler and receive its handshake (``--connect-timeout``).
+CONNECT_TIMEOUT = 5.0
+#: The study's Dask scratch directory: ``<system temp dir>/substruct-dask-XXXXXXXX``.
+SCRATCH_PREFIX = "substruct-dask-"
+#: Loggers that are silent while a Dask backend is in use (their lines would reach the
+#: terminal from this process: the LocalCluster's scheduler and nannies, the client).
+QUIET_LOGGERS = ("distributed", "tornado", "asyncio", "bokeh")
 
 #: ``progress(done, total)`` after each finished sample.
 Tick = Callable[[int, int], None]
 
 
-class BackendError(RuntimeError):
-    """The backend cannot be used: Dask not installed, the scheduler not reachable."""
-
-
 @dataclass(frozen=True)
 class Backend:
     """``workers``: start a LocalCluster of that many processes (one thread each);
-    ``scheduler``: ``tcp://host:port`` of an existing cluster; neither: in-process, serial."""
+    ``scheduler``: ``tcp://host:port`` of an existing cluster, reached within
+    ``connect_timeout`` seconds; neither: in-process, serial."""
 
     workers: int | None = None
     scheduler: str | None = None
-    connect_timeout: float = 20.0
+    connect_timeout: float = CONNECT_TIMEOUT
 
     def describe(self) -> str:
         """``"in-process"``, ``"LocalCluster (2 workers)"`` or ``"scheduler tcp://..."``."""
@@ -70,24 +86,100 @@ def _serial(tasks: Sequence[SampleTask], tick: Tick | None,
     return out
 
 
-def _client(backend: Backend) -> tuple[Any, Any]:
-    """A ``distributed.Client`` and the LocalCluster it owns (``None`` for a scheduler)."""
+@contextlib.contextmanager
+def quiet_dask_logs() -> Iterator[None]:
+    """The loggers of :data:`QUIET_LOGGERS` silent (above CRITICAL) inside the block, their
+    levels restored after it."""
+    loggers = [logging.getLogger(name) for name in QUIET_LOGGERS]
+    levels = [lg.level for lg in loggers]
+    for lg in loggers:
+        lg.setLevel(logging.CRITICAL + 1)
     try:
-        from distributed import Client, LocalCluster
+        yield
+    finally:
+        for lg, level in zip(loggers, levels):
+            lg.setLevel(level)
+
+
+def _one_line(err: BaseException) -> str:
+    text = printable(" ".join(str(err).split()))
+    text = text if len(text) <= 200 else text[:197] + "..."
+    return f"{type(err).__name__}: {text}" if text else type(err).__name__
+
+
+def _connect(backend: Backend) -> Any:
+    """A ``distributed.Client`` of the scheduler of ``backend``: the address and protocol
+    checked, then probed for a Dask handshake (:mod:`substruct.studies.scheduler_probe`),
+    then connected within the timeout; every failure one :class:`BackendError`."""
+    assert backend.scheduler is not None
+    address = scheduler_address(backend.scheduler)
+    timeout = connect_timeout(backend.connect_timeout)
+    probe(address, timeout)
+    try:
+        from distributed import Client
     except ImportError:
-        raise BackendError("--workers and --scheduler need dask.distributed: "
+        raise BackendError("--scheduler needs dask.distributed: "
                            "pip install 'substruct[dask]'") from None
-    if backend.scheduler is not None:
-        try:
-            return Client(backend.scheduler, timeout=backend.connect_timeout), None
-        except (OSError, TimeoutError, ValueError) as err:
-            detail = " ".join(str(err).split()) or type(err).__name__
-            raise BackendError(f"cannot reach the Dask scheduler {backend.scheduler} "
-                               f"({detail})") from None
-    cluster = LocalCluster(n_workers=int(backend.workers or 1), threads_per_worker=1,
-                           processes=True, host="127.0.0.1", dashboard_address=":0",
-                           silence_logs=logging.ERROR, env={"OMP_NUM_THREADS": "1"})
-    return Client(cluster), cluster
+    client = Client.__new__(Client)  # held here, so that a failed start is closed here
+    try:
+        Client.__init__(client, str(address), timeout=timeout)
+        return client
+    except Exception as err:  # anything Dask raises while connecting: the peer's doing
+        message = (f"--scheduler {address}: not a Dask scheduler (the connection failed: "
+                   f"{_one_line(err)})")
+    with contextlib.suppress(Exception):
+        client.close(timeout=timeout)
+    raise BackendError(message)
+
+
+def _local_cluster(workers: int, scratch: str, stack: contextlib.ExitStack) -> Any:
+    """A LocalCluster of ``workers`` processes (one thread each) on 127.0.0.1 (its dashboard
+    on a free port), its scratch space in ``scratch`` and each worker's output in a log file
+    there (:mod:`substruct.studies.dask_worker`); its closing pushed on ``stack``.
+
+    SIGINT is blocked in this thread while the cluster starts: the cluster's event-loop
+    thread, created meanwhile, inherits the mask, and so does every worker process it spawns
+    (now or when a worker is restarted), so a Ctrl-C of the terminal, sent to the whole
+    process group, reaches this process only.  A Ctrl-C during the start is delivered here
+    once the cluster exists and is on ``stack``.
+    """
+    try:
+        import dask
+        from distributed import LocalCluster
+    except ImportError:
+        raise BackendError("--workers needs dask.distributed: "
+                           "pip install 'substruct[dask]'") from None
+    from multiprocessing import resource_tracker
+
+    # started here first: starting it unblocks SIGINT in the thread that does
+    resource_tracker.ensure_running()
+    mask = getattr(signal, "pthread_sigmask", None)
+    old = mask(signal.SIG_BLOCK, {signal.SIGINT}) if mask is not None else None
+    try:
+        cluster = LocalCluster.__new__(LocalCluster)  # held here, closed if its start fails
+        stack.callback(_close_quietly, cluster)
+        with dask.config.set({"temporary-directory": scratch}):
+            LocalCluster.__init__(cluster, n_workers=int(workers), threads_per_worker=1,
+                                  processes=True, host="127.0.0.1",
+                                  dashboard_address="127.0.0.1:0",
+                                  silence_logs=logging.CRITICAL, local_directory=scratch,
+                                  preload=["substruct.studies.dask_worker"],
+                                  env={"OMP_NUM_THREADS": "1"})
+    finally:
+        if mask is not None and old is not None:
+            mask(signal.SIG_SETMASK, old)
+    return cluster
+
+
+def _close_quietly(cluster: Any) -> None:
+    """Close ``cluster``, also one whose start was interrupted (then Dask's own clean-up at
+    exit would fail on it: it is taken off Dask's list of clusters to close)."""
+    try:
+        cluster.close()
+    except Exception:  # a cluster that never finished starting
+        instances = getattr(type(cluster), "_instances", None)
+        if instances is not None:
+            instances.discard(cluster)
 
 
 def _on_dask(client: Any, tasks: Sequence[SampleTask], tick: Tick | None,
@@ -106,8 +198,7 @@ def _on_dask(client: Any, tasks: Sequence[SampleTask], tick: Tick | None,
         try:
             out[k] = future.result()
         except Exception as err:  # the task itself never raises: a lost worker did
-            text = " ".join(str(err).split())
-            out[k] = SampleRecord(index=tasks[k].index, error=f"{type(err).__name__}: {text}")
+            out[k] = SampleRecord(index=tasks[k].index, error=_one_line(err))
         done += 1
         if tick is not None:
             tick(done, len(tasks))
@@ -127,17 +218,56 @@ class Session:
         self.backend = backend
         self.client: Any = None
         self.cluster: Any = None
+        self.scratch: str | None = None
+        self._stack = contextlib.ExitStack()
 
     def __enter__(self) -> "Session":
-        if self.backend.workers is not None or self.backend.scheduler is not None:
-            self.client, self.cluster = _client(self.backend)
+        if self.backend.workers is None and self.backend.scheduler is None:
+            return self
+        stack = self._stack
+        try:
+            stack.enter_context(quiet_dask_logs())
+            if self.backend.scheduler is not None:
+                self.client = _connect(self.backend)
+            else:
+                self.scratch = tempfile.mkdtemp(prefix=SCRATCH_PREFIX)
+                stack.callback(shutil.rmtree, self.scratch, ignore_errors=True)
+                self.cluster = _local_cluster(int(self.backend.workers or 1), self.scratch,
+                                              stack)
+                from distributed import Client
+
+                self.client = Client(self.cluster)
+            stack.callback(self.client.close)
+        except BaseException:
+            stack.close()
+            raise
         return self
 
     def __exit__(self, *exc: Any) -> None:
-        if self.client is not None:
-            self.client.close()
-        if self.cluster is not None:
-            self.cluster.close()
+        self._stack.close()
+
+    @contextlib.contextmanager
+    def contained(self) -> Iterator[None]:
+        """Inside the block, a failure of the cluster itself (the connection to the scheduler
+        lost, futures cancelled, a task whose workers kept dying, a timeout) is one
+        :class:`BackendError`; an exception raised by a task's own function passes."""
+        from concurrent.futures import CancelledError
+
+        from distributed import KilledWorker
+
+        try:
+            yield
+        except (OSError, TimeoutError, CancelledError, KilledWorker) as err:
+            raise BackendError(f"the Dask cluster ({self.backend.describe()}) failed during "
+                               f"the study ({_one_line(err)})") from None
+
+    def scatter(self, value: Any) -> Any:
+        """``value`` sent once to every worker (a future to hand to tasks); ``value`` itself
+        in-process."""
+        if self.client is None:
+            return value
+        with self.contained():
+            return self.client.scatter([value], broadcast=True, hash=False)[0]
 
     def map(self, function: Callable[..., Any], *args: Sequence[Any],
             tick: Tick | None = None) -> list[Any]:
@@ -153,12 +283,13 @@ class Session:
             return out
         from distributed import as_completed
 
-        futures = self.client.map(function, *[list(a) for a in args], pure=False,
-                                  retries=RETRIES)
-        for k, _ in enumerate(as_completed(futures)):
-            if tick is not None:
-                tick(k + 1, len(calls))
-        return list(self.client.gather(futures))
+        with self.contained():
+            futures = self.client.map(function, *[list(a) for a in args], pure=False,
+                                      retries=RETRIES)
+            for k, _ in enumerate(as_completed(futures)):
+                if tick is not None:
+                    tick(k + 1, len(calls))
+            return list(self.client.gather(futures))
 
     def parts(self, jobs: Sequence[PartJob], tick: Tick | None = None
               ) -> dict[str, Substructure]:
@@ -172,10 +303,9 @@ class Session:
         the records in the order of ``tasks``."""
         if self.client is None:
             return _serial(tasks, tick, shared)
-        future = None
-        if shared:
-            future = self.client.scatter([dict(shared)], broadcast=True, hash=False)[0]
-        return _on_dask(self.client, tasks, tick, future)
+        future = self.scatter(dict(shared)) if shared else None
+        with self.contained():
+            return _on_dask(self.client, tasks, tick, future)
 
 
 def execute(tasks: Sequence[SampleTask], backend: Backend,
@@ -183,7 +313,8 @@ def execute(tasks: Sequence[SampleTask], backend: Backend,
     """Run every task on ``backend``; the records in the order of ``tasks``.
 
     Raises:
-        BackendError: Dask missing, or the scheduler not reachable.
+        BackendError: Dask missing, the scheduler refused or not reachable, the cluster
+            failed.
     """
     with Session(backend) as session:
         return session.samples(tasks, tick)

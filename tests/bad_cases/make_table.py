@@ -240,7 +240,7 @@ def _n(x: float) -> str:
 def limits() -> str:
     """The section on classes of hostile input and their limits, from the constants."""
     from substruct.case import expressions, fields, loader, matrices, mesh_files, numbers
-    from substruct.case import solids, yaml_io
+    from substruct.case import solids, study, yaml_io
     from substruct.case.fields import gigabytes
     from substruct.io import export, result_reader
 
@@ -305,6 +305,11 @@ def limits() -> str:
          f"{_n(solids.MIN_RELATIVE_SIZE)} of the coordinates it lies at (a box far from the "
          f"origin for its size would have nodes that cannot be told apart)",
          code(solids, "MAX_ASPECT") + ", `MIN_RELATIVE_SIZE`"),
+        ("study plans", f"at most {_n(study.MAX_SAMPLES)} samples: a product grid's size is the "
+         "product of the counts its axes declare, in integers, before any value is computed "
+         "(the axis where it passes the limit is named); a zip, one axis and a random count "
+         "alike; what the samples collect within the memory limit above",
+         code(study, "MAX_SAMPLES")),
         ("terminal", "control and format characters of a value or a key shown in a message "
          "are escaped (`\\x1b`, `\\u202e`): an error line cannot retitle, clear or reorder "
          "the terminal", "-"),
