@@ -27,6 +27,7 @@ computed as well and their agreement held to ``tolerance``
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Callable, Mapping, Sequence
 
 import numpy as np
@@ -210,7 +211,8 @@ def direct_run(phys: Physical, form: str, s: Scheme, h: float, n_steps: int, d0:
         solve = _spd_solver(S, opts.factorization)
         corr = (_correction(S, solve, phys.A, phys.b, phys.motion) if phys.A.shape[0]
                 else None)
-        rec = Recorder(phys, M, K, h, forces, opts.field_every)
+        # the generalized-inverse form integrates q itself: no particular solution to add
+        rec = Recorder(dataclasses.replace(phys, qp=None), M, K, h, forces, opts.field_every)
         ground = None if mo is None else (lambda k: mo.e * mo.g[k, 2])
         integrate(M, C, K, s, h, n_steps, B, phys.loads, d0, v0, a0, solve, rec, opts.every,
                   corr, Work(), rec.on_work, restarter(phys.M, phys.C, phys.K, phys.B, phys.A,

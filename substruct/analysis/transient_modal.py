@@ -71,13 +71,17 @@ def modal_run(phys: Physical, s: Scheme, h: float, n_steps: int, d0: np.ndarray,
         loads = loads.widened(mo.g[:, [2, 0, 1][:len(extra)]])
         f = loads.f
         d0, v0 = d0 - mo.r * mo.g[0, 0], v0 - mo.r * mo.g[0, 1]
+    qp = phys.qp if phys.qp is not None else np.zeros(M.shape[0])
+    if phys.qp is not None:  # q = q_p + Phi eta + R f: the constant load -K q_p
+        Bd = np.hstack([Bd, -(K @ qp)[:, None]])
+        loads = loads.widened(np.ones((f.shape[0], 1)))
+        f = loads.f
     if Bd.shape[1]:
         G = static_solver(sp.csr_array(K), sp.csr_array(M), phys.A, Phi[:, rigid])
         Pe, we = Phi[:, ~rigid], omega[~rigid]
         R = G(Bd) - Pe @ ((Pe.T @ Bd) / (we ** 2)[:, None])
     else:
         R = np.zeros((M.shape[0], 0))
-    qp = phys.qp if phys.qp is not None else np.zeros(M.shape[0])
     k = Phi.shape[1]
     Me, Ke = np.eye(k), np.diag(omega ** 2)
     Ce = None if phys.C is None else Phi.T @ (phys.C @ Phi)

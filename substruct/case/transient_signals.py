@@ -40,19 +40,19 @@ from substruct.case.expressions import compile_expression
 from substruct.case.fields import Number, Point, Positive, StrictModel
 from substruct.case.transient_files import read_table
 
-__all__ = ["SHAPES", "Step", "Ramp", "HalfSine", "Harmonic", "ExpressionShape", "TableShape",
+__all__ = ["SHAPES", "SHAPE_KEYS", "Step", "Ramp", "HalfSine", "Harmonic", "ExpressionShape", "TableShape",
            "Signal", "StepLoad", "RampLoad", "HalfSineLoad", "HarmonicLoad", "ExpressionLoad",
            "TableLoad", "TransientLoad", "AnySignal", "Waveform", "waveform", "load_values"]
 
 #: The shapes a signal may have.
 SHAPES = ("step", "ramp", "half-sine", "harmonic", "expression", "table")
 #: The keys of each shape besides ``amplitude`` and ``shape`` (for "a key of shape: ..." hints).
-_KEYS = {"step": ("start",), "ramp": ("start", "duration"), "half-sine": ("start", "duration"),
+SHAPE_KEYS = {"step": ("start",), "ramp": ("start", "duration"), "half-sine": ("start", "duration"),
          "harmonic": ("omega", "phase"), "expression": ("expression",), "table": ("table",)}
 
 
 def _owners(key: str) -> list[str]:
-    return [s for s, keys in _KEYS.items() if key in keys]
+    return [s for s, keys in SHAPE_KEYS.items() if key in keys]
 
 
 def _known_shape(value: Any) -> Any:
