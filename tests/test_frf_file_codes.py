@@ -249,7 +249,7 @@ def test_npz_reader_keeps_exact_values_and_the_transient_table_uses_it(tmp_path)
         read_table(tmp_path / "c.npz")
     big = _npz(tmp_path / "big.npz", _member("t.npy", (10 ** 9,), "<f8"),
                _member("value.npy", (10 ** 9,), "<f8"))
-    with pytest.raises(ValueError, match="more than"):
+    with pytest.raises(ValueError, match="has 1000000000 entries, at most 1000000 expected"):
         read_table(big)
     with pytest.raises(ValueError, match=r"would need about 2.4 GB of memory, more than the "
                        r"1 GB allowed"):

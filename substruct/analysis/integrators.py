@@ -41,16 +41,16 @@ otherwise accumulate: :math:`|A d_n - b|` stays at the rounding level of one ste
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Callable, Protocol, TypeAlias
+from dataclasses import dataclass, field
+from typing import Callable, Mapping, Protocol, TypeAlias
 
 import numpy as np
 import scipy.sparse as sp
 
 from substruct.linalg.factorize import Solve
 
-__all__ = ["INTEGRATORS", "Scheme", "Correction", "Sink", "scheme", "integrate",
-           "effective_matrix"]
+__all__ = ["INTEGRATORS", "Scheme", "Correction", "Sink", "LoadSteps", "Restart", "scheme",
+           "integrate", "effective_matrix"]
 
 #: The integrators a case may name.
 INTEGRATORS = ("newmark", "generalized-alpha")
@@ -67,10 +67,13 @@ class Scheme:
     alpha_f: float
     beta: float
     gamma: float
+    #: the spectral radius at infinite frequency (1 for Newmark's average acceleration)
+    rho_inf: float = 1.0
 
 
 def scheme(name: str, rho_inf: float = 1.0) -> Scheme:
-    r"""The scheme ``name`` (one of :data:`INTEGRATORS`).
+    r"""The scheme ``name`` (one of :data:`INTEGRATORS`); ``rho_inf`` is that of
+    generalized-alpha (Newmark's average acceleration has 1 whatever is given).
 
     .. math::  \alpha_m = \frac{2\rho_\infty - 1}{\rho_\infty + 1}, \quad
                \alpha_f = \frac{\rho_\infty}{\rho_\infty + 1}, \quad
@@ -81,13 +84,14 @@ def scheme(name: str, rho_inf: float = 1.0) -> Scheme:
         ValueError: an unknown name, or ``rho_inf`` outside ``[0, 1]``.
     """
     if name == "newmark":
-        return Scheme("newmark", 0.0, 0.0, 0.25, 0.5)
+        return Scheme("newmark", 0.0, 0.0, 0.25, 0.5, 1.0)
     if name == "generalized-alpha":
         if not 0.0 <= rho_inf <= 1.0:
             raise ValueError(f"rho_inf must lie in [0, 1], got {rho_inf!r}")
         am = (2 * rho_inf - 1) / (rho_inf + 1)
         af = rho_inf / (rho_inf + 1)
-        return Scheme("generalized-alpha", am, af, 0.25 * (1 - am + af) ** 2, 0.5 - am + af)
+        return Scheme("generalized-alpha", am, af, 0.25 * (1 - am + af) ** 2, 0.5 - am + af,
+                      float(rho_inf))
     raise ValueError(f"unknown integrator {name!r}; expected one of {', '.join(INTEGRATORS)}")
 
 
@@ -156,23 +160,71 @@ class Work:
     dissipated: float = 0.0
 
 
+@dataclass(frozen=True)
+class LoadSteps:
+    r"""The load factors as the steps see them: the nodal values ``f`` (``(n_steps + 1) x L``,
+    :math:`f_k = f(t_k)`) and, for the steps over which a load jumps or kinks, the values at
+    the step's start and end that replace them (``pairs[n] = (start, end)``, each ``L``;
+    :mod:`substruct.analysis.transient_loads`).  Step ``n`` integrates the load that varies
+    linearly from ``start(n)`` to ``end(n)``."""
+
+    f: np.ndarray
+    pairs: Mapping[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+
+    def start(self, n: int) -> np.ndarray:
+        """The load factors at the start of step ``n``."""
+        return self.pairs[n][0] if n in self.pairs else self.f[n]
+
+    def end(self, n: int) -> np.ndarray:
+        """The load factors at the end of step ``n``."""
+        return self.pairs[n][1] if n in self.pairs else self.f[n + 1]
+
+    def widened(self, extra: np.ndarray) -> "LoadSteps":
+        """These loads with the nodal columns ``extra`` (``(n_steps + 1) x k``) appended (their
+        pairs are their nodal values)."""
+        ex = np.asarray(extra, dtype=float).reshape(self.f.shape[0], -1)
+        return LoadSteps(np.hstack([self.f, ex]),
+                         {n: (np.concatenate([a, ex[n]]), np.concatenate([b, ex[n + 1]]))
+                          for n, (a, b) in self.pairs.items()})
+
+
+#: ``restart(step, d, v, f) -> a``: the acceleration the equation of motion gives at step
+#: ``step`` for the state ``(d, v)`` under the load factors ``f`` (eq 10 with constraints).
+Restart: TypeAlias = Callable[[int, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
+
+
 def integrate(M: Matrix, C: Matrix | None, K: Matrix, s: Scheme, h: float, n_steps: int,
-              B: Matrix, f: np.ndarray, d0: np.ndarray, v0: np.ndarray, a0: np.ndarray,
-              solve: Solve, sink: Sink, every: int = 1, correction: Correction | None = None,
-              work: Work | None = None, on_work: Callable[[int, Work], None] | None = None
-              ) -> None:
+              B: Matrix, f: np.ndarray | LoadSteps, d0: np.ndarray, v0: np.ndarray,
+              a0: np.ndarray, solve: Solve, sink: Sink, every: int = 1,
+              correction: Correction | None = None, work: Work | None = None,
+              on_work: Callable[[int, Work], None] | None = None,
+              restart: Restart | None = None) -> None:
     r"""March ``n_steps`` steps of size ``h`` from ``(d0, v0, a0)``.
+
+    A load that jumps (or kinks) within or at the end of a step enters that step as the linear
+    function with the same integral and first moment over the step (:class:`LoadSteps`);
+    where the load factors at the start of a step differ from those the acceleration was
+    computed with, the acceleration is computed again from the equation of motion
+    (``restart``), as at ``t = 0``.  So the step keeps the scheme's second order at a
+    discontinuity anywhere in time, instead of the first order of nodal values.
 
     Args:
         M, C, K: the system matrices (``C`` may be ``None``).
         s: the scheme; ``solve``: :math:`S^{-1}` (:func:`effective_matrix`), factorized once.
-        B, f: the load :math:`F(t_k) = B f_k`; ``f`` is ``(n_steps + 1) x L``.
-        d0, v0, a0: the initial state (``a0`` consistent with the equation of motion).
-        sink: called at step 0 and after every ``every``-th step, and after the last.
+        B, f: the load :math:`F(t_k) = B f_k`; ``f`` is ``(n_steps + 1) x L`` or a
+            :class:`LoadSteps`.
+        d0, v0, a0: the initial state (``a0`` consistent with the equation of motion under
+            ``f_0``).
+        sink: called at step 0 and after every ``every``-th step, and after the last, with the
+            acceleration under the nodal load :math:`f_k`.
         correction: the constraint correction (the generalized-inverse form), or ``None``.
         work: accumulated energy flows (updated in place); ``on_work(step, work)`` is called
             with them where ``sink`` is.
+        restart: needed when ``f`` has pairs (:data:`Restart`).
     """
+    load = f if isinstance(f, LoadSteps) else LoadSteps(np.asarray(f))
+    if load.pairs and restart is None:
+        raise ValueError("a load with jumps needs a restart of the acceleration")
     d, v, a = (np.array(x, dtype=float, copy=True) for x in (d0, v0, a0))
     beta, gamma, am, af = s.beta, s.gamma, s.alpha_m, s.alpha_f
     c1, c2, c3 = h * h * (0.5 - beta), h * (1 - gamma), beta * h * h
@@ -182,10 +234,14 @@ def integrate(M: Matrix, C: Matrix | None, K: Matrix, s: Scheme, h: float, n_ste
     sink(0, d, v, a)
     if on_work is not None and work is not None:
         on_work(0, work)
+    carried = load.f[0]  # the load factors the acceleration a was computed with
     for n in range(n_steps):
+        fs, fe = load.start(n), load.end(n)
+        if restart is not None and not np.array_equal(fs, carried):
+            a = restart(n, d, v, fs)
         d_star = d + h * v + c1 * a
         v_star = v + c2 * a
-        fa = (1 - af) * f[n + 1] + af * f[n]
+        fa = (1 - af) * fe + af * fs
         rhs = B @ fa - K @ (af * d + (1 - af) * d_star)
         if am:
             rhs -= am * (M @ a)
@@ -200,12 +256,16 @@ def integrate(M: Matrix, C: Matrix | None, K: Matrix, s: Scheme, h: float, n_ste
         if correction is not None:  # remove the rounding that would drift
             d_new, v_new = correction.apply_both(d_new, target, v_new, correction.rate(n + 1))
         if work is not None:
-            work.external += float((Bt @ (d_new - d)) @ (0.5 * (f[n + 1] + f[n])))
+            work.external += float((Bt @ (d_new - d)) @ (0.5 * (fs + fe)))
             if damped:
                 vm = 0.5 * (v + v_new)
                 work.dissipated += h * float(vm @ (Cm @ vm))
         d, v, a = d_new, v_new, a_new
+        carried = fe
         if (n + 1) % every == 0 or n + 1 == n_steps:
-            sink(n + 1, d, v, a)
+            nodal = load.f[n + 1]
+            shown = a if restart is None or np.array_equal(nodal, fe) else \
+                restart(n + 1, d, v, nodal)
+            sink(n + 1, d, v, shown)
             if on_work is not None and work is not None:
                 on_work(n + 1, work)

@@ -27,7 +27,8 @@ computed as well and their agreement held to ``tolerance``
 
 from __future__ import annotations
 
-from typing import Callable, Sequence
+import dataclasses
+from typing import Callable, Mapping, Sequence
 
 import numpy as np
 import scipy.sparse as sp
@@ -39,6 +40,8 @@ from substruct.analysis.checks import (
 )
 from substruct.analysis.integrators import (
     Correction,
+    LoadSteps,
+    Restart,
     Scheme,
     Work,
     effective_matrix,
@@ -49,6 +52,8 @@ from substruct.analysis.krylov import eliminate
 from substruct.analysis.projection import constrained_acceleration
 from substruct.analysis.results import DEFAULT_TOLERANCE
 from substruct.analysis.transient_base import BaseMotion, Motion, ground_history, influence
+from substruct.analysis.transient_loads import for_scheme
+from substruct.analysis.transient_initial import InitialStateError, check_initial, static_state
 from substruct.analysis.transient_modal import modal_run
 from substruct.analysis.transient_record import (
     Physical,
@@ -157,23 +162,45 @@ def initial_state(M: sp.csr_array, K: sp.csr_array, A: sp.csr_array, load: np.nd
     on, off = sp.diags_array(s.astype(float)), sp.diags_array((~s).astype(float))
     zero = target[keep] if A.shape[0] else np.zeros(0)
 
-    def kkt(rows: sp.sparray, rhs: np.ndarray) -> np.ndarray:
+    def kkt(rows: sp.sparray, rhs: np.ndarray, held: np.ndarray) -> np.ndarray:
         big = sp.block_array([[rows, Ak.T], [Ak, None]], format="csc")
         try:
-            x = factorizer("superlu", spd=False)(big)(np.concatenate([rhs, zero]))
+            x = factorizer("superlu", spd=False)(big)(np.concatenate([rhs, held]))
         except RuntimeError:
             raise ValueError("initial state (eq 10): a massless coordinate held neither by a "
                              "constraint nor by a stiffness") from None
         return np.asarray(x[:M.shape[0]])
 
-    d = d0 + kkt(off + on @ K, np.where(s, load - K @ d0, 0.0))
-    return d, kkt(off @ M + on @ K, np.where(s, 0.0, force(d)))
+    d = d0 + kkt(off + on @ K, np.where(s, load - K @ d0, 0.0), 0.0 * zero)  # A d kept
+    return d, kkt(off @ M + on @ K, np.where(s, 0.0, force(d)), zero)
+
+
+def restarter(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
+              K: sp.sparray | np.ndarray, B: sp.sparray | np.ndarray, A: sp.csr_array,
+              accel: Callable[[int], np.ndarray] | None = None) -> Restart:
+    r"""``restart(step, d, v, f)``: the acceleration of eq (10) for the state ``(d, v)`` under
+    the load :math:`B f` (:func:`initial_state`; ``accel(step)``: :math:`A \ddot q` of a
+    moving ground, else 0): where a load jumps, the integration restarts as at ``t = 0``."""
+    Ms, Ks, Bs = (sp.csr_array(X, dtype=float) for X in (M, K, B))
+    Cs = None if C is None else sp.csr_array(C, dtype=float)
+
+    def restart(step: int, d: np.ndarray, v: np.ndarray, f: np.ndarray) -> np.ndarray:
+        load = np.asarray(Bs @ f)
+
+        def force(x: np.ndarray) -> np.ndarray:
+            return np.asarray(load - Ks @ x - (Cs @ v if Cs is not None else 0.0))
+
+        return initial_state(Ms, Ks, A, load, d, force,
+                             None if accel is None else accel(step))[1]
+
+    return restart
 
 
 def direct_run(phys: Physical, form: str, s: Scheme, h: float, n_steps: int, d0: np.ndarray,
                v0: np.ndarray, a0: np.ndarray, opts: TransientOptions) -> Recorder:
     """One run of the generalized-inverse or the null-space form (module docstring)."""
     M, C, K, B = phys.M, phys.C, phys.K, phys.B
+    mo = phys.motion
     n = M.shape[0]
     rows = independent_rows(phys.A, col_scale=mass_column_scale(M))
     forces = constraint_force_solver(phys.A, rows.keep) if opts.forces else None
@@ -184,9 +211,12 @@ def direct_run(phys: Physical, form: str, s: Scheme, h: float, n_steps: int, d0:
         solve = _spd_solver(S, opts.factorization)
         corr = (_correction(S, solve, phys.A, phys.b, phys.motion) if phys.A.shape[0]
                 else None)
-        rec = Recorder(phys, M, K, h, forces, opts.field_every)
-        integrate(M, C, K, s, h, n_steps, B, phys.f, d0, v0, a0, solve, rec, opts.every,
-                  corr, Work(), rec.on_work)
+        # the generalized-inverse form integrates q itself: no particular solution to add
+        rec = Recorder(dataclasses.replace(phys, qp=None), M, K, h, forces, opts.field_every)
+        ground = None if mo is None else (lambda k: mo.e * mo.g[k, 2])
+        integrate(M, C, K, s, h, n_steps, B, phys.loads, d0, v0, a0, solve, rec, opts.every,
+                  corr, Work(), rec.on_work, restarter(phys.M, phys.C, phys.K, phys.B, phys.A,
+                                                       ground))
         return rec
     el = eliminate(sp.csr_array(M), phys.A)
     T = sp.csr_array(el.T)
@@ -194,12 +224,13 @@ def direct_run(phys: Physical, form: str, s: Scheme, h: float, n_steps: int, d0:
     Mt, Kt = T.T @ M @ T, T.T @ K @ T
     Ct = None if C is None else T.T @ C @ T
     cols = [T.T @ sp.csc_array(B), sp.csc_array(-(T.T @ (K @ qp))[:, None])]
-    ft = np.hstack([phys.f, np.ones((phys.f.shape[0], 1))])
-    mo = phys.motion
+    extra = [np.ones((phys.f.shape[0], 1))]
     if mo is not None:  # q = T p + q_p + r g: the effective loads -M r g'' - C r g' - K r g
         cols += [sp.csc_array(-(T.T @ (X @ mo.r))[:, None]) for X in (M, K, C) if X is not None]
-        ft = np.hstack([ft, mo.g[:, [2, 0, 1][:len(cols) - 2]]])
+        extra.append(mo.g[:, [2, 0, 1][:len(cols) - 2]])
         d0, v0, a0 = (x - mo.r * mo.g[0, k] for k, x in enumerate((d0, v0, a0)))
+    loads = phys.loads.widened(np.hstack(extra))
+    ft = loads.f
     Bt = sp.hstack(cols).tocsr()
     p0, pv0 = d0[el.masters] - qp[el.masters], v0[el.masters]
     pa0 = a0[el.masters]
@@ -211,10 +242,11 @@ def direct_run(phys: Physical, form: str, s: Scheme, h: float, n_steps: int, d0:
     S = effective_matrix(Mt, Ct, Kt, s, h)
     solve = _spd_solver(S, opts.factorization)
     nphys = Physical(phys.M, phys.C, phys.K, phys.B, phys.f, phys.A, phys.b, phys.O, T, qp,
-                     phys.motion)
+                     phys.motion, phys.pairs)
     rec = Recorder(nphys, Mt, Kt, h, forces, opts.field_every)
-    integrate(Mt, Ct, Kt, s, h, n_steps, Bt, ft, p0, pv0, pa0, solve, rec, opts.every,
-              None, Work(), rec.on_work)
+    integrate(Mt, Ct, Kt, s, h, n_steps, Bt, loads, p0, pv0, pa0, solve, rec, opts.every,
+              None, Work(), rec.on_work,
+              restarter(Mt, Ct, Kt, Bt, sp.csr_array((0, Mt.shape[0]))))
     return rec
 
 
@@ -236,7 +268,9 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
               d0: np.ndarray | None = None, v0: np.ndarray | None = None,
               method: str = "generalized-inverse", checks: Sequence[str] = (),
               tolerance: float = DEFAULT_TOLERANCE, options: TransientOptions | None = None,
-              base: BaseMotion | None = None, what: str = "transient") -> Transient:
+              base: BaseMotion | None = None, what: str = "transient",
+              pairs: Mapping[int, tuple[np.ndarray, np.ndarray]] | None = None,
+              static: bool = False) -> Transient:
     r"""Time histories of :math:`M \ddot q + C \dot q + K q = B f(t) + Q^c`, :math:`A q = b`
     (eqs 5, 10), by ``method``, checked by ``checks``.
 
@@ -249,7 +283,14 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
         dt, n_steps: the constant step and the number of steps.
         outputs: ``n_out x n`` output rows; ``output_names`` their names.
         d0, v0: the initial displacement and velocity (zero if ``None``); they must satisfy
-            :math:`A q_0 = b`, :math:`A \dot q_0 = 0`.
+            :math:`A q_0 = b`, :math:`A \dot q_0 = 0` (refused otherwise, with the residual).
+        static: start from the constrained static state under :math:`P(0) = B f_0`,
+            :math:`K q + A^T \lambda = P(0)`, :math:`A q = b(0)`
+            (:func:`substruct.analysis.transient_initial.static_state`; ``d0`` must be
+            ``None``).
+        pairs: step -> the load factors at its start and end, for the steps over which a load
+            jumps or kinks (:func:`substruct.analysis.transient_loads.step_pairs`): the
+            integration stays second order at the discontinuity.
         method, checks: forms of :data:`TRANSIENT_METHODS`.
         tolerance: the largest agreement a check may have.
         options: :class:`TransientOptions`.
@@ -285,8 +326,16 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
     Bs = sp.csr_array(B, dtype=float)
     f = np.asarray(f, dtype=float).reshape(n_steps + 1, -1)
     O = sp.csr_array(outputs, dtype=float)
-    d0 = np.zeros(n) if d0 is None else np.asarray(d0, dtype=float).ravel()
+    if static and d0 is not None:
+        raise InitialStateError("give the initial displacement or start from the static "
+                                "state, not both")
+    d0 = (static_state(Ks, Ae, be, np.asarray(Bs @ f[0])) if static else np.zeros(n)
+          if d0 is None else np.asarray(d0, dtype=float).ravel())
     v0 = np.zeros(n) if v0 is None else np.asarray(v0, dtype=float).ravel()
+    for name, vec in (("displacement", d0), ("velocity", v0)):
+        if vec.shape != (n,) or not np.all(np.isfinite(vec)):
+            raise InitialStateError(f"the initial {name} needs {n} finite values, got "
+                                    f"{vec.size}")
     motion = None
     if base is not None:
         e = np.asarray(eq.scale.apply(np.asarray(base.rows, dtype=float)))
@@ -298,12 +347,7 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
         d0, v0 = d0 + motion.r * g[0, 0], v0 + motion.r * g[0, 1]
     bt = be if motion is None else be + motion.e * motion.g[0, 0]
     vt = 0.0 * be if motion is None else motion.e * motion.g[0, 1]
-    scale = max(float(np.abs(d0).max(initial=0.0)), 1e-300)
-    for name, vec, rhs in (("displacement", d0, bt), ("velocity", v0, vt)):
-        bad = float(np.abs(Ae @ vec - rhs).max(initial=0.0))
-        ref = max(float(np.abs(vec).max(initial=0.0)), scale if name == "displacement" else 0)
-        if bad > 1e-9 * max(ref, float(np.abs(rhs).max(initial=0.0)), 1e-300):
-            raise ValueError(f"the initial {name} violates the constraints by {bad:.3g}")
+    check_initial(Ae, d0, v0, bt, vt)
     qp = particular_solution(Ae, be) if np.any(be) else None
     qp = None if qp is None else np.asarray(qp).ravel()
     def force0(d: np.ndarray) -> np.ndarray:
@@ -311,7 +355,7 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
 
     d0, a0 = initial_state(Ms, Ks, Ae, np.asarray(Bs @ f[0]), d0, force0,
                            None if motion is None else motion.e * motion.g[0, 2])
-    phys = Physical(Ms, Cs, Ks, Bs, f, Ae, be, O, None, qp, motion)
+    phys = Physical(Ms, Cs, Ks, Bs, f, Ae, be, O, None, qp, motion, for_scheme(pairs or {}, s))
 
     def run(form: str) -> Recorder:
         if form == "modal":
@@ -323,7 +367,7 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
     require_agreement(what, method, agreement, tolerance)
     r = main.arrays()
     lam = np.asarray(eq.scale.apply(r["lam"].T)).T if r["lam"].size else r["lam"]
-    return Transient(method=method, integrator=s.name, rho_inf=float(opts.rho_inf), dt=dt,
+    return Transient(method=method, integrator=s.name, rho_inf=s.rho_inf, dt=dt,
                      t=r["t"], outputs=list(output_names), displacement=r["d"],
                      velocity=r["v"], acceleration=r["a"],
                      constraint_labels=list(constraint_labels), constraint_forces=lam,

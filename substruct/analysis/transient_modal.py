@@ -61,21 +61,27 @@ def modal_run(phys: Physical, s: Scheme, h: float, n_steps: int, d0: np.ndarray,
     """The modal form (module docstring), recorded like the direct forms."""
     Phi, omega = coupled_basis(phys, opts.modal_count, opts.modal_solver)
     M, K, B, f = phys.M, phys.K, phys.B, phys.f
+    loads = phys.loads
     rigid = omega == 0.0
     Bd = np.asarray(sp.csr_array(B).toarray()) if sp.issparse(B) else np.asarray(B)
     mo = phys.motion
     if mo is not None:  # q = r g + w: the effective loads -M r g'' - K r g - C r g'
         extra = [X @ mo.r for X in (M, K, phys.C) if X is not None]
         Bd = np.hstack([Bd, -np.column_stack(extra)])
-        f = np.hstack([f, mo.g[:, [2, 0, 1][:len(extra)]]])
+        loads = loads.widened(mo.g[:, [2, 0, 1][:len(extra)]])
+        f = loads.f
         d0, v0 = d0 - mo.r * mo.g[0, 0], v0 - mo.r * mo.g[0, 1]
+    qp = phys.qp if phys.qp is not None else np.zeros(M.shape[0])
+    if phys.qp is not None:  # q = q_p + Phi eta + R f: the constant load -K q_p
+        Bd = np.hstack([Bd, -(K @ qp)[:, None]])
+        loads = loads.widened(np.ones((f.shape[0], 1)))
+        f = loads.f
     if Bd.shape[1]:
         G = static_solver(sp.csr_array(K), sp.csr_array(M), phys.A, Phi[:, rigid])
         Pe, we = Phi[:, ~rigid], omega[~rigid]
         R = G(Bd) - Pe @ ((Pe.T @ Bd) / (we ** 2)[:, None])
     else:
         R = np.zeros((M.shape[0], 0))
-    qp = phys.qp if phys.qp is not None else np.zeros(M.shape[0])
     k = Phi.shape[1]
     Me, Ke = np.eye(k), np.diag(omega ** 2)
     Ce = None if phys.C is None else Phi.T @ (phys.C @ Phi)
@@ -85,8 +91,13 @@ def modal_run(phys: Physical, s: Scheme, h: float, n_steps: int, d0: np.ndarray,
     r0 = Be @ f[0] - Ke @ eta0 - (Ce @ etav0 if Ce is not None else 0.0)
     S = effective_matrix(Me, Ce, Ke, s, h)
     inv = np.linalg.inv(S)
-    mphys = Physical(M, phys.C, K, B, phys.f, phys.A, phys.b, phys.O, Phi, phys.qp, mo)
+    mphys = Physical(M, phys.C, K, B, phys.f, phys.A, phys.b, phys.O, Phi, phys.qp, mo,
+                     phys.pairs)
+
+    def restart(step: int, eta: np.ndarray, etav: np.ndarray, fv: np.ndarray) -> np.ndarray:
+        return np.asarray(Be @ fv - Ke @ eta - (Ce @ etav if Ce is not None else 0.0))
+
     rec = Recorder(mphys, Me, Ke, h, None, opts.field_every, offset=lambda step: R @ f[step])
-    integrate(Me, Ce, Ke, s, h, n_steps, Be, f, eta0, etav0, r0, lambda r: inv @ r, rec,
-              opts.every, None, Work(), rec.on_work)
+    integrate(Me, Ce, Ke, s, h, n_steps, Be, loads, eta0, etav0, r0, lambda r: inv @ r, rec,
+              opts.every, None, Work(), rec.on_work, restart)
     return rec

@@ -12,12 +12,12 @@ through :math:`A_k A_k^T`, one sparse factorization; a redundant row gets 0).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable, TypeAlias
+from typing import Callable, Mapping, TypeAlias
 
 import numpy as np
 import scipy.sparse as sp
 
-from substruct.analysis.integrators import Work
+from substruct.analysis.integrators import LoadSteps, Work
 from substruct.analysis.transient_base import Motion
 from substruct.linalg.factorize import factorizer
 
@@ -56,6 +56,8 @@ class Physical:
         O: output rows (``n_out x n``).
         T, qp: the integrated coordinates' map and particular solution.
         motion: a moving ground (:mod:`substruct.analysis.transient_base`), or ``None``.
+        pairs: step -> the load factors at its start and end, where a load jumps or kinks
+            within it (:mod:`substruct.analysis.transient_loads`).
     """
 
     M: Matrix
@@ -69,6 +71,13 @@ class Physical:
     T: Matrix | None = None
     qp: np.ndarray | None = None
     motion: Motion | None = None
+    pairs: Mapping[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+
+    @property
+    def loads(self) -> LoadSteps:
+        """The load factors as the steps see them (:class:`~substruct.analysis.integrators.
+        LoadSteps`: nodal values, pairs where a load jumps)."""
+        return LoadSteps(self.f, self.pairs)
 
     def position(self, x: np.ndarray, step: int = 0) -> np.ndarray:
         """:math:`q = T x + q_p + r g_k` (``r g_k``: a moving ground, only when ``T`` is

@@ -33,7 +33,8 @@ class Transient:
 
     Attributes:
         method: the main form (``"generalized-inverse"``, ``"null-space"``, ``"modal"``).
-        integrator: ``"newmark"`` or ``"generalized-alpha"``; ``rho_inf`` its parameter.
+        integrator: ``"newmark"`` or ``"generalized-alpha"``; ``rho_inf`` the spectral radius
+            at infinite frequency the integrator used (1 for Newmark).
         dt: the step; ``t``: the recorded instants (``n_samples``).
         outputs: the names of the output points.
         displacement, velocity, acceleration: ``n_samples x n_outputs``.

@@ -54,6 +54,9 @@ def point_uses(case: Case) -> list[PointUse]:
         if tr.base is not None:
             uses += [PointUse(p, ("analysis", "transient", "base", "at", i))
                      for i, p in enumerate(tr.base.at)]
+        for key in ("displacement", "velocity"):
+            uses += [PointUse(p, ("analysis", "transient", "initial", key, p))
+                     for p in getattr(tr.initial, key) or {}]
     return uses
 
 

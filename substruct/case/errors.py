@@ -163,7 +163,7 @@ class FieldError(ValueError):
 # ------------------------------------------------------------------------ field paths
 
 #: Keys whose value selects a member of a tagged union in the case schema.
-_DISCRIMINATORS = ("type", "method")
+_DISCRIMINATORS = ("type", "method", "shape")
 
 
 def _key(key: Any) -> str:

@@ -182,6 +182,8 @@ class Case(StrictModel):
             if len(counted) == len(sizes) and modes.count > sum(counted):
                 raise FieldError(("analysis", "modes", "count"), f"more modes than the "
                                  f"{sum(counted)} coordinates of the model", modes.count)
+        if self.analysis.transient is not None:
+            self.analysis.transient.refuse_frf_parts(self.substructures)
         if self.study is not None:
             self.study.check(self)
         return self

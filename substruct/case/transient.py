@@ -1,34 +1,25 @@
 r"""The ``analysis: transient:`` block of a case file: the constrained transient response
 (eqs 5, 10; :mod:`substruct.analysis.transient`).
 
-Loads act at points; each is ``amplitude`` times a shape of ``t`` (a signal); ``base`` moves
-grounded supports by a signal (their acceleration or displacement):
+Loads act at points; each is ``amplitude`` times a shape of ``t`` (a signal,
+:mod:`substruct.case.transient_signals`: ``step``, ``ramp``, ``half-sine``, ``harmonic``,
+``expression``, ``table``; each shape takes its own keys and no other); ``base`` moves grounded
+supports by a signal (their acceleration or displacement); ``initial`` sets the state at
+``t = 0`` (:class:`InitialState`).
 
-=============  ===============================================================================
-shape          value at ``t``
-=============  ===============================================================================
-``step``       1 for :math:`t \ge t_0` (``start``), else 0
-``ramp``       :math:`\min((t - t_0)/T, 1)` after ``start``, ``T`` the ``duration``
-``half-sine``  :math:`\sin(\pi (t - t_0)/T)` for :math:`t_0 \le t \le t_0 + T`, else 0
-``harmonic``   :math:`\cos(\omega t + \varphi)` (``omega`` rad/s, ``phase`` rad)
-``expression`` a safe expression of ``t`` and the parameters (:mod:`substruct.case.expressions`)
-``table``      linear interpolation in a CSV (two columns ``t, value``) or NPZ (arrays ``t``
-               and ``value``) file: finite values, strictly increasing times, at most
-               :data:`MAX_TABLE_ROWS` rows; 0 outside the table
-=============  ===============================================================================
+Sizes are checked here, before anything is allocated: the number of steps, and the memory of
+the load table (one value per load and instant, copied once by each of the null-space and modal
+forms) together with the recorded samples, against :data:`~substruct.case.fields.MEMORY_LIMIT`.
 """
 
 from __future__ import annotations
 
-from pathlib import Path
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from substruct.case.errors import FieldError
-from substruct.case.expressions import compile_expression
-from substruct.case.npz_files import npz_members, read_npz
 from substruct.case.fields import (
     MEMORY_LIMIT,
     Count,
@@ -38,46 +29,23 @@ from substruct.case.fields import (
     StrictModel,
     gigabytes,
 )
+from substruct.case.transient_files import MAX_TABLE_ROWS, read_table
+from substruct.case.transient_signals import Signal, TransientLoad, load_values
 
-__all__ = ["MAX_STEPS", "MAX_TABLE_ROWS", "Signal", "TransientLoad", "BaseExcitation", "InitialState", "TransientAnalysis",
-           "load_values", "read_table"]
+__all__ = ["MAX_STEPS", "MAX_TABLE_ROWS", "MAX_LOAD_VALUES", "RECORD_BYTES", "Signal", "TransientLoad", "BaseExcitation",
+           "InitialState", "TransientAnalysis", "load_values", "read_table", "memory_need",
+           "RHO_INF"]
 
 #: The most steps a run may take.
 MAX_STEPS = 10_000_000
-#: The most rows a load table may have.
-MAX_TABLE_ROWS = 1_000_000
 #: Default tolerance of the checks (as substruct.analysis.results.DEFAULT_TOLERANCE).
 TOLERANCE = 1e-6
-
-
-class Signal(StrictModel):
-    """``amplitude`` times a shape of ``t`` (module docstring)."""
-
-    amplitude: Number = 1.0
-    shape: Literal["step", "ramp", "half-sine", "harmonic", "expression", "table"] = "step"
-    start: Number = 0.0
-    duration: Positive | None = None
-    omega: Number = 0.0
-    phase: Number = 0.0
-    expression: str | None = None
-    table: str | None = None
-
-    @model_validator(mode="after")
-    def _complete(self) -> "Signal":
-        if self.shape in ("ramp", "half-sine") and self.duration is None:
-            raise FieldError("duration", f"a {self.shape} load needs a duration")
-        if self.shape == "expression":
-            if self.expression is None:
-                raise FieldError("expression", "an expression load needs an expression of t")
-        if self.shape == "table" and self.table is None:
-            raise FieldError("table", "a table load needs a CSV or NPZ file")
-        return self
-
-
-class TransientLoad(Signal):
-    """A force at ``point``: ``amplitude`` times a shape of ``t`` (module docstring)."""
-
-    point: Point
+#: The most values a load table may hold (loads times instants: 800 MB), whatever the memory.
+MAX_LOAD_VALUES = 100_000_000
+#: Bytes a recorded sample takes besides its values (measured, :func:`memory_need`).
+RECORD_BYTES = 1000
+#: The spectral radius at infinite frequency of generalized-alpha when ``rho_inf`` is not given.
+RHO_INF = 0.9
 
 
 class BaseExcitation(StrictModel):
@@ -104,84 +72,82 @@ class BaseExcitation(StrictModel):
         return "acceleration" if self.acceleration is not None else "displacement"
 
     @property
-    def signal(self) -> Signal:
+    def signal(self) -> Any:
         """The signal given."""
         sig = self.acceleration if self.acceleration is not None else self.displacement
         assert sig is not None
         return sig
 
 
-def read_table(path: Path) -> tuple[np.ndarray, np.ndarray]:
-    """``(t, value)`` of a load table (CSV ``t, value`` rows or NPZ arrays ``t``, ``value``).
-
-    Raises:
-        ValueError: not a regular file, too many rows, non-finite values, times not strictly
-            increasing.
-    """
-    if not path.is_file():
-        raise ValueError(f"no such table file {path.name!r}")
-    if path.suffix == ".npz":
-        members = npz_members(path)
-        if "t" not in members or "value" not in members:
-            raise ValueError("an NPZ table needs arrays t and value")
-        if max(members["t"].count, members["value"].count) > MAX_TABLE_ROWS:
-            raise ValueError(f"more than {MAX_TABLE_ROWS} rows")
-        z = read_npz(path, ["t", "value"], {"t": np.float64, "value": np.float64})
-        t, v = z["t"].ravel(), z["value"].ravel()
-    elif path.suffix == ".csv":
-        if path.stat().st_size > 64 * MAX_TABLE_ROWS:
-            raise ValueError(f"more than {MAX_TABLE_ROWS} rows")
-        data = np.loadtxt(path, delimiter=",", ndmin=2, comments="#")
-        if data.shape[1] != 2:
-            raise ValueError("a CSV table has two columns, t and value")
-        t, v = data[:, 0], data[:, 1]
-    else:
-        raise ValueError("a table is a .csv or .npz file")
-    if t.size != v.size or t.size < 2 or t.size > MAX_TABLE_ROWS:
-        raise ValueError(f"a table needs 2 to {MAX_TABLE_ROWS} rows of t and value")
-    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(v))):
-        raise ValueError("a table with a value that is not finite (NaN or inf)")
-    if np.any(np.diff(t) <= 0):
-        k = int(np.flatnonzero(np.diff(t) <= 0)[0])
-        raise ValueError(f"times not strictly increasing at row {k + 1} (t = {t[k + 1]:g} "
-                         f"after {t[k]:g})")
-    return t, v
-
-
-def load_values(load: Signal, t: np.ndarray, base_dir: Path,
-                parameters: dict[str, float]) -> np.ndarray:
-    """The load's values at the times ``t`` (module docstring)."""
-    s = t - load.start
-    T = load.duration or 1.0
-    if load.shape == "step":
-        shape = (s >= 0).astype(float)
-    elif load.shape == "ramp":
-        shape = np.clip(s / T, 0.0, 1.0)
-    elif load.shape == "half-sine":
-        shape = np.where((s >= 0) & (s <= T), np.sin(np.pi * np.clip(s, 0, T) / T), 0.0)
-    elif load.shape == "harmonic":
-        shape = np.cos(load.omega * t + load.phase)
-    elif load.shape == "expression":
-        expr = compile_expression(str(load.expression), ["t", *parameters])
-        shape = np.broadcast_to(expr(t=t, **{k: parameters[k] for k in expr.names if k != "t"}),
-                                t.shape).astype(float)
-    else:
-        tt, vv = read_table(base_dir / str(load.table))
-        shape = np.interp(t, tt, vv, left=0.0, right=0.0)
-    out = load.amplitude * shape
-    if not np.all(np.isfinite(out)):
-        raise ValueError("the load is not finite at some time")
-    return out
-
-
 class InitialState(StrictModel):
-    """The initial displacement: ``scale`` times coupled mode ``mode`` (1-based, M-normalized);
-    the initial velocity likewise (``velocity_mode``, ``velocity_scale``)."""
+    r"""The state at ``t = 0`` (zero if nothing is given).
+
+    The displacement is given one way: ``mode`` (``scale`` times coupled mode ``mode``, 1-based,
+    M-normalized), ``displacement`` (``{point: value}``: those coordinates set, the others 0),
+    ``file`` (an ``.npz`` file whose array ``displacement`` holds every coordinate of the
+    model) or ``static: true`` (the constrained static state under the loads at ``t = 0``,
+    :math:`K q + A^T \lambda = P(0)`, :math:`A q = b(0)`; ``initial: static`` for short).
+    The velocity likewise: ``velocity_mode`` (with ``velocity_scale``), ``velocity``
+    (``{point: value}``) or the array ``velocity`` of ``file``.  The state must satisfy the
+    constraints, :math:`A q_0 = b(0)`, :math:`A \dot q_0 = \dot b(0)`; one that does not is
+    refused with its residual (never projected)."""
 
     mode: Count | None = None
     scale: Number = 1.0
     velocity_mode: Count | None = None
     velocity_scale: Number = 1.0
+    displacement: dict[Point, Number] | None = None
+    velocity: dict[Point, Number] | None = None
+    file: str | None = None
+    static: bool = False
+
+    @model_validator(mode="before")
+    @classmethod
+    def _shorthand(cls, data: Any) -> Any:
+        """``initial: static`` is ``initial: {static: true}``."""
+        if data == "static":
+            return {"static": True}
+        if isinstance(data, str):
+            raise FieldError((), "must be a mapping (key: value) or static", data)
+        return data
+
+    @model_validator(mode="after")
+    def _one_way(self) -> "InitialState":
+        ways = [k for k, on in (("mode", self.mode is not None),
+                                ("displacement", self.displacement is not None),
+                                ("static", self.static)) if on]
+        if len(ways) > 1:
+            raise FieldError(ways[1], f"the initial displacement is given one way; "
+                             f"{ways[0]} is given too", getattr(self, ways[1]))
+        if self.velocity_mode is not None and self.velocity is not None:
+            raise FieldError("velocity", "the initial velocity is given one way; "
+                             "velocity_mode is given too", self.velocity)
+        for name in ("displacement", "velocity"):
+            if getattr(self, name) == {}:
+                raise FieldError(name, "must name at least one point", {})
+        if "scale" in self.model_fields_set and self.mode is None:
+            raise FieldError("scale", "scales a mode: give mode too", self.scale)
+        if "velocity_scale" in self.model_fields_set and self.velocity_mode is None:
+            raise FieldError("velocity_scale", "scales a mode: give velocity_mode too",
+                             self.velocity_scale)
+        return self
+
+
+def memory_need(steps: int, every: int, n_loads: int, n_outputs: int, forms: int,
+                copies: int) -> tuple[float, float]:
+    """``(table, records)``: bytes of the load table and of the recorded samples.
+
+    The table holds ``n_loads`` values per instant, beside the instants themselves and the
+    temporaries of one load's evaluation (5 columns more); each of ``copies`` forms (null
+    space, modal) copies it with 4 columns more.  A recorded sample takes
+    :data:`RECORD_BYTES` (measured with ``tracemalloc``: 968 bytes a sample for one output and
+    one constraint row) and 16 bytes per value (its array, then the stacked copy), per form
+    run."""
+    n = float(steps + 1)
+    table = 8.0 * n * (n_loads + 5) + 8.0 * n * (n_loads + 4) * copies
+    samples = steps // every + 2
+    records = samples * (RECORD_BYTES + 16.0 * (3 * n_outputs + 6)) * forms
+    return table, records
 
 
 class TransientAnalysis(StrictModel):
@@ -190,7 +156,8 @@ class TransientAnalysis(StrictModel):
     t_end: Positive
     dt: Positive
     integrator: Literal["newmark", "generalized-alpha"] = "newmark"
-    rho_inf: Annotated[float, Field(ge=0, le=1)] = 0.9
+    #: generalized-alpha only (Newmark's average acceleration has 1)
+    rho_inf: Annotated[float, Field(ge=0, le=1)] | None = None
     method: Literal["generalized-inverse", "null-space", "modal"] = "generalized-inverse"
     check: list[Literal["generalized-inverse", "null-space", "modal"]] = Field(
         default_factory=list)
@@ -208,22 +175,70 @@ class TransientAnalysis(StrictModel):
     #: modes of the modal form (default: all of a small model)
     modal_count: Count | None = None
 
+    @field_validator("initial", mode="before")
+    @classmethod
+    def _initial(cls, value: Any) -> Any:
+        return {"static": True} if value == "static" else value
+
     @property
     def steps(self) -> int:
         """The number of steps, ``ceil(t_end / dt)`` (to rounding)."""
         return int(np.ceil(self.t_end / self.dt - 1e-9))
 
+    @property
+    def spectral_radius(self) -> float:
+        """The ``rho_inf`` the integrator uses: as given (generalized-alpha, default
+        :data:`RHO_INF`), 1 for Newmark's average acceleration."""
+        if self.integrator == "newmark":
+            return 1.0
+        return RHO_INF if self.rho_inf is None else float(self.rho_inf)
+
     @model_validator(mode="after")
     def _sizes(self) -> "TransientAnalysis":
+        if self.rho_inf is not None and self.integrator == "newmark":
+            raise FieldError("rho_inf", "only integrator: generalized-alpha takes rho_inf "
+                             "(Newmark's average acceleration has rho_inf = 1)", self.rho_inf)
         if self.dt > self.t_end:
             raise FieldError("dt", f"must be at most t_end ({self.t_end:g})", self.dt)
         if self.t_end / self.dt > MAX_STEPS:
             raise FieldError("dt", f"t_end / dt is more than {MAX_STEPS} steps", self.dt)
-        samples = self.steps // self.every + 2
-        need = 8.0 * samples * (3 * len(self.outputs) + 6) * (1 + len(self.check))
-        if need > MEMORY_LIMIT:
+        values = len(self.loads) * (self.steps + 1)
+        if values > MAX_LOAD_VALUES:
+            raise FieldError("loads", f"{len(self.loads)} loads over {self.steps + 1} instants "
+                             f"are {values:.3g} values in the load table (about "
+                             f"{gigabytes(8.0 * values)}), more than the {MAX_LOAD_VALUES:.0e} "
+                             f"allowed: take a longer dt, a shorter t_end or fewer loads",
+                             len(self.loads))
+        forms = {self.method, *self.check}
+        table, records = memory_need(self.steps, self.every, len(self.loads),
+                                     len(self.outputs), len(forms),
+                                     len(forms & {"null-space", "modal"}))
+        if table + records > MEMORY_LIMIT:
+            samples = self.steps // self.every + 2
+            if table >= records:
+                raise FieldError("loads", f"{len(self.loads)} loads over {self.steps + 1} "
+                                 f"instants need about {gigabytes(table)} for the load table "
+                                 f"(and {gigabytes(records)} for the records), more than the "
+                                 f"{gigabytes(MEMORY_LIMIT)} allowed: take a longer dt or a "
+                                 f"shorter t_end", len(self.loads))
             raise FieldError("every", f"{samples} recorded samples of {len(self.outputs)} "
-                             f"outputs would need about {gigabytes(need)}, more than the "
+                             f"outputs would need about {gigabytes(records)} (and "
+                             f"{gigabytes(table)} for the load table), more than the "
                              f"{gigabytes(MEMORY_LIMIT)} allowed: record every more steps",
                              self.every)
         return self
+
+    def refuse_frf_parts(self, substructures: list[Any]) -> None:
+        """Refuse a substructure known only by its receptances (``type: frf``): it has no
+        ``M``, ``C``, ``K`` to integrate, and leaving it out would answer for another
+        structure.
+
+        Raises:
+            FieldError: at ``analysis.transient``, naming the part.
+        """
+        for sub in substructures:
+            if getattr(sub, "type", None) == "frf":
+                raise FieldError(("analysis", "transient"), f"cannot include substructure "
+                                 f"{sub.name!r} (type: frf, known by its receptances only, "
+                                 f"without M, C, K to integrate): give it by its matrices or "
+                                 f"leave analysis.transient out", sub.name)

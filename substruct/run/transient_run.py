@@ -10,6 +10,8 @@ the tolerance stays a :class:`~substruct.analysis.errors.CheckError` (exit 1).
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import scipy.sparse as sp
 
@@ -17,11 +19,15 @@ from substruct.analysis.api import modes
 from substruct.analysis.errors import CheckError
 from substruct.analysis.transient import TransientOptions, transient
 from substruct.analysis.transient_base import BaseMotion
+from substruct.analysis.transient_initial import InitialStateError
 from substruct.analysis.transient_results import Transient
 from substruct.builder.model import Model
 from substruct.case.fields import MEMORY_LIMIT, gigabytes
 from substruct.case.loader import Case
+from substruct.analysis.transient_loads import merge_pairs, step_pairs
 from substruct.case.transient import load_values
+from substruct.case.transient_files import npz_vector
+from substruct.case.transient_signals import waveform
 
 __all__ = ["transient_result"]
 
@@ -79,11 +85,100 @@ def _base(case: Case, model: Model, t: np.ndarray) -> BaseMotion | None:
             g0, g1, g2 = load_values(sig, np.array([0.0, d, 2 * d]), case.base_dir, params)
             rate0, accel0 = (-3 * g0 + 4 * g1 - g2) / (2 * d), (g0 - 2 * g1 + g2) / d ** 2
     except ValueError as err:
-        field = "table" if sig.shape == "table" else "expression"
+        field = sig.shape if sig.shape in ("table", "expression") else "amplitude"
         raise case.error(("analysis", "transient", "base", kind, field),
-                         " ".join(str(err).split()), sig.table or sig.expression) from None
+                         " ".join(str(err).split()), getattr(sig, field)) from None
     return BaseMotion(rows=_grounding_rows(case, model), kind=kind, values=values,
                       rate0=float(rate0), accel0=float(accel0))
+
+
+def _loads(case: Case, t: np.ndarray, steps: int
+           ) -> tuple[np.ndarray, dict[int, tuple[np.ndarray, np.ndarray]]]:
+    """``(f, pairs)``: the load factors at the instants ``t`` and the pairs of the steps over
+    which a load jumps or kinks (:mod:`substruct.analysis.transient_loads`)."""
+    spec = case.analysis.transient
+    assert spec is not None
+    f = np.zeros((steps + 1, len(spec.loads)))
+    columns = []
+    for j, load in enumerate(spec.loads):
+        try:
+            wave = waveform(load, case.base_dir, dict(case.parameters))
+            f[:, j] = wave.values(t)
+            if not np.all(np.isfinite(f[:, j])):
+                raise ValueError("the load is not finite at some time")
+            columns.append(step_pairs(wave.values, wave.breaks, spec.dt, steps))
+        except ValueError as err:
+            field = load.shape if load.shape in ("table", "expression") else "amplitude"
+            raise case.error(("analysis", "transient", "loads", j, field),
+                             " ".join(str(err).split()),
+                             getattr(load, field, load.amplitude)) from None
+    return f, merge_pairs(columns, f)
+
+
+def _by_points(case: Case, model: Model, key: str) -> np.ndarray | None:
+    r"""The state vector of ``initial.<key>`` given as ``{point: value}``: the minimum-norm
+    :math:`q` with :math:`R q = u` (``R`` the points' rows; the coordinates of the points set,
+    the others 0)."""
+    spec = case.analysis.transient
+    assert spec is not None
+    values = getattr(spec.initial, key)
+    if values is None:
+        return None
+    R = model.assembly.rows([model.points[p] for p in values])
+    u = np.array(list(values.values()), dtype=float)
+    G = (R @ R.T).toarray()
+    if np.linalg.matrix_rank(G) < len(values):
+        raise case.error(("analysis", "transient", "initial", key), "its points are not "
+                         "independent coordinates (a point named twice, or points that "
+                         "move together)", list(values))
+    return np.asarray(R.T @ np.linalg.solve(G, u))
+
+
+def _from_file(case: Case, n: int) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """The arrays ``displacement`` and ``velocity`` of ``initial.file`` (``n`` each)."""
+    spec = case.analysis.transient
+    assert spec is not None
+    name = spec.initial.file
+    if name is None:
+        return None, None
+    path = Path(name) if Path(name).is_absolute() else case.base_dir / name
+    loc = ("analysis", "transient", "initial", "file")
+    if path.suffix.lower() != ".npz":
+        raise case.error(loc, "an initial state file is an .npz file with arrays "
+                         "displacement and/or velocity", name)
+    try:
+        d = npz_vector(path, "displacement", n, exact=n)
+        v = npz_vector(path, "velocity", n, exact=n)
+    except ValueError as err:
+        raise case.error(loc, f"{' '.join(str(err).split())} (the model has {n} "
+                         f"coordinates)", name) from None
+    if d is None and v is None:
+        raise case.error(loc, "holds neither an array displacement nor velocity", name)
+    for what, x in (("displacement", d), ("velocity", v)):
+        if x is not None and not np.all(np.isfinite(x)):
+            raise case.error(loc, f"{what} holds values that are not finite", name)
+    return d, v
+
+
+def _initial(case: Case, model: Model) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """``(d0, v0)`` of ``analysis.transient.initial`` (``None``: zero, or the static state)."""
+    spec = case.analysis.transient
+    assert spec is not None
+    init = spec.initial
+    d_file, v_file = _from_file(case, model.assembly.n_dof)
+    loc = ("analysis", "transient", "initial")
+    if d_file is not None and (init.mode or init.displacement is not None or init.static):
+        raise case.error((*loc, "file"), "the initial displacement is given one way; the file "
+                         "holds one too", init.file)
+    if v_file is not None and (init.velocity_mode or init.velocity is not None):
+        raise case.error((*loc, "file"), "the initial velocity is given one way; the file "
+                         "holds one too", init.file)
+    d0 = (init.scale * _mode(case, model, init.mode, "mode") if init.mode else
+          _by_points(case, model, "displacement") if init.displacement is not None else d_file)
+    v0 = (init.velocity_scale * _mode(case, model, init.velocity_mode, "velocity_mode")
+          if init.velocity_mode else
+          _by_points(case, model, "velocity") if init.velocity is not None else v_file)
+    return d0, v0
 
 
 def transient_result(case: Case, model: Model) -> Transient:
@@ -106,32 +201,25 @@ def transient_result(case: Case, model: Model) -> Transient:
                              f"{gigabytes(need)}, more than {gigabytes(MEMORY_LIMIT)}",
                              spec.field_every)
     t = spec.dt * np.arange(steps + 1)
-    base = case.base_dir
-    f = np.zeros((steps + 1, len(spec.loads)))
-    for j, load in enumerate(spec.loads):
-        try:
-            f[:, j] = load_values(load, t, base, dict(case.parameters))
-        except ValueError as err:
-            field = "table" if load.shape == "table" else "expression"
-            raise case.error(("analysis", "transient", "loads", j, field),
-                             " ".join(str(err).split()), load.table or load.expression) from None
+    f, pairs = _loads(case, t, steps)
     B = (sp.csc_array(asm.rows([model.points[ld.point] for ld in spec.loads]).T)
          if spec.loads else sp.csc_array((n, 0)))
     O = (asm.rows([model.points[p] for p in spec.outputs]) if spec.outputs
          else sp.csr_array((0, n)))
-    init = spec.initial
-    d0 = init.scale * _mode(case, model, init.mode, "mode") if init.mode else None
-    v0 = (init.velocity_scale * _mode(case, model, init.velocity_mode, "velocity_mode")
-          if init.velocity_mode else None)
-    opts = TransientOptions(integrator=spec.integrator, rho_inf=spec.rho_inf, every=spec.every,
-                            field_every=spec.field_every, forces=spec.constraint_forces,
-                            modal_count=spec.modal_count)
+    d0, v0 = _initial(case, model)
+    opts = TransientOptions(integrator=spec.integrator, rho_inf=spec.spectral_radius,
+                            every=spec.every, field_every=spec.field_every,
+                            forces=spec.constraint_forces, modal_count=spec.modal_count)
     ground = _base(case, model, t)
     try:
         return transient(asm.M, asm.C, asm.K, asm.A, asm.b, B, f, spec.dt, steps, O,
                          output_names=spec.outputs, constraint_labels=asm.constraint_labels,
                          d0=d0, v0=v0, method=spec.method, checks=spec.check,
-                         tolerance=spec.tolerance, options=opts, base=ground)
+                         tolerance=spec.tolerance, options=opts, base=ground, pairs=pairs,
+                         static=spec.initial.static)
+    except InitialStateError as err:
+        raise case.error(("analysis", "transient", "initial"), " ".join(str(err).split())
+                         ) from None
     except ValueError as err:
         raise case.error(("analysis", "transient"), " ".join(str(err).split())) from None
     except CheckError as err:
