@@ -31,7 +31,7 @@ from substruct.analysis.results import Modes
 from substruct.linalg.constraints import independent_rows
 
 __all__ = ["check_methods", "modes_agreement", "receptance_difference", "require_agreement",
-           "compliance_scale", "holds_every_coordinate"]
+           "compliance_scale", "holds_every_coordinate", "require_finite"]
 
 
 def check_methods(main: str, checks: Sequence[str]) -> list[str]:
@@ -130,3 +130,24 @@ def require_agreement(what: str, main: str, agreement: dict[str, float],
     also = f"; also {', '.join(f'{m} by {bad[m]:.1e}' for m in others)}" if others else ""
     raise CheckError(f"{what}: {worst} disagrees with {main} by {bad[worst]:.1e} "
                      f"(tolerance {tolerance:g}){also}")
+
+
+def require_finite(what: str, **arrays: np.ndarray) -> None:
+    """Raise :class:`CheckError` if a computed array holds ``inf`` or ``NaN`` (an overflow, a
+    division by zero): such a result is not to be trusted, and is never written or printed as a
+    table of ``inf``.
+
+    The message is one line, e.g. ``frf: 4 of 18 values of H are inf or NaN (an overflow: the
+    model's numbers span more than double precision carries); nothing written``.
+
+    Args:
+        what: the analysis, as the message starts.
+        arrays: name -> computed array.
+    """
+    for name, values in arrays.items():
+        a = np.asarray(values)
+        if a.size and a.dtype.kind in "fc" and not np.all(np.isfinite(a)):
+            bad = int(a.size - np.count_nonzero(np.isfinite(a)))
+            raise CheckError(f"{what}: {bad} of {a.size} values of {name} are inf or NaN (an "
+                             f"overflow: the model's numbers span more than double precision "
+                             f"carries); nothing written")
