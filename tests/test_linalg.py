@@ -15,23 +15,9 @@ import scipy.sparse.linalg as spla
 import substruct.linalg as la
 from substruct.linalg import factorize as fz
 
+from tolerances import backward_bound, row_scale
+
 TINY, HUGE = 1e-300, 1e300
-#: Unit roundoff of double precision.
-EPS = np.finfo(float).eps
-
-
-def backward_bound(n: int, c: float = 4.0) -> float:
-    r"""The relative error bound ``c n eps`` of a backward-stable dense factorization (SVD,
-    QR, LU with pivoting) or of an inner product of length ``n`` (Higham, *Accuracy and
-    Stability of Numerical Algorithms*, sections 3.1 and 19.3): what any BLAS/LAPACK may
-    leave, whatever the order of its sums, with the constant ``c`` taken generously."""
-    return c * n * EPS
-
-
-def row_scale(A: np.ndarray) -> np.ndarray:
-    """``sqrt(n) max_j |a_ij|`` per row: a bound of each row's 2-norm that does not underflow
-    for rows of ``1e-300`` (the plain 2-norm does: see the first test)."""
-    return np.sqrt(A.shape[1]) * np.abs(A).max(axis=1)
 
 
 def test_the_plain_two_norm_of_a_tiny_row_underflows():
