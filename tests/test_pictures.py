@@ -11,6 +11,8 @@ import substruct
 from substruct.viz.layout import WARP_SPRING, layout
 from substruct.viz.mode_picture import complex_part, mapping_note, render_modes
 
+from tolerances import backward_bound
+
 CASES = Path(__file__).resolve().parent.parent / "cases"
 BEAM = {
     "name": "beam_tmd",
@@ -43,7 +45,7 @@ def labels(monkeypatch):
 def test_complex_part_is_phase_free_and_bounded():
     u = np.array([1.0, -2.0, 0.5])
     assert complex_part(u) == 0.0
-    assert complex_part(u * np.exp(0.7j)) < 1e-15          # a real shape at any phase
+    assert complex_part(u * np.exp(0.7j)) < backward_bound(3)  # a real shape at any phase
     assert complex_part(np.array([1.0, 1j])) == pytest.approx(2 ** -0.5)   # travelling wave
 
 

@@ -15,7 +15,8 @@ returns one :class:`~substruct.analysis.results.Receptance`, with the constraint
 
 Both fail with :class:`~substruct.analysis.errors.CheckError` when a check disagrees with the
 main formulation by more than ``tolerance`` (:func:`substruct.analysis.checks.require_agreement`),
-and with ``ValueError`` on input they cannot analyse.
+and with :class:`~substruct.analysis.errors.AnalysisInputError` (or another of
+:data:`~substruct.analysis.errors.INPUT_ERRORS`) on input they cannot analyse.
 """
 
 from __future__ import annotations
@@ -27,6 +28,8 @@ import scipy.sparse as sp
 
 from substruct.analysis.checks import (
     check_methods,
+    compliance_scale,
+    holds_every_coordinate,
     receptance_difference,
     require_agreement,
 )
@@ -58,6 +61,7 @@ __all__ = [
     "SOLVERS",
     "SPARSE_ABOVE",
     "SolverChoice",
+    "EXACT_ZERO",
     "choose_solver",
     "modes",
     "receptance_sweep",
@@ -73,6 +77,11 @@ class Progress(Protocol):
 
 #: Frequencies per receptance call in a sweep (progress is reported between calls).
 CHUNK = 10
+#: Key of :attr:`Receptance.agreement` for a model whose constraints hold every coordinate:
+#: ``max |H| / h0`` of the main formulation against the exact zero
+#: (:func:`substruct.analysis.checks.compliance_scale`); the receptances are then reported as
+#: exactly zero.
+EXACT_ZERO = "exact-zero"
 
 
 
@@ -124,7 +133,11 @@ def receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
             :func:`substruct.analysis.modal_frf.modal_receptance_sweep`) or ``"auto"``
             (:func:`substruct.analysis.modal_frf.frf_method`).
         checks: check formulations (the main one and repeats are skipped).
-        tolerance: the largest ``max |H_check - H| / max |H|`` a check may have.
+        tolerance: the largest ``max |H_check - H| / max |H|`` a check may have (when the
+            constraints hold every coordinate, ``H`` is exactly zero and the figures are
+            ``max |H_check - H| / h0``, with ``h0`` the compliance scale
+            :func:`substruct.analysis.checks.compliance_scale`; the main formulation is then
+            checked against zero too, as ``agreement["exact-zero"]``).
         input_names, output_names: names of the inputs and outputs (default ``"1"``, ...).
         constraint_labels: constraint names for error messages.
         progress: called as ``progress(done, total, method)`` during the sweeps.
@@ -135,9 +148,15 @@ def receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
     Raises:
         CheckError: a check disagrees by more than ``tolerance``.
         ConstraintError: a redundant constraint row with an inconsistent ``R``.
-        ValueError: an unknown method; a singular system (e.g. eq 15 at ``omega = 0``).
+        AnalysisInputError: a singular system (e.g. eq 15 at ``omega = 0``).
+        ValueError: an unknown method (a programming error).
     """
     method = frf_method(method, K.shape[0], R)
+    As = sp.csr_array((0, K.shape[0])) if A is None or np.size(A) == 0 else \
+        sp.csr_array(A, dtype=float)
+    held = holds_every_coordinate(As, R, K.shape[0])
+    if held and method == "modal":  # no mode to sum: the direct form gives the exact zero
+        method = "generalized-inverse"
     if method == "modal":
         return modal_receptance_sweep(K, M, C, A, omegas, inputs, outputs, R=R,
                                       options=modal or ModalOptions(), checks=checks,
@@ -147,7 +166,6 @@ def receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
     n = Ks.shape[0]
     Ms = sp.csr_array(M, dtype=float)
     Cs = None if C is None else sp.csr_array(C, dtype=float)
-    As = sp.csr_array((0, n)) if A is None or np.size(A) == 0 else sp.csr_array(A, dtype=float)
     forces = sp.csc_array(inputs, dtype=float)
     out_rows = sp.csr_array(outputs, dtype=float)
     w = np.atleast_1d(np.asarray(omegas, dtype=float))
@@ -155,7 +173,10 @@ def receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
     Rs = None if R is None or not sp.csr_array(R).nnz else sp.csr_array(R, dtype=float)
     labels = None if constraint_labels is None else list(constraint_labels)
     k_out = out_rows.shape[0]
-    production = production_sweep_applies(n, Rs, method)
+    # no free coordinate: the exact H is zero, every figure is taken against the compliance
+    # scale h0 of the problem (analysis/checks.py), the main formulation's rounding included
+    floor = compliance_scale(Ks, Ms, Cs, w, forces, out_rows) if held else 0.0
+    production = production_sweep_applies(n, Rs, method) and not held
     if production:  # the outputs only; the constraint residual at the checked frequencies
         H = production_sweep(Ks, Ms, Cs, As, w, forces, out_rows, progress)
         residual = constraint_residual(Ks, Ms, Cs, As, w, forces, H)
@@ -164,7 +185,7 @@ def receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
         eq = equilibrate(As, R=Rs, labels=labels) if m else None
         rows = sp.csr_array(sp.vstack([out_rows, eq.A])) if eq is not None else out_rows
         full = _sweep(Ks, Ms, Cs, As, w, Rs, method, forces, rows, labels, progress)
-        scale = _largest(full[:, :k_out])
+        scale = max(_largest(full[:, :k_out]), floor)
         residual = 0.0
         if eq is not None and full.size:
             RE = (sp.csr_array(eq.R) @ forces).toarray() if eq.R is not None else \
@@ -177,8 +198,13 @@ def receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
         method = PRODUCTION_SWEEP
     for check in [] if production else check_methods(method, checks):
         Hc = _sweep(Ks, Ms, Cs, As, w, Rs, check, forces, out_rows, labels, progress)
-        agreement[check] = receptance_difference(Hc, H)
+        agreement[check] = receptance_difference(Hc, H, floor)
+    if held:  # the main formulation against the exact zero
+        agreement[EXACT_ZERO] = max((float(np.abs(Hk).max(initial=0.0)) for Hk in H),
+                                    default=0.0) / max(floor, 1e-300)
     require_agreement(what, method, agreement, tolerance)
+    if held:
+        H[...] = 0.0
     names_in = list(input_names) if input_names is not None else \
         [str(j + 1) for j in range(forces.shape[1])]
     names_out = list(output_names) if output_names is not None else \

@@ -35,10 +35,12 @@ import scipy.sparse as sp
 
 from substruct.analysis.checks import (
     check_methods,
+    holds_every_coordinate,
     modes_agreement,
     require_agreement,
 )
 from substruct.analysis.dense_modes import MODE_METHODS, coupled_modes
+from substruct.analysis.errors import INPUT_ERRORS, AnalysisInputError
 from substruct.analysis.events import Phase
 from substruct.analysis.krylov import (
     check_inputs,
@@ -114,7 +116,7 @@ def choose_solver(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
     free = free_coordinates(el, massless_coordinates(Ms))
     try:
         krylov_size(k, free)
-    except ValueError:
+    except AnalysisInputError:
         return SolverChoice("dense", f"sparse asked, but {free} free coordinates are too few "
                                      f"for {k} modes and a Krylov basis")
     return SolverChoice("sparse", "", el)
@@ -130,10 +132,10 @@ def _sparse(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
         return sparse_coupled_modes(sp.csr_array(M, dtype=float), sp.csr_array(K, dtype=float),
                                     As, count, method=method, C=Cs,
                                     elimination=choice.elimination)
-    except ValueError as err:
+    except INPUT_ERRORS as err:
         text = " ".join(str(err).split()).replace("(use the dense coupled_modes)",
                                                    "(use solver: dense)")
-        raise ValueError(f"sparse eigensolver: {text}") from None
+        raise AnalysisInputError(f"sparse eigensolver: {text}") from None
 
 
 def modes(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
@@ -180,8 +182,9 @@ def modes(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
 
     Raises:
         CheckError: a check disagrees by more than ``tolerance``.
-        ValueError: an unknown method or solver; a model the solver cannot take (a motion with
-            no mass, stiffness or constraint; more modes than a sparse solver can give).
+        AnalysisInputError: a model the solver cannot take (a motion with no mass, stiffness
+            or constraint; more modes than a sparse solver can give).
+        ValueError: an unknown method or solver (a programming error).
     """
     for name in (method, *checks):
         if name not in MODE_METHODS:
@@ -211,8 +214,9 @@ def modes(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
         try:
             main, agreement, note = production_modes(
                 M, K, A, count, C=C if damped else None, elimination=choice.elimination)
-        except ValueError as err:
-            raise ValueError(f"sparse eigensolver: {' '.join(str(err).split())}") from None
+        except INPUT_ERRORS as err:
+            raise AnalysisInputError(f"sparse eigensolver: {' '.join(str(err).split())}") \
+                from None
         require_agreement(what, main.method, agreement, tolerance)
         solver_label = f"{choice.strategy} ({note})" if note else choice.strategy
     else:
@@ -222,6 +226,10 @@ def modes(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
         solver_label = main.solver
         if choice.note or not main.solver or main.solver == choice.strategy:
             solver_label = choice.label
+    n = M.shape[0]
+    if not len(main.omega) and n and A is not None and np.size(A) and \
+            holds_every_coordinate(sp.csr_array(A, dtype=float), None, n):
+        solver_label += f"; no free coordinate: the constraints hold all {n} coordinates"
     # one type, one set of scalar types whatever the strategy: complex roots and shapes (the
     # undamped sparse solvers compute real ones), real frequencies, ratios and residuals
     return dataclasses.replace(

@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from substruct.analysis.errors import AnalysisInputError
 from substruct.linalg.nullspace import Elimination, master_slave
 from substruct.linalg.scaling import (
     equilibrate,
@@ -108,7 +109,7 @@ def krylov_size(k: int, free: int, ncv: int | None = None, *, margin: int = 1) -
     want = max(2 * k + 1, KRYLOV_MIN) if ncv is None else int(ncv)
     size = min(want, free - 1)
     if size < k + margin:
-        raise ValueError(f"{k} modes asked of a constrained model with {free} free coordinates "
+        raise AnalysisInputError(f"{k} modes asked of a constrained model with {free} free coordinates "
                          f"(n - rank(A)): too few for a Krylov basis (use the dense "
                          f"coupled_modes)")
     return size

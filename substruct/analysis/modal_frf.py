@@ -51,6 +51,7 @@ from substruct.analysis.checks import (
 )
 from substruct.analysis.coupling import receptance
 from substruct.analysis.eigen import modes
+from substruct.analysis.errors import AnalysisInputError
 from substruct.analysis.results import DEFAULT_TOLERANCE, Modes, Receptance
 from substruct.analysis.sparse_modes import has_damping
 from substruct.linalg.constraints import independent_rows
@@ -165,7 +166,7 @@ def modal_basis(M: sp.csr_array, C: sp.csr_array | None, K: sp.csr_array, A: sp.
     scale = max(omega_max, highest, 1e-300)
     rigid = np.abs(lam) <= RIGID_TOL * scale
     if np.any(rigid) and damped:
-        raise ValueError("modal receptance of a damped model with rigid-body modes is not "
+        raise AnalysisInputError("modal receptance of a damped model with rigid-body modes is not "
                          "supported; use method: generalized-inverse")
     Phi = U[:, rigid].real
     if Phi.shape[1]:
@@ -210,7 +211,7 @@ def static_solver(K: sp.csr_array, M: sp.csr_array, A: sp.csr_array,
     try:
         solve = factorizer("saddle")(big)
     except RuntimeError:
-        raise ValueError("the constrained stiffness is singular (a mechanism with no mass?); "
+        raise AnalysisInputError("the constrained stiffness is singular (a mechanism with no mass?); "
                          "the modal receptance needs a static solve") from None
 
     def flexibility(F: np.ndarray) -> np.ndarray:
@@ -330,7 +331,7 @@ def modal_receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarra
     Cs = None if C is None else sp.csr_array(C, dtype=float)
     As = sp.csr_array((0, n)) if A is None or np.size(A) == 0 else sp.csr_array(A, dtype=float)
     if R is not None and sp.csr_array(R).nnz and np.any(sp.csr_array(R).data != 0):
-        raise ValueError("the modal receptance needs A q = 0; a constraint tied to the force "
+        raise AnalysisInputError("the modal receptance needs A q = 0; a constraint tied to the force "
                          "(R) needs method: generalized-inverse")
     w = np.atleast_1d(np.asarray(omegas, dtype=float))
     E = sp.csc_array(inputs, dtype=float).toarray()
@@ -339,7 +340,7 @@ def modal_receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarra
                         cutoff=options.cutoff, solver=options.solver)
     residual = options.residual
     if basis.rigid.shape[1] and np.any(w <= 0):
-        raise ValueError("the receptance of a model with rigid-body modes is infinite at "
+        raise AnalysisInputError("the receptance of a model with rigid-body modes is infinite at "
                          "omega = 0")
     P = O @ basis.shapes
     Q = basis.shapes.T @ E

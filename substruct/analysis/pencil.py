@@ -126,20 +126,31 @@ def rayleigh_root(lam: complex, a: complex, b: complex, c: complex,
     slow decay next to a zero root).  The correction is kept only when it is small
     (``trust |lambda|``) and lowers ``|f|``.
 
+    The iteration runs on :math:`y = \lambda / s`, :math:`s = |\lambda|`, with
+    :math:`g(y) = f(s y) / s^2 = a y^2 + (b/s) y + c/s^2`: the same Newton steps, without the
+    overflow of :math:`a \lambda^2` for a root of ``1e30`` (an infinite or zero ``lambda`` is
+    returned as it is).
+
     Returns:
         ``(root, kept)``: the refined root and ``True``, or ``lam`` and ``False``.
     """
-    def f(x: complex) -> complex:
-        return (a * x + b) * x + c
+    s = abs(complex(lam))
+    if not np.isfinite(s) or s == 0.0:
+        return complex(lam), False
+    b1, c2 = complex(b) / s, complex(c) / s / s
 
-    x = complex(lam)
+    def g(y: complex) -> complex:
+        return (a * y + b1) * y + c2
+
+    y0 = complex(lam) / s
+    y = y0
     for _ in range(3):
-        d = 2 * a * x + b
-        if d == 0:
+        d = 2 * a * y + b1
+        if d == 0 or not np.isfinite(d):
             break
-        x = x - f(x) / d
-    if np.isfinite(x) and abs(x - lam) <= trust * abs(lam) and abs(f(x)) <= abs(f(lam)):
-        return x, True
+        y = y - g(y) / d
+    if np.isfinite(y) and abs(y - y0) <= trust and abs(g(y)) <= abs(g(y0)):
+        return y * s, True
     return complex(lam), False
 
 

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import scipy.sparse as sp
 
+from substruct.analysis.errors import require_analysis_memory
 from substruct.analysis.krylov import check_inputs, eliminate
 from substruct.analysis.mode_checks import (
     generalized_inverse_affordable,
@@ -39,7 +40,7 @@ from substruct.analysis.results import Modes
 from substruct.analysis.sparse_damped import damped_sparse_modes
 from substruct.analysis.sparse_modes import null_space_modes
 from substruct.linalg.factorize import has_cholmod
-from substruct.linalg.memory import factor_memory, require_memory
+from substruct.linalg.memory import factor_memory
 from substruct.linalg.nullspace import Elimination
 
 __all__ = ["KKT_CHECK", "GI_CHECK", "MAIN_METHOD", "production_modes", "sparse_memory"]
@@ -76,7 +77,7 @@ def production_modes(M: sp.sparray, K: sp.sparray, A: sp.sparray | None, count: 
         saying which check was skipped and why (empty if none).
 
     Raises:
-        ValueError: the factorization would not fit the memory available; what
+        AnalysisInputError: the factorization would not fit the memory available; what
             :func:`~substruct.analysis.sparse_modes.null_space_modes` refuses.
     """
     Ms, Ks, As, k = check_inputs(M, K, A, count)
@@ -84,8 +85,8 @@ def production_modes(M: sp.sparray, K: sp.sparray, A: sp.sparray | None, count: 
     if C is None:
         kind = "cholmod" if has_cholmod() else "superlu"
         label = "CHOLMOD" if kind == "cholmod" else "SuperLU"
-        require_memory(sparse_memory(Ks, k, kind),
-                       f"the sparse eigensolve of {Ks.shape[0]} coordinates ({label})")
+        require_analysis_memory(sparse_memory(Ks, k, kind),
+                                f"the sparse eigensolve of {Ks.shape[0]} coordinates ({label})")
         main = null_space_modes(Ms, Ks, As, k, factorization=kind, elimination=el)
         roots, Cs = 1j * main.omega, None
     else:

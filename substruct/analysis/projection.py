@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
+from substruct.analysis.errors import AnalysisInputError
 from substruct.linalg.constraints import independent_rows, pinv_sym
 from substruct.linalg.dense import dense
 from substruct.linalg.factorize import Solve, factorizer
@@ -84,7 +85,7 @@ def split_mass(M: sp.sparray | np.ndarray) -> MassSplit:
     try:  # partial pivoting: an M_d singular on the coordinates with mass is reported
         factor = factorizer("superlu", spd=False)(Md)
     except RuntimeError as exc:  # exactly singular
-        raise ValueError("mass matrix is singular on coordinates that have mass") from exc
+        raise AnalysisInputError("mass matrix is singular on coordinates that have mass") from exc
     return MassSplit(Md=Md, massless=massless, factor=factor, mu=mu)
 
 
@@ -177,6 +178,6 @@ def constrained_acceleration(M: sp.sparray | np.ndarray, A: sp.sparray | np.ndar
     try:
         qs = np.linalg.solve(lhs, rhs[s])
     except np.linalg.LinAlgError as exc:
-        raise ValueError("massless coordinates not determined by the constraints "
+        raise AnalysisInputError("massless coordinates not determined by the constraints "
                          "(I - M* M_o is singular)") from exc
     return refined(rhs + cols @ qs)

@@ -27,6 +27,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from substruct.analysis.errors import AnalysisInputError
 from substruct.analysis.projection import constraint_gain, split_mass
 from substruct.linalg.constraints import IndependentRows, particular_solution
 from substruct.linalg.dense import dense
@@ -97,7 +98,7 @@ def generalized_inverse_sweep(K: sp.csr_array, M: sp.csr_array, C: sp.csr_array,
     out = np.empty((len(omegas), O.shape[0], E.shape[1]), dtype=complex)
     for k, w in enumerate(omegas):
         if w <= 0:
-            raise ValueError(f"the generalized-inverse receptance (eq 15) is singular at "
+            raise AnalysisInputError(f"the generalized-inverse receptance (eq 15) is singular at "
                              f"omega = {w}; use method 'kkt' or 'null-space' for statics")
         Z = impedance(K, M, C, w)
         YtZ = (Z.T @ Y).T  # A M^-1 Z
@@ -168,7 +169,7 @@ def kkt_sweep(K: sp.csr_array, M: sp.csr_array, C: sp.csr_array, A: sp.csr_array
         try:
             x = factorizer("complex-lu")(big.astype(complex))(rhs)[:n]
         except RuntimeError as exc:
-            raise ValueError(f"KKT system singular at omega = {w} (a constrained resonance "
+            raise AnalysisInputError(f"KKT system singular at omega = {w} (a constrained resonance "
                              "of an undamped system)") from exc
         out[k] = O @ x
     return out

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 
+from substruct.analysis.errors import AnalysisInputError
 from substruct.analysis.pencil import Refine
 from substruct.analysis.results import Modes
 from substruct.linalg.constraints import independent_rows
@@ -158,7 +159,7 @@ def root_structure(M: np.ndarray, C: np.ndarray, K: np.ndarray,
         Mr = rigid.T @ M @ rigid
         w, V = np.linalg.eigh((Mr + Mr.T) / 2)
         if w.min() <= 1e-12 * max(np.abs(M).max(), 1e-300):
-            raise ValueError("singular model: a motion with no mass, no stiffness and no "
+            raise AnalysisInputError("singular model: a motion with no mass, no stiffness and no "
                              "constraint (a massless coordinate attached to nothing)")
         rigid = rigid @ (V / np.sqrt(w))  # M-orthonormal
         Cr = rigid.T @ C @ rigid

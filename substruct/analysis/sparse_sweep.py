@@ -32,6 +32,7 @@ from typing import Callable
 import numpy as np
 import scipy.sparse as sp
 
+from substruct.analysis.errors import AnalysisInputError, require_analysis_memory
 from substruct.analysis.krylov import eliminate
 from substruct.linalg.banded import (
     BAND_MAX,
@@ -42,7 +43,7 @@ from substruct.linalg.banded import (
     kernel_pays,
 )
 from substruct.linalg.factorize import complex_symmetric, fill_ordering
-from substruct.linalg.memory import factor_memory, require_memory
+from substruct.linalg.memory import factor_memory
 from substruct.linalg.scaling import equilibrate
 
 __all__ = ["Gather", "null_space_sparse_sweep"]
@@ -101,9 +102,10 @@ class Gather:
                 self.rest @ X
 
 
-def _singular(omega: float) -> ValueError:
-    return ValueError(f"the receptance is singular at omega = {omega:g} rad/s (a resonance of "
-                      f"an undamped system, or a rigid-body motion at omega = 0)")
+def _singular(omega: float) -> AnalysisInputError:
+    return AnalysisInputError(f"the receptance is singular at omega = {omega:g} rad/s (a "
+                              f"resonance of an undamped system, or a rigid-body motion at "
+                              f"omega = 0)")
 
 
 def null_space_sparse_sweep(K: sp.sparray, M: sp.sparray, C: sp.sparray | None,
@@ -143,9 +145,10 @@ def null_space_sparse_sweep(K: sp.sparray, M: sp.sparray, C: sp.sparray | None,
                    dtype=complex)
     pattern = abs(Kt) + abs(Mt) + (abs(Ct) if Ct is not None else 0)
     out_bytes = 16.0 * w.size * OT.shape[0] * B.shape[1]
-    require_memory(factor_memory(pattern, "superlu", complex_factor=True) + out_bytes,
-                   f"the receptance sweep of {Kt.shape[0]} reduced coordinates "
-                   f"({w.size} frequencies x {OT.shape[0]} outputs x {B.shape[1]} inputs)")
+    require_analysis_memory(
+        factor_memory(pattern, "superlu", complex_factor=True) + out_bytes,
+        f"the receptance sweep of {Kt.shape[0]} reduced coordinates "
+        f"({w.size} frequencies x {OT.shape[0]} outputs x {B.shape[1]} inputs)")
     order, width = band_ordering(pattern)
     banded = width <= BAND_MAX
     p = order if banded else fill_ordering(pattern)  # one ordering for every frequency

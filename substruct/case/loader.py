@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 import os
+import re
 import stat
 from pathlib import Path
 from typing import Annotated, Any, Sequence, Union
@@ -256,6 +257,43 @@ def _parameters(raw: Any) -> dict[str, float]:
     return out
 
 
+_NAME = re.compile(r"[A-Za-z_][A-Za-z_0-9]*")
+
+
+def _names_in(node: Any, out: set[str], depth: int = 0) -> None:
+    """Every identifier written in a string (value or key) of ``node``: a generous reading of
+    what the expressions, point references and study axes may use."""
+    if depth > 100:
+        return
+    if isinstance(node, str):
+        out.update(_NAME.findall(node))
+    elif isinstance(node, dict):
+        for k, v in node.items():
+            _names_in(k, out, depth + 1)
+            _names_in(v, out, depth + 1)
+    elif isinstance(node, list):
+        for v in node:
+            _names_in(v, out, depth + 1)
+
+
+def _refuse_unused_parameters(data: dict, source: str, set_paths: Sequence[str]) -> None:
+    """Every key is used or refused: a parameter that no expression, point, other parameter or
+    study names is refused (a misspelt name, or one set with ``--set`` that does nothing)."""
+    params = data.get("parameters")
+    if not isinstance(params, dict) or not params:
+        return
+    used: set[str] = set()
+    _names_in({k: v for k, v in data.items() if k != "parameters"}, used)
+    _names_in(list(params.values()), used)
+    for name in params:
+        if isinstance(name, str) and name not in used:
+            path = field_path(("parameters", name), data)
+            problem = "a parameter that nothing uses (no expression, point or study names it)"
+            if path in set_paths:
+                problem += " (set on the command line)"
+            raise CaseError(source, path, problem, params[name])
+
+
 def _check_numbers(data: dict, source: str, set_paths: Sequence[str]) -> None:
     """Refuse the first number of the raw data out of range (:mod:`substruct.case.numbers`),
     before anything converts it."""
@@ -288,6 +326,7 @@ def parse_case(text: str, source: str = "<string>", base_dir: str | Path = ".",
         case = Case.model_validate(data, context=context)
     except ValidationError as exc:
         raise translate(exc, data, source, Case, set_paths) from None
+    _refuse_unused_parameters(data, source, set_paths)
     case._source, case._text, case._raw = source, text, data
     case._base_dir, case._overrides = Path(base_dir), tuple(overrides)
     return case

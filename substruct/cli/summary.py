@@ -96,6 +96,8 @@ def print_modes(modes: Any, out: TextIO, requested: int | None = None) -> None:
     n = len(modes.omega)
     more = f" of {requested} requested" if requested is not None and requested > n else ""
     out.write(f"  {n} physical mode(s){more}, {modes.method}:\n")
+    if not n and "no free coordinate" in modes.solver:
+        out.write(f"  no mode: {modes.solver.split('; ', 1)[-1]}\n")
     out.write(f"  {'mode':>4s}  {'omega (rad/s)':>14s}  {'f (Hz)':>12s}  "
               f"{'damping ratio':>13s}  {'|A u| residual':>14s}\n")
     for j in range(n):
@@ -127,10 +129,15 @@ def print_frf(frf: Any, out: TextIO) -> None:
               f"{len(frf.inputs)} input(s)\n")
     out.write("  constraint residual, rows at unit norm, max|A q - R F| / max|H|: "
               f"{frf.constraint_residual:.1e}\n")
+    zero = "exact-zero" in frf.agreement
+    if zero:
+        out.write("  no free coordinate: the constraints hold every coordinate, every "
+                  "receptance is exactly zero\n")
     if frf.agreement:
         figures = ", ".join(f"{k} {v:.1e}" for k, v in frf.agreement.items())
-        out.write(f"  agreement with check formulations (max |H - H_check| / max |H|): "
-                  f"{figures}\n")
+        what = "max |H - H_check| / h0, h0 = max|o| max|e| / min|Z|: the compliance scale" \
+            if zero else "max |H - H_check| / max |H|"
+        out.write(f"  agreement with check formulations ({what}): {figures}\n")
     if len(w) <= 3 and H.shape[1] * H.shape[2] <= 64:
         width = max(len(s) for s in frf.outputs)
         for k, wk in enumerate(w):

@@ -11,11 +11,13 @@ r"""The analyses a case asks for, on its model: a thin adapter from ``case.analy
 
   (a unit force at point ``p_j`` is the generalized force ``r(p_j)^T``).
 
-Input the analyses cannot take (``ValueError``,
-:class:`~substruct.linalg.constraints.ConstraintError`) becomes a
-:class:`~substruct.case.loader.CaseError` naming the field (exit 2); a check that
+Input the analyses cannot take (:data:`~substruct.analysis.errors.INPUT_ERRORS`: an
+:class:`~substruct.analysis.errors.AnalysisInputError`, an inconsistent or empty constraint row)
+becomes a :class:`~substruct.case.loader.CaseError` naming the field (exit 2); a check that
 disagrees beyond the tolerance stays a :class:`~substruct.analysis.errors.CheckError` (exit 1),
-its message closed by the case field that sets the tolerance.
+its message closed by the case field that sets the tolerance.  Any other exception, a plain
+``ValueError`` included, is left to be reported as an internal error: a bug is never passed off
+as bad input.
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from substruct.analysis.api import Progress, modes, receptance_sweep
-from substruct.analysis.errors import CheckError
+from substruct.analysis.errors import INPUT_ERRORS, CheckError
 from substruct.analysis.events import Phase
 from substruct.analysis.frf_quantity import as_quantity
 from substruct.analysis.modal_frf import ModalOptions
@@ -60,7 +62,7 @@ def modes_result(case: Case, asm: Assembly, A: sp.csr_array, loc: tuple,
         return modes(asm.M, asm.C, asm.K, A, spec.count, method=spec.method,
                      checks=spec.check, solver=spec.solver, tolerance=spec.tolerance,
                      what=what, events=events)
-    except ValueError as err:
+    except INPUT_ERRORS as err:
         raise case.error(loc, " ".join(str(err).split())) from None
     except CheckError as err:
         raise CheckError(f"{err}; to accept it, raise analysis.modes.tolerance") from None
@@ -128,7 +130,7 @@ def frf_result(case: Case, model: Model, progress: Progress | None) -> Receptanc
             input_names=spec.inputs, output_names=spec.outputs,
             constraint_labels=asm.constraint_labels, progress=progress, modal=modal),
             spec.quantity)
-    except ValueError as err:  # ConstraintError included
+    except INPUT_ERRORS as err:
         raise case.error(("analysis", "frf"), " ".join(str(err).split())) from None
     except CheckError as err:
         raise CheckError(f"{err}; to accept it, raise analysis.frf.tolerance") from None

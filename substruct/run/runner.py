@@ -13,7 +13,9 @@ from typing import Mapping
 
 import scipy.sparse as sp
 
+from substruct.analysis.checks import require_finite
 from substruct.analysis.events import Phase
+from substruct.analysis.results import Modes
 from substruct.builder.frf_parts import assemble_frf_case, has_frf_parts
 from substruct.builder.model import Model, assemble_case
 from substruct.case.loader import Case
@@ -81,7 +83,8 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
         CaseError: input that cannot be analysed (see :func:`build_model`; inconsistent
             constraints; a model too large for the dense eigenproblem).
         CheckError: a check formulation disagrees with the main one by more than the
-            case's ``tolerance`` (nothing is returned, so nothing is written).
+            case's ``tolerance``, or a result holds ``inf`` or ``NaN`` (an overflow); nothing
+            is returned, so nothing is written.
     """
     from substruct import __version__
 
@@ -123,4 +126,24 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
             events("sweep", f"transient: {case.analysis.transient.steps} steps, "
                    f"{asm.n_dof} coordinates", case.analysis.transient.steps)
         result.transient = transient_result(case, model)
+    _require_finite_result(result)
     return result
+
+
+def _require_finite_modes(what: str, modes: Modes) -> None:
+    require_finite(what, eigenvalues=modes.eigenvalues, shapes=modes.shapes)
+
+
+def _require_finite_result(result: Result) -> None:
+    """Refuse a result holding ``inf`` or ``NaN`` (an overflow) with one line
+    (:func:`substruct.analysis.checks.require_finite`): never a table of ``inf``."""
+    if result.modes is not None:
+        _require_finite_modes("modes", result.modes)
+    for name, variant in result.variants.items():
+        _require_finite_modes(f"modes (variant {name})", variant)
+    if result.frf is not None:
+        require_finite("frf", H=result.frf.H)
+    tr = result.transient
+    if tr is not None:
+        require_finite("transient", displacement=tr.displacement, velocity=tr.velocity,
+                       acceleration=tr.acceleration, constraint_forces=tr.constraint_forces)
