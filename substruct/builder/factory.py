@@ -11,6 +11,7 @@ import scipy.sparse as sp
 
 from substruct.builder.frames import build_frame
 from substruct.builder.solids import build_solid
+from substruct.builder.superelements import build_superelement
 from substruct.case.loader import (
     Case,
     DiscreteSpec,
@@ -21,6 +22,7 @@ from substruct.case.loader import (
 from substruct.case.frames import FrameSpec
 from substruct.case.solids import SolidSpec
 from substruct.case.substructures import MassSpec, SpringSpec
+from substruct.case.superelements import SuperelementSpec
 from substruct.models.discrete import fixed_free, free_free, point_mass, spring
 from substruct.models.reduction import modal_truncation
 from substruct.models.rod import rod_assumed_modes, rod_fe
@@ -130,6 +132,8 @@ def make_substructures(case: Case, positions: dict[str, list[float]],
             subs.append(_matrices_substructure(spec))
         elif isinstance(spec, FrameSpec):
             subs.append(build_frame(case, i, spec))
+        elif isinstance(spec, SuperelementSpec):
+            subs.append(build_superelement(case, i, spec))
         # type: frf has no matrices: split off by substruct.builder.frf_parts
     return subs
 

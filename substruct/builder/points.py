@@ -9,11 +9,13 @@ from typing import Any
 
 from substruct.builder.frames import frame_where
 from substruct.builder.solids import solid_where
+from substruct.builder.superelements import superelement_where
 from substruct.case.expressions import ExpressionError, scalar
 from substruct.case.loader import Case, DiscreteSpec, RodSpec
 from substruct.case.frames import FrameSpec
 from substruct.case.solids import SolidSpec
 from substruct.case.substructures import MassSpec, SpringSpec
+from substruct.case.superelements import SuperelementSpec
 
 __all__ = ["PointUse", "point_uses", "rod_position", "resolve_point"]
 
@@ -97,6 +99,8 @@ def resolve_point(case: Case, spec: Any, where: str | None, use: PointUse) -> An
         return solid_where(case, spec, where, use)
     if isinstance(spec, FrameSpec):
         return frame_where(case, spec, where, use)
+    if isinstance(spec, SuperelementSpec):
+        return superelement_where(case, spec, where, use)
     # matrices: a label, or a 1-based index
     if where is None:
         raise case.error(use.loc, f"a point on {spec.name!r} needs a coordinate, as in "

@@ -73,6 +73,7 @@ from substruct.case.numbers import find_problem
 from substruct.case.frames import FrameSpec
 from substruct.case.solids import InterfaceSpec, SolidSpec
 from substruct.case.study import StudySpec
+from substruct.case.superelements import SuperelementSpec
 from substruct.case.substructures import (
     AssumedModes,
     DiscreteSpec,
@@ -124,7 +125,7 @@ __all__ = [
 MAX_CASE_FILE = 200_000
 
 SubstructureSpec = Annotated[Union[RodSpec, DiscreteSpec, SpringSpec, MassSpec, MatrixSpec,
-                                   SolidSpec, FrfSpec, FrameSpec],
+                                   SolidSpec, FrfSpec, FrameSpec, SuperelementSpec],
                              Field(discriminator="type")]
 
 

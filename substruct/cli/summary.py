@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any, Sequence, TextIO
 
 import numpy as np
 
+from substruct.builder.superelements import rigid_body_lines
 from substruct.cli.transient_summary import print_transient, transient_json
 
 if TYPE_CHECKING:
@@ -165,6 +166,8 @@ def print_summary(result: Result, out: TextIO, requested: int | None = None,
     out.write(f"{result.case_name}: {int(model.offsets[-1])} coordinates in {len(names)} "
               f"substructure(s) ({', '.join(names)}), {len(model.constraint_labels)} "
               f"constraint row(s)\n")
+    for line in rigid_body_lines(result.attrs):
+        out.write(line + "\n")
     if result.modes is not None:
         out.write("modes\n")
         print_modes(result.modes, out, requested)

@@ -18,6 +18,7 @@ from substruct.analysis.events import Phase
 from substruct.analysis.results import Modes
 from substruct.builder.frf_parts import assemble_frf_case, has_frf_parts
 from substruct.builder.model import Model, assemble_case
+from substruct.builder.superelements import rigid_body_attrs
 from substruct.case.loader import Case
 from substruct.run.analyses import (
     Progress,
@@ -97,7 +98,8 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
     attrs = {"substruct_version": __version__,
              "created": datetime.now(timezone.utc).isoformat(timespec="seconds"),
              "units": case.units, "description": case.description.strip(),
-             "case_file": case.source, "overrides": "\n".join(case.overrides)}
+             "case_file": case.source, "overrides": "\n".join(case.overrides),
+             **rigid_body_attrs(asm.substructures)}
     result = Result(case_name=case.name, case_yaml=case.text, model=model_info(model),
                     attrs={k: v for k, v in attrs.items() if v})
     if case.output.matrices:
