@@ -8,10 +8,12 @@ from dataclasses import dataclass
 from typing import Any
 
 from substruct.builder.frames import frame_where
+from substruct.builder.links import link_point_texts
 from substruct.builder.solids import solid_where
 from substruct.case.expressions import ExpressionError, scalar
 from substruct.case.loader import Case, DiscreteSpec, RodSpec
 from substruct.case.frames import FrameSpec
+from substruct.case.nastran import NastranSpec
 from substruct.case.solids import SolidSpec
 from substruct.case.substructures import MassSpec, SpringSpec
 
@@ -54,6 +56,7 @@ def point_uses(case: Case) -> list[PointUse]:
         if tr.base is not None:
             uses += [PointUse(p, ("analysis", "transient", "base", "at", i))
                      for i, p in enumerate(tr.base.at)]
+    uses += [PointUse(text, loc) for text, loc in link_point_texts(case)]
     return uses
 
 
@@ -94,6 +97,12 @@ def resolve_point(case: Case, spec: Any, where: str | None, use: PointUse) -> An
         return solid_where(case, spec, where, use)
     if isinstance(spec, FrameSpec):
         return frame_where(case, spec, where, use)
+    if isinstance(spec, NastranSpec):
+        if where is None or ":" not in where:
+            raise case.error(use.loc, f"a point on Nastran model {spec.name!r} is a grid and a "
+                             f"component 1-6, as in {spec.name}@{min(spec.bulk.grids)}:3",
+                             use.text)
+        return where
     # matrices: a label, or a 1-based index
     if where is None:
         raise case.error(use.loc, f"a point on {spec.name!r} needs a coordinate, as in "
