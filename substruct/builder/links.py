@@ -29,15 +29,15 @@ from substruct.substructure import PointError, Substructure
 __all__ = ["link_node", "case_links", "link_point_texts"]
 
 
-def link_point_texts(case: Any) -> list[tuple[str, tuple]]:
-    """``(point text, loc)`` for every node of the case's links, with a component so that it
-    is resolved (and kept by reductions) as any point: ``frame@5:ux``, ``box@n12:x`` ..., and
-    every term of their MPCs."""
-    out: list[tuple[str, tuple]] = []
+def link_point_texts(case: Any) -> list[tuple[str, tuple, str]]:
+    """``(point text, loc, text as written)`` for every node of the case's links, with a
+    component so that it is resolved (and kept by reductions) as any point: ``frame@5:ux``,
+    ``box@n12:x`` ..., and every term of their MPCs."""
+    out: list[tuple[str, tuple, str]] = []
     specs = {s.name: s for s in case.substructures}
     for k, link in enumerate(case.links):
         if isinstance(link, MpcLinkSpec):
-            out += [(p, ("links", k, "terms", p)) for p in link.terms]
+            out += [(p, ("links", k, "terms", p), p) for p in link.terms]
             continue
         nodes: list[tuple[tuple, str]] = [(("independent",), link.independent)] \
             if isinstance(link, RigidLinkSpec) else [(("reference",), link.reference)]
@@ -47,7 +47,7 @@ def link_point_texts(case: Any) -> list[tuple[str, tuple]]:
         for loc, text in nodes:
             spec = specs.get(parse_point(text)[0])
             comps = ("x", "y", "z") if isinstance(spec, SolidSpec) else ("ux",)
-            out += [(f"{text}:{c}", ("links", k, *loc)) for c in comps]
+            out += [(f"{text}:{c}", ("links", k, *loc), text) for c in comps]
     return out
 
 

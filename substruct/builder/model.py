@@ -74,7 +74,7 @@ def point_positions(case: Case) -> tuple[list[PointUse], dict[str, tuple[str, An
         sub, where = parse_point(use.text)
         if sub not in specs:
             raise case.error(use.loc, f"unknown substructure {sub!r} (known: "
-                             f"{', '.join(specs)})", use.text)
+                             f"{', '.join(specs)})", use.shown or use.text)
         value = resolve_point(case, specs[sub], where, use)
         resolved[use.text] = (sub, value)
         spec = specs[sub]
@@ -111,7 +111,7 @@ def assemble_case(case: Case, prebuilt: Mapping[str, Substructure] | None = None
         try:
             by_name[sub].row(value)
         except (PointError, ValueError) as err:
-            raise case.error(use.loc, str(err), use.text) from None
+            raise case.error(use.loc, str(err), use.shown or use.text) from None
         points[use.text] = PointRef(sub, value)
     subs, link_rows = case_links(case, subs, points)  # rows of A after the user constraints
     by_name = {s.name: s for s in subs}

@@ -27,6 +27,7 @@ class PointUse:
 
     text: str
     loc: tuple
+    shown: str | None = None  # the text as written, when ``text`` adds to it (link nodes)
 
 
 # ---------------------------------------------------------------------------- points
@@ -56,7 +57,7 @@ def point_uses(case: Case) -> list[PointUse]:
         if tr.base is not None:
             uses += [PointUse(p, ("analysis", "transient", "base", "at", i))
                      for i, p in enumerate(tr.base.at)]
-    uses += [PointUse(text, loc) for text, loc in link_point_texts(case)]
+    uses += [PointUse(text, loc, shown) for text, loc, shown in link_point_texts(case)]
     return uses
 
 

@@ -288,6 +288,9 @@ def read_conm2(c: RawCard) -> Conm2:
     m = c.real(3, "M")
     if m < 0:
         raise c.error("must not be negative", m, "M")
+    if np.linalg.eigvalsh(inertia).min() < -1e-12 * max(np.abs(inertia).max(), 1e-300):
+        raise c.error("the inertia matrix about the centre of gravity is not positive "
+                      "semi-definite", [i11, i21, i22, i31, i32, i33], "I11")
     x = np.array([c.real(4, "X1", 0.0), c.real(5, "X2", 0.0), c.real(6, "X3", 0.0)])
     return Conm2(c.integer(0, "EID"), c.integer(1, "G"), c.integer(2, "CID", 0), m, x, inertia, c.line)
 
