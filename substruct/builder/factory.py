@@ -10,6 +10,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from substruct.builder.frames import build_frame
+from substruct.builder.nastran import build_nastran
 from substruct.builder.solids import build_solid
 from substruct.builder.superelements import build_superelement
 from substruct.case.loader import (
@@ -20,6 +21,7 @@ from substruct.case.loader import (
     RodSpec,
 )
 from substruct.case.frames import FrameSpec
+from substruct.case.nastran import NastranSpec
 from substruct.case.solids import SolidSpec
 from substruct.case.substructures import MassSpec, SpringSpec
 from substruct.case.superelements import SuperelementSpec
@@ -134,6 +136,8 @@ def make_substructures(case: Case, positions: dict[str, list[float]],
             subs.append(build_frame(case, i, spec))
         elif isinstance(spec, SuperelementSpec):
             subs.append(build_superelement(case, i, spec))
+        elif isinstance(spec, NastranSpec):
+            subs.append(build_nastran(spec))
         # type: frf has no matrices: split off by substruct.builder.frf_parts
     return subs
 

@@ -30,6 +30,7 @@ from substruct.builder.checks import (
 from substruct.builder.drawing import Drawing
 from substruct.builder.drawings import layout_drawings
 from substruct.builder.factory import make_substructures
+from substruct.builder.links import case_links
 from substruct.builder.points import PointUse, point_uses, resolve_point
 from substruct.builder.solids import tie_and_reduce
 from substruct.case.loader import Case, RodSpec, parse_point
@@ -73,7 +74,7 @@ def point_positions(case: Case) -> tuple[list[PointUse], dict[str, tuple[str, An
         sub, where = parse_point(use.text)
         if sub not in specs:
             raise case.error(use.loc, f"unknown substructure {sub!r} (known: "
-                             f"{', '.join(specs)})", use.text)
+                             f"{', '.join(specs)})", use.shown or use.text)
         value = resolve_point(case, specs[sub], where, use)
         resolved[use.text] = (sub, value)
         spec = specs[sub]
@@ -110,8 +111,10 @@ def assemble_case(case: Case, prebuilt: Mapping[str, Substructure] | None = None
         try:
             by_name[sub].row(value)
         except (PointError, ValueError) as err:
-            raise case.error(use.loc, str(err), use.text) from None
+            raise case.error(use.loc, str(err), use.shown or use.text) from None
         points[use.text] = PointRef(sub, value)
+    subs, link_rows = case_links(case, subs, points)  # rows of A after the user constraints
+    by_name = {s.name: s for s in subs}
 
     connections, chains = [], []
     for i, chain in enumerate(case.connections):
@@ -134,7 +137,7 @@ def assemble_case(case: Case, prebuilt: Mapping[str, Substructure] | None = None
         active.append(name)
     connections += interface_ties  # rows of A after the case's connections
     try:
-        asm = assemble(subs, connections, constraints)
+        asm = assemble(subs, connections, constraints + link_rows)
     except ValueError as err:
         name = str(err).split(":")[0]
         k = next((k for k, c in enumerate(case.constraints) if c.name == name), None)

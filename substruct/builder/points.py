@@ -8,11 +8,13 @@ from dataclasses import dataclass
 from typing import Any
 
 from substruct.builder.frames import frame_where
+from substruct.builder.links import link_point_texts
 from substruct.builder.solids import solid_where
 from substruct.builder.superelements import superelement_where
 from substruct.case.expressions import ExpressionError, scalar
 from substruct.case.loader import Case, DiscreteSpec, RodSpec
 from substruct.case.frames import FrameSpec
+from substruct.case.nastran import NastranSpec
 from substruct.case.solids import SolidSpec
 from substruct.case.substructures import MassSpec, SpringSpec
 from substruct.case.superelements import SuperelementSpec
@@ -27,6 +29,7 @@ class PointUse:
 
     text: str
     loc: tuple
+    shown: str | None = None  # the text as written, when ``text`` adds to it (link nodes)
 
 
 # ---------------------------------------------------------------------------- points
@@ -59,6 +62,7 @@ def point_uses(case: Case) -> list[PointUse]:
         for key in ("displacement", "velocity"):
             uses += [PointUse(p, ("analysis", "transient", "initial", key, p))
                      for p in getattr(tr.initial, key) or {}]
+    uses += [PointUse(text, loc, shown) for text, loc, shown in link_point_texts(case)]
     return uses
 
 
@@ -101,6 +105,12 @@ def resolve_point(case: Case, spec: Any, where: str | None, use: PointUse) -> An
         return frame_where(case, spec, where, use)
     if isinstance(spec, SuperelementSpec):
         return superelement_where(case, spec, where, use)
+    if isinstance(spec, NastranSpec):
+        if where is None or ":" not in where:
+            raise case.error(use.loc, f"a point on Nastran model {spec.name!r} is a grid and a "
+                             f"component 1-6, as in {spec.name}@{min(spec.bulk.grids)}:3",
+                             use.text)
+        return where
     # matrices: a label, or a 1-based index
     if where is None:
         raise case.error(use.loc, f"a point on {spec.name!r} needs a coordinate, as in "

@@ -71,6 +71,8 @@ from substruct.case.frf_substructure import FrfSpec
 from substruct.case.matrices import MatrixSpec
 from substruct.case.numbers import find_problem
 from substruct.case.frames import FrameSpec
+from substruct.case.links import LinkSpec
+from substruct.case.nastran import BDF_SUFFIXES, NastranSpec, bdf_case
 from substruct.case.solids import InterfaceSpec, SolidSpec
 from substruct.case.study import StudySpec
 from substruct.case.superelements import SuperelementSpec
@@ -125,7 +127,8 @@ __all__ = [
 MAX_CASE_FILE = 200_000
 
 SubstructureSpec = Annotated[Union[RodSpec, DiscreteSpec, SpringSpec, MassSpec, MatrixSpec,
-                                   SolidSpec, FrfSpec, FrameSpec, SuperelementSpec],
+                                   SolidSpec, FrfSpec, FrameSpec, SuperelementSpec,
+                                   NastranSpec],
                              Field(discriminator="type")]
 
 
@@ -150,6 +153,7 @@ class Case(StrictModel):
     connections: list[Annotated[list[Point], Field(min_length=2)]] = Field(default_factory=list)
     constraints: list[ConstraintSpec] = Field(default_factory=list)
     interfaces: list[InterfaceSpec] = Field(default_factory=list)
+    links: list[LinkSpec] = Field(default_factory=list)
     analysis: Analysis
     output: Output = Field(default_factory=Output)
     study: StudySpec | None = None
@@ -167,6 +171,8 @@ class Case(StrictModel):
             if c.name is None:
                 c.name = f"constraint{k + 1}"
         self._unique("constraints", [str(c.name) for c in self.constraints], "constraint")
+        self._unique("links", [ln.name or f"link{k + 1}" for k, ln in enumerate(self.links)],
+                     "link")
         modes = self.analysis.modes
         if modes is not None:
             self._unique(("analysis", "modes", "variants"), [v.name for v in modes.variants],
@@ -354,6 +360,8 @@ def load_case(path: str | Path | dict, overrides: Sequence[str] = ()) -> Case:
         return parse_case(path, "<string>", Path.cwd(), overrides)
     p = Path(path)
     source = str(path)
+    if p.suffix.lower() in BDF_SUFFIXES:  # Nastran bulk data: its normal modes
+        return parse_case(bdf_case(p, source), source, p.parent, overrides)
     text = read_case_text(p, source)
     return parse_case(text, source, p.parent, overrides)
 

@@ -1,0 +1,116 @@
+"""Nastran models of a case (``type: nastran``, :mod:`substruct.case.nastran`): their
+substructures (:mod:`substruct.models.nastran`), their rigid elements and MPC set as links
+(:mod:`substruct.assembly.links`), and AUTOSPC once every link is known."""
+
+from __future__ import annotations
+
+from typing import Any, Collection, Mapping
+
+import numpy as np
+import scipy.sparse as sp
+
+from substruct.assembly.links import (
+    Link, LinkError, NodeRef, interpolation_link, mpc, rigid_link,
+)
+from substruct.case.bdf import BulkData
+from substruct.case.bdf_fields import BdfError
+from substruct.case.nastran import NastranSpec
+from substruct.models.nastran import nastran_matrices, nastran_substructure
+from substruct.substructure import Substructure
+
+__all__ = ["build_nastran", "bulk_links", "autospc"]
+
+
+def build_nastran(spec: NastranSpec) -> Substructure:
+    """The substructure of a ``type: nastran`` item, its SPC set and GRID PS removed (AUTOSPC
+    comes later, :func:`autospc`).
+
+    Raises:
+        BdfError: an element that cannot be made, naming the file, line, card and id.
+    """
+    return nastran_substructure(spec.name, nastran_matrices(spec.bulk))
+
+
+def bulk_links(name: str, bulk: BulkData, subs: Mapping[str, Substructure]
+               ) -> list[tuple[Link, int, str, int]]:
+    """The RBE2, RBE3 and MPC cards of ``bulk`` (substructure ``name``) as links, each with
+    its card's ``(line, card name, id)``.
+
+    RBE3: the groups of one card must use the same components (translations); a grid in two
+    groups is refused.
+
+    Raises:
+        BdfError: a link that cannot be made (a component a grid does not have, an RBE3 whose
+            grids do not determine a reference component), naming the card.
+    """
+    out: list[tuple[Link, int, str, int]] = []
+
+    def node(g: int) -> NodeRef:
+        return NodeRef(name, {"node": g})
+
+    def fail(err: Exception, line: int, card: str, ident: int, field: str = "") -> BdfError:
+        text = str(err).split(": ", 1)[-1] if str(err).startswith(name) else str(err)
+        return BdfError(bulk.source, text.split(": ", 1)[-1], line=line, card=card,
+                        ident=ident, name=field)
+
+    for r in bulk.rbe2:
+        if r.gn in r.gm:
+            raise BdfError(bulk.source, "GN is also a dependent grid", r.gn, r.line, "RBE2",
+                           r.id, "GM")
+        try:
+            link = rigid_link(subs, node(r.gn), [node(g) for g in r.gm], r.cm,
+                              name=f"{name}: RBE2 {r.id}")
+        except LinkError as err:
+            raise fail(err, r.line, "RBE2", r.id) from None
+        out.append((link, r.line, "RBE2", r.id))
+    for r3 in bulk.rbe3:
+        comps = {c for _, c, _ in r3.groups}
+        if len(comps) > 1 or any(ch > "3" for ch in next(iter(comps))):
+            raise BdfError(bulk.source, "the groups of an RBE3 use the same translational "
+                           "components (rotations and mixed components are not supported)",
+                           sorted(comps), r3.line, "RBE3", r3.id, "C1")
+        grids = [g for _, _, gl in r3.groups for g in gl]
+        weights = [w for w, _, gl in r3.groups for _ in gl]
+        if len(set(grids)) != len(grids) or r3.ref in grids:
+            raise BdfError(bulk.source, "a grid appears twice (or is the reference grid)",
+                           grids, r3.line, "RBE3", r3.id, "G")
+        try:
+            link = interpolation_link(subs, node(r3.ref), [node(g) for g in grids], weights,
+                                      r3.refc, next(iter(comps)), name=f"{name}: RBE3 {r3.id}")
+        except LinkError as err:
+            raise fail(err, r3.line, "RBE3", r3.id, "REFC") from None
+        out.append((link, r3.line, "RBE3", r3.id))
+    for m in bulk.mpcs:
+        try:
+            link = mpc(subs, [(node(g), str(c + 1), a) for g, c, a in m.terms],
+                       name=f"{name}: MPC {m.sid} (line {m.line})")
+        except LinkError as err:
+            raise fail(err, m.line, "MPC", m.sid) from None
+        out.append((link, m.line, "MPC", m.sid))
+    return out
+
+
+def autospc(sub: Substructure, used: Collection[int]) -> Substructure:
+    """Nastran's AUTOSPC on ``sub``: the coordinates whose column of ``K`` is empty and that
+    are not ``used`` (named by a link, an MPC or a point of the case) are removed
+    (``q = T p``, ``T`` the columns of the identity kept).  Returns ``sub`` when none is."""
+    K = sp.csc_array(sub.K)
+    empty = np.asarray(abs(K).sum(axis=0)).ravel() == 0
+    empty[np.asarray(list(used), dtype=np.int64)] = False
+    if not empty.any():
+        return sub
+    keep = np.flatnonzero(~empty)
+    T = sp.csr_array((np.ones(keep.size), (keep, np.arange(keep.size))),
+                     shape=(sub.n_dof, keep.size))
+    return sub.transformed(T, tuple(sub.dof_labels[k] for k in keep), sub.kind,
+                           autospc=int(empty.sum()))
+
+
+def used_columns(sub: Substructure, refs: Any) -> set[int]:
+    """Columns of ``sub`` that the point references ``refs`` (``(substructure, where)``
+    pairs) touch."""
+    out: set[int] = set()
+    for name, where in refs:
+        if name == sub.name:
+            out.update(int(j) for j in sub.row(where).indices)
+    return out

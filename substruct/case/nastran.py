@@ -1,0 +1,92 @@
+"""Case-file Nastran models: ``type: nastran``, a substructure read from a bulk data file
+(:mod:`substruct.case.bdf`).
+
+.. code-block:: yaml
+
+    - name: bracket
+      type: nastran
+      file: bracket.bdf          # relative to the case file
+
+Points are ``bracket@12:3`` (grid 12, component 3; components ``1`` - ``6`` or ``ux`` ...
+``rz``), nodes of links ``bracket@12``.  The file is read and checked when the case is
+validated, so that any problem in it is reported before anything is built; its rigid elements
+and MPC set become rows of ``A`` (:mod:`substruct.builder.links`), its EIGRL is not used (the
+case's ``analysis`` says what to compute).
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+import yaml
+from pydantic import Field, PrivateAttr, ValidationInfo, model_validator
+
+from substruct.case.bdf import BulkData, read_bulk
+from substruct.case.errors import CaseError, FieldError
+from substruct.case.fields import Name, StrictModel
+
+__all__ = ["NastranSpec", "BDF_SUFFIXES", "bdf_case"]
+
+#: File name endings read as Nastran bulk data by ``substruct run``.
+BDF_SUFFIXES = (".bdf", ".dat", ".nas", ".bulk")
+
+
+class NastranSpec(StrictModel):
+    """A substructure from a Nastran bulk data file."""
+
+    name: Name
+    type: Literal["nastran"]
+    file: Annotated[str, Field(min_length=1)]
+
+    _bulk: Any = PrivateAttr(default=None)
+
+    @model_validator(mode="after")
+    def _read(self, info: ValidationInfo) -> "NastranSpec":
+        base = Path((info.context or {}).get("base_dir", "."))
+        try:
+            self._bulk = read_bulk(base / self.file, self.file)
+        except CaseError as err:
+            raise FieldError("file", str(err)) from None
+        return self
+
+    @property
+    def bulk(self) -> BulkData:
+        """The bulk data read."""
+        assert self._bulk is not None
+        return self._bulk
+
+    def n_dof(self) -> None:
+        """Known once built (supports decide it)."""
+        return None
+
+
+def bdf_case(path: Path, source: str) -> str:
+    """The case text of ``substruct run MODEL.bdf``: the model as its only substructure (named
+    after the file) and the normal modes its EIGRL asks for, ``ND`` of them.
+
+    Raises:
+        BdfError: the file cannot be read, has no EIGRL, or asks for modes by frequency range
+            only (``ND`` blank).
+    """
+    from substruct.case.bdf_fields import BdfError
+
+    bulk = read_bulk(path, path.name)
+    eig = bulk.eigrl
+    if eig is None:
+        raise BdfError(source, "no EIGRL: substruct run of a bulk data file computes the "
+                       "normal modes its EIGRL asks for")
+    name = re.sub(r"[^A-Za-z0-9_.-]", "_", path.stem)[:100] or "model"
+    modes: dict[str, Any] = {"count": eig.nd}
+    if eig.nd is None:
+        raise BdfError(source, "modes by frequency range alone (ND blank) are not run: give "
+                       "ND", line=eig.line, card="EIGRL", ident=eig.sid, name="ND")
+    if eig.v1 is not None or eig.v2 is not None:
+        raise BdfError(source, "a frequency range V1, V2 with ND is not run: leave V1, V2 "
+                       "blank", eig.v2 if eig.v2 is not None else eig.v1, line=eig.line,
+                       card="EIGRL", ident=eig.sid, name="V1")
+    data = {"name": name, "description": f"normal modes of {path.name} (EIGRL {eig.sid})",
+            "substructures": [{"name": name, "type": "nastran", "file": path.name}],
+            "analysis": {"modes": modes}}
+    return yaml.safe_dump(data, sort_keys=False)
