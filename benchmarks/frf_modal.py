@@ -17,7 +17,7 @@ point, the three-quarter point and the two absorber masses.  Frequencies: 10 to 
   ``--check-frequencies`` frequencies, 0 by default, since the direct column below is that
   check), all of it timed;
 * direct: the Lagrange-multiplier formulation itself,
-  :func:`substruct.analysis.coupling.receptance` with ``method="kkt"`` (one sparse complex LU
+  :func:`substruct.analysis.formulations.coupling.receptance` with ``method="kkt"`` (one sparse complex LU
   of the bordered impedance a frequency), on ``--direct-frequencies`` frequencies spread over
   the grid (a full 1,000-frequency direct sweep takes too long here: its cost is the same at
   every frequency, so the time is scaled to the whole grid and the table says so).
@@ -81,9 +81,9 @@ def timed(run, repeat: int):
 def chains_table(n: int, frequencies: int, repeat: int) -> None:
     """Two damped spring-mass chains of ``n`` coordinates each, joined end to start, every
     coordinate an input and an output (``2n x 2n`` receptances at each frequency): LM-FBS from
-    the two chains' receptances (:func:`substruct.analysis.frf_coupling.lm_fbs`, batched over
+    the two chains' receptances (:func:`substruct.analysis.frf.coupling.lm_fbs`, batched over
     the frequencies) against the inverse of the coupled impedance at each frequency."""
-    from substruct.analysis.frf_coupling import boolean_rows, lm_fbs, stack
+    from substruct.analysis.frf.coupling import boolean_rows, lm_fbs, stack
     from substruct.builder.frf_parts import FrfPart
 
     rng = np.random.default_rng(0)
@@ -135,8 +135,8 @@ def chains_table(n: int, frequencies: int, repeat: int) -> None:
 def main(argv: list[str] | None = None) -> None:
     """Print the tables (one row per size; then the two chains)."""
     from substruct.analysis.api import receptance_sweep
-    from substruct.analysis.coupling import receptance
-    from substruct.analysis.modal_frf import ModalOptions
+    from substruct.analysis.formulations.coupling import receptance
+    from substruct.analysis.frf.modal import ModalOptions
 
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--sizes", type=int, nargs="+", default=[3000, 10000])

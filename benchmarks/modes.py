@@ -185,7 +185,7 @@ def worker(kind: str, size: int, factorization: str, repeat: int) -> dict:
     """One measurement, in this (fresh) process."""
     t0 = time.perf_counter()
     if kind == "a":
-        from substruct.analysis.sparse_modes import null_space_modes
+        from substruct.analysis.modes.sparse import null_space_modes
         from substruct.assembly.stack import assemble
         subs, cons, mpcs = substruct_model(size)
         build = time.perf_counter() - t0

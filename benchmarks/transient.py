@@ -92,7 +92,7 @@ def baseline_run(mono: dict, steps: int, factorization: str) -> np.ndarray:
 
 def substruct_run(asm, method: str, steps: int, factorization: str) -> tuple[np.ndarray, float]:
     """substruct's transient on the assembled model; the output histories and the drift."""
-    from substruct.analysis.transient import TransientOptions, transient
+    from substruct.analysis.transient.response import TransientOptions, transient
     from substruct.assembly.stack import PointRef
     tip = asm.rows([PointRef("right", {"at": list(TIP), "component": "z"})])
     O = sp.csr_array(sp.vstack([tip, asm.rows([PointRef("t1", "mass")])]))

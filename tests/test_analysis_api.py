@@ -22,7 +22,7 @@ import pytest
 import scipy.sparse as sp
 
 import substruct.analysis.api as api
-import substruct.analysis.eigen as eigen
+import substruct.analysis.modes.eigen as eigen
 from substruct.analysis.api import SPARSE_ABOVE, choose_solver, modes, receptance_sweep
 from substruct.analysis.checks import modes_agreement, require_agreement
 from substruct.analysis.errors import CheckError

@@ -23,12 +23,12 @@ import pytest
 from substruct.assembly.stack import Connection, LinearConstraint, PointRef, assemble
 from substruct.linalg.constraints import ConstraintError
 from substruct.linalg.nullspace import null_space_basis
-from substruct.analysis.coupling import METHODS, constrained_acceleration, receptance, receptance_agreement
+from substruct.analysis.formulations.coupling import FORMULATIONS, constrained_acceleration, receptance, receptance_agreement
 from substruct.models.discrete import fixed_free, free_free
 from substruct.models.rod import (paper_taper, rod_assumed_modes, rod_fe,
                                   uniform_rod_frequencies)
 from substruct.analysis.checks import modes_agreement
-from substruct.analysis.dense_modes import MODE_METHODS, coupled_modes
+from substruct.analysis.modes.dense import FORMULATIONS, coupled_modes
 from substruct.models.reduction import modal_truncation
 
 from tolerances import solve_bound
@@ -38,7 +38,7 @@ INFINITE = "infinite root"
 
 
 def all_modes(M, C, K, A):
-    return {mth: coupled_modes(M, C, K, A, method=mth) for mth in MODE_METHODS}
+    return {mth: coupled_modes(M, C, K, A, method=mth) for mth in FORMULATIONS}
 
 
 def asm_modes(asm):
@@ -121,7 +121,7 @@ def test_redundant_nonhomogeneous_constraint_consistent_and_not():
     same = [LinearConstraint(((pa, 1.0),), force_terms=((pb, 1.0),), name="first"),
             LinearConstraint(((pa, 2.0),), force_terms=((pb, 2.0),), name="second")]
     asm = assemble(subs, (), same)
-    for method in METHODS:
+    for method in FORMULATIONS:
         H = receptance(asm.K, asm.M, asm.C, asm.A, 10.0, R=asm.R, method=method)
         np.testing.assert_allclose(H[0], [0.0, 1.0], atol=1e-14)  # u_a = F_b exactly
         # b alone, loaded by F_b, with u_a prescribed: 1 / (k - w^2 m + i w c)
@@ -202,7 +202,7 @@ def test_constraints_fix_everything():
     # (Z^-1), the forced answer against its own; both to c n eps cond
     Z = K - 1.5 ** 2 * M
     exact = np.linalg.solve(A, R)
-    for method in METHODS:
+    for method in FORMULATIONS:
         np.testing.assert_allclose(receptance(K, M, None, A, 1.5, method=method), 0.0,
                                    atol=solve_bound(Z, np.linalg.inv(Z)))
         np.testing.assert_allclose(receptance(K, M, None, A, 1.5, R=R, method=method),
@@ -340,7 +340,7 @@ def test_massless_coordinate_attached_to_nothing_is_refused():
     """Not legal: a massless coordinate with no stiffness and no constraint makes the pencil
     singular (every lambda is a root); all formulations say so instead of returning noise."""
     M, K = np.diag([1.0, 0.0]), np.diag([100.0, 0.0])
-    for method in MODE_METHODS:
+    for method in FORMULATIONS:
         with pytest.raises(ValueError, match="singular model"):
             coupled_modes(M, None, K, None, method=method)
 
@@ -354,7 +354,7 @@ def test_stiffness_1e12_next_to_1():
     boundary joined to the mass): ``m1 m2 w^4 - (m1 k + m2 (k0 + k)) w^2 + k0 k = 0``.  The
     frequencies (about 1 and 1e6) from all formulations; no spurious rigid-body mode (the
     unequilibrated rank test saw one: ``K / max K`` has singular values below ``1e-9``).  QZ
-    alone had the low one to ``1e-6`` (GI) and ``8e-6`` (KKT): see ``substruct.analysis.pencil.rayleigh_root``
+    alone had the low one to ``1e-6`` (GI) and ``8e-6`` (KKT): see ``substruct.analysis.modes.pencil.rayleigh_root``
     and ``_gi_polish``."""
     m1, k0, m2, k = 1.0, 1e12, 1.0, 1.0
     asm = assemble([fixed_free("base", m1, k0), free_free("abs", m2, k)],
@@ -395,7 +395,7 @@ def test_units_change_nothing_but_the_units():
     fm, fk = 1e-3, 1e6
     fw = np.sqrt(fk / fm)
     scaled = all_modes(fm * M, np.sqrt(fm * fk) * C, fk * K, 7.0 * A)
-    for mth in MODE_METHODS:
+    for mth in FORMULATIONS:
         np.testing.assert_allclose(scaled[mth].eigenvalues, fw * base[mth].eigenvalues,
                                    rtol=1e-11)
         np.testing.assert_allclose(scaled[mth].damping_ratio, base[mth].damping_ratio,

@@ -21,7 +21,7 @@ from substruct.cli.convergence_summary import print_table, run_convergence
 from substruct.io.convergence_report import load_h5, save_h5
 from substruct.models.enrichment import rod_assumed_modes_enriched, static_shapes
 from substruct.models.rod import paper_taper, rod_assumed_modes, rod_fe, uniform_rod_frequencies
-from substruct.analysis.dense_modes import coupled_modes
+from substruct.analysis.modes.dense import coupled_modes
 from substruct.linalg.nullspace import master_slave
 
 L = 200.0

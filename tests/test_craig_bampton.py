@@ -11,8 +11,8 @@ from substruct.assembly.interfaces import node_dofs, tie_nodes
 from substruct.models.discrete import free_free
 from substruct.models.rod import rod_fe
 from substruct.models.solid import solid_box
-from substruct.analysis.dense_modes import coupled_modes
-from substruct.analysis.sparse_modes import null_space_modes
+from substruct.analysis.modes.dense import coupled_modes
+from substruct.analysis.modes.sparse import null_space_modes
 
 E, NU, RHO = 2.1e11, 0.3, 7850.0
 L, B, H = 1.0, 0.1, 0.1

@@ -5,10 +5,10 @@ import pytest
 import scipy.sparse as sp
 
 from substruct.linalg.constraints import ConstraintError, independent_rows
-from substruct.analysis.coupling import (METHODS, constrained_acceleration, receptance,
+from substruct.analysis.formulations.coupling import (FORMULATIONS, constrained_acceleration, receptance,
                                 receptance_agreement)
 from substruct.analysis.checks import modes_agreement
-from substruct.analysis.dense_modes import MODE_METHODS, coupled_modes
+from substruct.analysis.modes.dense import FORMULATIONS, coupled_modes
 
 
 def random_system(rng, n, n_massless=0, damped=True):
@@ -74,7 +74,7 @@ def test_modes_agree(seed, n, m, redundant, n_massless, damped):
     rng = np.random.default_rng(100 + seed)
     M, C, K, massless = random_system(rng, n, n_massless, damped)
     A = random_constraints(rng, n, m, redundant, reach=massless)
-    sets = {mth: coupled_modes(M, C, K, A, method=mth) for mth in MODE_METHODS}
+    sets = {mth: coupled_modes(M, C, K, A, method=mth) for mth in FORMULATIONS}
     ref = sets["null-space"]
     r = np.linalg.matrix_rank(A)
     for mth, md in sets.items():
@@ -94,7 +94,7 @@ def test_inconsistent_constraints_are_reported(three_dof):
     with pytest.raises(ConstraintError, match="inconsistent"):
         receptance(K, M, C, A, w, R=R_bad)
     R_ok = np.array([[1.0, 1.0, 3.0], [2.0, 2.0, 6.0]])
-    for method in METHODS:
+    for method in FORMULATIONS:
         H = receptance(K, M, C, A, w, R=R_ok, method=method)
         np.testing.assert_allclose(A[:1] @ H, R_ok[:1], atol=1e-12)
 

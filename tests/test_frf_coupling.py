@@ -9,7 +9,7 @@ import pytest
 import scipy.sparse as sp
 
 from substruct.analysis.api import receptance_sweep
-from substruct.analysis.frf_coupling import (
+from substruct.analysis.frf.coupling import (
     boolean_rows,
     common_grid,
     decouple,

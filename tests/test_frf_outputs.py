@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from substruct import cli
-from substruct.analysis.frf_quantity import as_quantity, quantity_units
+from substruct.analysis.frf.quantity import as_quantity, quantity_units
 from substruct.case.loader import load_case
 from substruct.io import hdf5
 from substruct.io.uff import modes_from_2414, read_uff

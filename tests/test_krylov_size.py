@@ -4,7 +4,7 @@ A P2 rod of 8 elements fixed at both ends (15 coordinates) with one free-free ab
 and a massless boundary) joined at x = 150: 17 coordinates, one connection, 16 free.  ARPACK's
 default Krylov basis for 6 modes is 20 vectors, more than the 16 the shift-invert operator spans
 on ``null(A)``: it failed with "ARPACK error -9999".  The basis is now capped by the free
-coordinates (:func:`substruct.analysis.krylov.krylov_size`); the modes equal the dense ones, and
+coordinates (:func:`substruct.analysis.modes.krylov.krylov_size`); the modes equal the dense ones, and
 the command records which solver ran.
 """
 
@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 
 from cli_helpers import run
-from substruct.analysis.dense_modes import coupled_modes
-from substruct.analysis.krylov import free_coordinates, krylov_size, eliminate
-from substruct.analysis.sparse_modes import SPARSE_METHODS, sparse_coupled_modes
+from substruct.analysis.modes.dense import coupled_modes
+from substruct.analysis.modes.krylov import free_coordinates, krylov_size, eliminate
+from substruct.analysis.modes.sparse import FORMULATIONS, sparse_coupled_modes
 from substruct.assembly.stack import Connection, PointRef, assemble
 from substruct.io import hdf5
 from substruct.linalg.scaling import massless_coordinates
@@ -42,7 +42,7 @@ def test_the_model_leaves_sixteen_free_coordinates():
         krylov_size(15, 16)
 
 
-@pytest.mark.parametrize("method", SPARSE_METHODS)
+@pytest.mark.parametrize("method", FORMULATIONS)
 def test_sparse_modes_of_a_small_model_equal_the_dense_ones(method):
     asm = small_rod()
     dense = coupled_modes(asm.M, None, asm.K, asm.A, "null-space", n_modes=6)

@@ -11,7 +11,7 @@ import scipy.sparse as sp
 
 from substruct.analysis.api import receptance_sweep
 from substruct.analysis.errors import CheckError
-from substruct.analysis.modal_frf import MODAL_ABOVE, ModalOptions, frf_method
+from substruct.analysis.frf.modal import MODAL_ABOVE, ModalOptions, frf_method
 from substruct.case.loader import load_case
 from substruct.run.runner import build_model
 

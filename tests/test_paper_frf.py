@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from substruct.analysis.coupling import METHODS, paper_G_D, receptance, receptance_unconstrained
+from substruct.analysis.formulations.coupling import FORMULATIONS, paper_G_D, receptance, receptance_unconstrained
 
 from tolerances import solve_bound
 
@@ -51,7 +51,7 @@ def test_paper_G_D_H_eq40(three_dof):
     np.testing.assert_array_equal(printed(np.linalg.solve(G, D)), H40)
 
 
-@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("method", FORMULATIONS)
 def test_every_formulation_gives_eq40(three_dof, method):
     M, C, K, w = three_dof
     H = receptance(K, M, C, A38, w, method=method)
@@ -69,7 +69,7 @@ def test_homogeneous_receptance_is_reciprocal(three_dof):
     np.testing.assert_allclose(H, H.T, atol=solve_bound(Z, H))
 
 
-@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("method", FORMULATIONS)
 def test_nonhomogeneous_receptance_satisfies_its_constraint(three_dof, method):
     M, C, K, w = three_dof
     H = receptance(K, M, C, A41, w, R=R41, method=method)

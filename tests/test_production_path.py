@@ -10,13 +10,13 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 import substruct.analysis.errors as analysis_errors
-import substruct.analysis.production as production
+import substruct.analysis.modes.production as production
 import substruct.linalg.factorize as fz
 from substruct.analysis.api import modes
 from substruct.analysis.checks import modes_agreement
 from substruct.analysis.errors import AnalysisInputError, CheckError
-from substruct.analysis.krylov import check_inputs, eliminate
-from substruct.analysis.mode_checks import generalized_inverse_residual, kkt_residual
+from substruct.analysis.modes.krylov import check_inputs, eliminate
+from substruct.analysis.modes.checks import generalized_inverse_residual, kkt_residual
 from substruct.assembly.interfaces import tie_nodes
 from substruct.assembly.stack import Connection, LinearConstraint, PointRef, assemble
 from substruct.linalg.memory import factor_entries, require_memory
@@ -125,7 +125,7 @@ def test_the_fill_models_bound_the_measured_fill():
 def test_cholmod_and_superlu_give_the_same_modes(coupled):
     if not fz.has_cholmod():
         pytest.skip("scikit-sparse (CHOLMOD) is not installed: make fast")
-    from substruct.analysis.sparse_modes import null_space_modes
+    from substruct.analysis.modes.sparse import null_space_modes
     asm = coupled
     a = null_space_modes(asm.M, asm.K, asm.A, 8, factorization="cholmod")
     b = null_space_modes(asm.M, asm.K, asm.A, 8, factorization="superlu")

@@ -35,7 +35,7 @@ nonzero physical root is at least ``1e-4`` of the largest.  Near-mechanisms (a s
 ``K`` whose null space the constraints cut at a small angle) and slow decays (weakly damped
 rigid-body motions) break it: such a root sits next to the zero roots, where the roots of every
 formulation are ill conditioned and those of the paper's pencil (34) worse, next to its
-``2 rank(A)`` defective spurious zeros; the Rayleigh refinement (``substruct.analysis.pencil``) recovers
+``2 rank(A)`` defective spurious zeros; the Rayleigh refinement (``substruct.analysis.modes.pencil``) recovers
 most of it, ``tests/test_awkward_models.py`` shows the size of the effect.
 
 Examples are drawn with ``derandomize=True`` and no example database: the same code gives the
@@ -57,10 +57,10 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from substruct.linalg.constraints import independent_rows
-from substruct.analysis.coupling import (METHODS, constrained_acceleration, receptance,
+from substruct.analysis.formulations.coupling import (FORMULATIONS, constrained_acceleration, receptance,
                                 receptance_agreement)
 from substruct.analysis.checks import modes_agreement
-from substruct.analysis.dense_modes import MODE_METHODS, coupled_modes
+from substruct.analysis.modes.dense import FORMULATIONS, coupled_modes
 
 #: log10 of the half-width of each matrix's eigenvalue band (a condition number of 1e3)
 HALF_DECADES = 1.5
@@ -192,7 +192,7 @@ def test_receptance_formulations_agree(sys_, fractions):
     omegas = np.sort(fractions) * wref
     agree = receptance_agreement(K, M, C, A, omegas, R)
     assert max(agree.values()) < 1e-9, (agree, sys_.describe())
-    for method in METHODS:
+    for method in FORMULATIONS:
         H = receptance(K, M, C, A, omegas, R, method=method)
         scale = np.abs(H).max()
         target = 0.0 if R is None else R
@@ -211,7 +211,7 @@ def test_receptance_formulations_agree(sys_, fractions):
 @given(sys_=systems(massless="any", rhs=False, min_constraints=0))
 def test_modes_formulations_agree(sys_):
     M, C, K, A = sys_.M, sys_.C, sys_.K, sys_.A
-    sets = {mth: coupled_modes(M, C, K, A, method=mth) for mth in MODE_METHODS}
+    sets = {mth: coupled_modes(M, C, K, A, method=mth) for mth in FORMULATIONS}
     ref = sets["null-space"]
     assume(_spread_ok(ref))
     rank = independent_rows(A).rank if A.size else 0
@@ -251,7 +251,7 @@ def test_adding_a_constraint_interlaces(sys_, extra, extra_seed):
         row = rng.standard_normal((1, A.shape[0])) @ A
     A1 = np.vstack([A, row])
     added = independent_rows(A1).rank - (independent_rows(A).rank if A.size else 0)
-    for method in MODE_METHODS:
+    for method in FORMULATIONS:
         w0 = coupled_modes(M, None, K, A, method=method).omega
         w1 = coupled_modes(M, None, K, A1, method=method).omega
         assert w1.size == w0.size - added, (method, w0, w1, sys_.describe())

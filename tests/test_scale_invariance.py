@@ -26,9 +26,9 @@ import pytest
 import scipy.sparse as sp
 
 from cli_helpers import run
-from substruct.analysis.coupling import METHODS, receptance
-from substruct.analysis.dense_modes import coupled_modes
-from substruct.analysis.sparse_modes import SPARSE_METHODS, sparse_coupled_modes
+from substruct.analysis.formulations.coupling import FORMULATIONS, receptance
+from substruct.analysis.modes.dense import coupled_modes
+from substruct.analysis.modes.sparse import FORMULATIONS, sparse_coupled_modes
 from substruct.linalg.scaling import ZeroRowError
 
 SCALES = [1.0, 1e-8, 1e-300]
@@ -70,7 +70,7 @@ def test_the_reference_roots_are_two_damped_pairs():
 
 
 @pytest.mark.parametrize("c", SCALES)
-@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("method", FORMULATIONS)
 def test_dense_modes_do_not_depend_on_the_scale_of_a_row(c, method):
     M, C, K, A = chain_model(c)
     modes = coupled_modes(M, C, K, A, method)
@@ -80,7 +80,7 @@ def test_dense_modes_do_not_depend_on_the_scale_of_a_row(c, method):
 
 
 @pytest.mark.parametrize("c", SCALES)
-@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("method", FORMULATIONS)
 def test_receptance_does_not_depend_on_the_scale_of_a_row(c, method):
     M, C, K, A = chain_model(c)
     omegas = [0.3, 0.9, 2.5]
@@ -91,7 +91,7 @@ def test_receptance_does_not_depend_on_the_scale_of_a_row(c, method):
         assert np.abs(H[k] - ref).max() < 1e-12 * np.abs(ref).max(), (method, w)
 
 
-@pytest.mark.parametrize("method", METHODS)
+@pytest.mark.parametrize("method", FORMULATIONS)
 def test_force_tied_constraint_scaled_with_its_right_hand_side(method):
     """``c q1 = c F2`` (``A`` and ``R`` scaled together) is ``q1 = F2``: the receptance of
     ``c = 1e-8`` and ``1e-300`` equals that of ``c = 1``, and satisfies ``q1 = F2``."""
@@ -139,7 +139,7 @@ def split_chain(c: float, n: int = 60, left: int = 30):
 
 
 @pytest.mark.parametrize("c", SCALES)
-@pytest.mark.parametrize("method", SPARSE_METHODS)
+@pytest.mark.parametrize("method", FORMULATIONS)
 def test_sparse_modes_do_not_depend_on_the_scale_of_a_row(c, method):
     M, K, A, exact = split_chain(c)
     modes = sparse_coupled_modes(M, K, A, 6, method=method)

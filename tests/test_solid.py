@@ -26,7 +26,7 @@ from skfem.models.elasticity import linear_elasticity
 from substruct.models.elasticity import elasticity_matrices
 from substruct.models.mesh_io import read_mesh
 from substruct.models.solid import solid_box, solid_from_mesh, solid_rectangle
-from substruct.analysis.sparse_modes import null_space_modes
+from substruct.analysis.modes.sparse import null_space_modes
 from substruct.substructure import PointError
 
 MESHES = Path(__file__).resolve().parents[1] / "meshes"

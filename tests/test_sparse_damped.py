@@ -18,10 +18,10 @@ import scipy.sparse as sp
 
 from substruct.case.loader import parse_case
 from substruct.analysis import api
-from substruct.analysis.dense_modes import coupled_modes
+from substruct.analysis.modes.dense import coupled_modes
 from substruct.run.runner import build_model, run_case
-from substruct.analysis.sparse_damped import damped_sparse_modes
-from substruct.analysis.sparse_modes import sparse_coupled_modes
+from substruct.analysis.modes.damped import damped_sparse_modes
+from substruct.analysis.modes.sparse import sparse_coupled_modes
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from test_solid_cases import small_case  # noqa: E402

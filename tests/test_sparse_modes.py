@@ -19,8 +19,8 @@ from substruct.assembly.interfaces import InterfaceError, node_dofs, tie_nodes, 
 from substruct.models.discrete import free_free
 from substruct.models.solid import solid_box, solid_from_mesh, solid_rectangle
 from substruct.analysis.checks import modes_agreement
-from substruct.analysis.dense_modes import coupled_modes
-from substruct.analysis.sparse_modes import (generalized_inverse_modes, null_space_modes,
+from substruct.analysis.modes.dense import coupled_modes
+from substruct.analysis.modes.sparse import (generalized_inverse_modes, null_space_modes,
                                              sparse_coupled_modes)
 import substruct.linalg.factorize as fz
 from substruct.linalg.nullspace import master_slave

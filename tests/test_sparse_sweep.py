@@ -8,12 +8,12 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-import substruct.analysis.sparse_sweep as sweep
+import substruct.analysis.frf.sparse as sweep
 from substruct.analysis.api import receptance_sweep
-from substruct.analysis.coupling import receptance
+from substruct.analysis.formulations.coupling import receptance
 from substruct.analysis.errors import CheckError
-from substruct.analysis.production_sweep import check_frequencies
-from substruct.analysis.sparse_sweep import null_space_sparse_sweep
+from substruct.analysis.frf.production import check_frequencies
+from substruct.analysis.frf.sparse import null_space_sparse_sweep
 
 
 def chains(n: int = 60, k: float = 1e4, m: float = 1.0):
@@ -73,7 +73,7 @@ def test_receptance_sweep_takes_the_production_path_and_checks_three_frequencies
 
 
 def test_a_check_that_disagrees_fails_the_production_sweep(monkeypatch):
-    import substruct.analysis.production_sweep as production_sweep
+    import substruct.analysis.frf.production as production_sweep
     K, M, C, A = chains()
     n = K.shape[0]
     real = production_sweep.receptance

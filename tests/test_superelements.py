@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from substruct.analysis.dense_modes import coupled_modes
+from substruct.analysis.modes.dense import coupled_modes
 from substruct.assembly.stack import Connection, PointRef, assemble
 from substruct.case.loader import CaseError, load_case
 from substruct.case.op4 import read_op4

@@ -10,8 +10,8 @@ import pytest
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-import substruct.analysis.sparse_sweep as sweep
-from substruct.analysis.sparse_sweep import Gather, null_space_sparse_sweep
+import substruct.analysis.frf.sparse as sweep
+from substruct.analysis.frf.sparse import Gather, null_space_sparse_sweep
 from substruct.linalg.banded import (
     band_factor,
     band_solve_many,
@@ -171,7 +171,7 @@ def test_constraint_residual_does_not_depend_on_a_row_scale(n_chain):
     1e8 leaves it at round-off, on the production path (more than 100 coordinates) and on
     the direct formulations (fewer)."""
     from substruct.analysis.api import receptance_sweep
-    from substruct.analysis.production_sweep import SWEEP_SPARSE_ABOVE
+    from substruct.analysis.frf.production import SWEEP_SPARSE_ABOVE
 
     K, M, C, A = chains(n_chain)
     n = K.shape[0]
@@ -189,7 +189,7 @@ def test_checks_solve_a_spread_sample_of_many_inputs_and_catch_a_wrong_column(mo
     last included; a production answer wrong in one sampled column fails the check."""
     import substruct.analysis.api as api
     from substruct.analysis.errors import CheckError
-    from substruct.analysis.production_sweep import CHECK_INPUTS, checked_inputs
+    from substruct.analysis.frf.production import CHECK_INPUTS, checked_inputs
 
     cols = checked_inputs(400)
     assert cols.size == CHECK_INPUTS and cols[0] == 0 and cols[-1] == 399

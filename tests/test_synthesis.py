@@ -7,7 +7,7 @@ from substruct.assembly.stack import Connection, LinearConstraint, PointRef, ass
 from substruct.models.discrete import fixed_free, free_free
 from substruct.models.rod import paper_taper, rod_assumed_modes, rod_fe
 from substruct.analysis.checks import modes_agreement
-from substruct.analysis.dense_modes import MODE_METHODS, coupled_modes
+from substruct.analysis.modes.dense import FORMULATIONS, coupled_modes
 from substruct.models.reduction import modal_truncation
 
 L = 200.0
@@ -39,13 +39,13 @@ def modes_of(asm, method="generalized-inverse"):
     return coupled_modes(asm.M, asm.C, asm.K, asm.A, method=method)
 
 
-@pytest.mark.parametrize("method", MODE_METHODS)
+@pytest.mark.parametrize("method", FORMULATIONS)
 def test_table1_without_constraint52_paper_literal(method):
     md = modes_of(tapered_rod_model("paper-literal", with52=False), method)
     np.testing.assert_array_equal(np.round(md.omega[:6], 1), TABLE1_WITHOUT)
 
 
-@pytest.mark.parametrize("method", MODE_METHODS)
+@pytest.mark.parametrize("method", FORMULATIONS)
 def test_table1_with_constraint52_paper_literal(method):
     asm = tapered_rod_model("paper-literal", with52=True)
     md = modes_of(asm, method)

@@ -10,10 +10,10 @@ import pytest
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from substruct.analysis.coupling import receptance
+from substruct.analysis.formulations.coupling import receptance
 from substruct.analysis.errors import CheckError
-from substruct.analysis.integrators import scheme
-from substruct.analysis.transient import TransientOptions, transient
+from substruct.analysis.transient.integrators import scheme
+from substruct.analysis.transient.response import TransientOptions, transient
 from substruct.case.loader import load_case
 from substruct.run.runner import build_model
 

@@ -1,4 +1,4 @@
-"""Base excitation of grounded supports (substruct/analysis/transient_base.py): a prescribed
+"""Base excitation of grounded supports (substruct/analysis/transient/base.py): a prescribed
 ground motion as the nonhomogeneous constraint A q = b + e g(t), checked against closed forms
 of a single oscillator on a moving base and against the relative-motion form (effective load
 -M r g'') of a coupled model."""
@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from cli_helpers import run
-from substruct.analysis.integrators import scheme
-from substruct.analysis.transient import TransientOptions, transient
-from substruct.analysis.transient_base import BaseMotion, ground_history
+from substruct.analysis.transient.integrators import scheme
+from substruct.analysis.transient.response import TransientOptions, transient
+from substruct.analysis.transient.base import BaseMotion, ground_history
 from substruct.io import hdf5 as results
 
 M1, K1, ZETA = 2.0, 800.0, 0.05
@@ -170,7 +170,7 @@ def test_coupled_model_base_motion_equals_relative_form_with_effective_load():
 def test_initial_acceleration_by_sparse_kkt_when_the_dense_gain_is_refused(monkeypatch):
     """A model whose n x m gain may not be copied dense starts from the same eq-10
     acceleration (one sparse KKT factorization), so the whole history is the same."""
-    import substruct.analysis.transient as transient_module
+    import substruct.analysis.transient.response as transient_module
     M, C, K, A = _oscillator()
     n = 200
     g = np.cos(20 * 1e-3 * np.arange(n + 1))

@@ -12,7 +12,7 @@ import pytest
 import scipy.sparse as sp
 
 from cli_helpers import run
-from substruct.analysis.transient import TransientOptions, transient
+from substruct.analysis.transient.response import TransientOptions, transient
 from substruct.io import hdf5 as results
 from test_export import make_result
 

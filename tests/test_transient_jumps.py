@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 import scipy.linalg as sla
 
-from substruct.analysis.integrators import scheme
-from substruct.analysis.transient import TransientOptions, transient
-from substruct.analysis.transient_loads import for_scheme, merge_pairs, step_pairs
+from substruct.analysis.transient.integrators import scheme
+from substruct.analysis.transient.response import TransientOptions, transient
+from substruct.analysis.transient.loads import for_scheme, merge_pairs, step_pairs
 from substruct.case.loader import parse_case
 from substruct.case.transient_signals import Step, TableShape, waveform
 from substruct.run.runner import build_model

@@ -18,7 +18,7 @@ import substruct
 import substruct.analysis.api as api
 from substruct.analysis.checks import require_finite
 from substruct.analysis.errors import CheckError
-from substruct.analysis.pencil import rayleigh_root
+from substruct.analysis.modes.pencil import rayleigh_root
 
 from cli_helpers import run
 

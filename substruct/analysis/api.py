@@ -2,14 +2,14 @@ r"""The front door from an assembled model to results: coupled modes and recepta
 its cross-checks.
 
 :func:`modes` (eqs 23-34) and the one choice of its strategy, :func:`choose_solver`, live in
-:mod:`substruct.analysis.eigen` and are named here so that every analysis is reached from one
+:mod:`substruct.analysis.modes.eigen` and are named here so that every analysis is reached from one
 module.
 
 :func:`receptance_sweep` computes the receptances (eq 15)
 
 .. math::  H[k, i, j] = o_i\, \hat H(\omega_k)\, e_j, \qquad \hat H = G^{-1} D,
 
-by the main formulation and the checks (:func:`substruct.analysis.coupling.receptance`) and
+by the main formulation and the checks (:func:`substruct.analysis.formulations.coupling.receptance`) and
 returns one :class:`~substruct.analysis.results.Receptance`, with the constraint residual
 :math:`\max |A \hat q - R F| / \max |H|`.
 
@@ -33,20 +33,20 @@ from substruct.analysis.checks import (
     receptance_difference,
     require_agreement,
 )
-from substruct.analysis.coupling import receptance
-from substruct.analysis.eigen import (
+from substruct.analysis.formulations.coupling import receptance
+from substruct.analysis.modes.eigen import (
     SOLVERS,
     SPARSE_ABOVE,
     SolverChoice,
     choose_solver,
     modes,
 )
-from substruct.analysis.modal_frf import (
+from substruct.analysis.frf.modal import (
     ModalOptions,
     frf_method,
     modal_receptance_sweep,
 )
-from substruct.analysis.production_sweep import (
+from substruct.analysis.frf.production import (
     PRODUCTION_SWEEP,
     constraint_residual,
     production_sweep,
@@ -55,6 +55,7 @@ from substruct.analysis.production_sweep import (
 )
 from substruct.analysis.results import DEFAULT_TOLERANCE, Receptance
 from substruct.linalg.scaling import equilibrate
+from substruct.vocabulary import GENERALIZED_INVERSE
 
 __all__ = [
     "Progress",
@@ -107,7 +108,7 @@ def receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
                      omegas: Sequence[float] | np.ndarray,
                      inputs: sp.sparray | np.ndarray, outputs: sp.sparray | np.ndarray, *,
                      R: sp.sparray | np.ndarray | None = None,
-                     method: str = "generalized-inverse", checks: Sequence[str] = (),
+                     method: str = GENERALIZED_INVERSE, checks: Sequence[str] = (),
                      tolerance: float = DEFAULT_TOLERANCE,
                      input_names: Sequence[str] | None = None,
                      output_names: Sequence[str] | None = None,
@@ -127,11 +128,11 @@ def receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
         inputs: ``n x p`` generalized forces ``e_j`` (columns).
         outputs: ``q x n`` output rows ``o_i``.
         R: ``m x n``, ties the constraint to the force (``None``: ``A q = 0``).
-        method: the main formulation (``"generalized-inverse"``, ``"null-space"``, ``"kkt"``),
+        method: the main formulation (``generalized-inverse``, ``null-space``, ``kkt``),
             ``"modal"`` (modal superposition with a residual flexibility, checked by the direct
             ``checks`` at a few frequencies:
-            :func:`substruct.analysis.modal_frf.modal_receptance_sweep`) or ``"auto"``
-            (:func:`substruct.analysis.modal_frf.frf_method`).
+            :func:`substruct.analysis.frf.modal.modal_receptance_sweep`) or ``"auto"``
+            (:func:`substruct.analysis.frf.modal.frf_method`).
         checks: check formulations (the main one and repeats are skipped).
         tolerance: the largest ``max |H_check - H| / max |H|`` a check may have (when the
             constraints hold every coordinate, ``H`` is exactly zero and the figures are
@@ -143,7 +144,7 @@ def receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
         progress: called as ``progress(done, total, method)`` during the sweeps.
         what: how the analysis is named in error messages.
         modal: options of the modal sweep (the defaults of
-            :class:`~substruct.analysis.modal_frf.ModalOptions` if ``None``).
+            :class:`~substruct.analysis.frf.modal.ModalOptions` if ``None``).
 
     Raises:
         CheckError: a check disagrees by more than ``tolerance``.
@@ -156,7 +157,7 @@ def receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
         sp.csr_array(A, dtype=float)
     held = holds_every_coordinate(As, R, K.shape[0])
     if held and method == "modal":  # no mode to sum: the direct form gives the exact zero
-        method = "generalized-inverse"
+        method = GENERALIZED_INVERSE
     if method == "modal":
         return modal_receptance_sweep(K, M, C, A, omegas, inputs, outputs, R=R,
                                       options=modal or ModalOptions(), checks=checks,
@@ -193,7 +194,7 @@ def receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
             residual = float(np.abs(full[:, k_out:] - RE[None]).max() / scale)
         H = _leading_rows(full, k_out)
     agreement = {}
-    if production:  # checked at a few frequencies (analysis/production_sweep.py)
+    if production:  # checked at a few frequencies (analysis/frf/production.py)
         agreement = sweep_checks(Ks, Ms, Cs, As, w, forces, out_rows, H, method, checks, labels)
         method = PRODUCTION_SWEEP
     for check in [] if production else check_methods(method, checks):

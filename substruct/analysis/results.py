@@ -20,11 +20,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from substruct.vocabulary import DEFAULT_TOLERANCE
+
 __all__ = ["Modes", "Receptance", "DEFAULT_TOLERANCE"]
 
-#: Largest relative disagreement between the main formulation and a check that a result may
-#: have (``analysis.modes.tolerance``, ``analysis.frf.tolerance`` in a case file).
-DEFAULT_TOLERANCE = 1e-6
+# DEFAULT_TOLERANCE (substruct.vocabulary): the largest relative disagreement between the main
+# formulation and a check that a result may have (``analysis.modes.tolerance``,
+# ``analysis.frf.tolerance`` in a case file).
 
 
 @dataclass(kw_only=True)
@@ -35,7 +37,7 @@ class Modes:
 
     * a complex root stands for its conjugate pair: one entry, ``Im lambda > 0``;
     * a real root (over-damped, or critically damped within
-      :data:`substruct.analysis.roots.REAL_TOL`) is an entry of its own, with ``Im lambda = 0``
+      :data:`substruct.analysis.modes.roots.REAL_TOL`) is an entry of its own, with ``Im lambda = 0``
       exactly, ``omega = |lambda|`` and ``damping_ratio = 1``; an over-damped pair
       ``-zeta w +- w sqrt(zeta^2 - 1)`` therefore gives two entries, neither of which has the
       classical ``zeta > 1`` (pair them by hand if that is wanted);
@@ -47,8 +49,8 @@ class Modes:
       ``spurious`` with a reason each (the sparse solvers never compute them).
 
     Attributes:
-        method: the formulation that computed them (``"generalized-inverse"``, ``"null-space"``,
-            ``"kkt"``; ``"<method>/sparse"`` from the sparse solvers).
+        method: the formulation that computed them (``generalized-inverse``, ``null-space``,
+            ``kkt``; ``"<method>/sparse"`` from the sparse solvers).
         eigenvalues: complex roots ``lambda`` (one of each conjugate pair, ``Im >= 0``),
             ascending in ``|lambda|``.
         omega: ``|lambda|`` in rad/s (the undamped natural frequency for proportional damping).
@@ -103,7 +105,7 @@ class Receptance:
     .. math::  H[k, i, j] = o_i\, \hat H(\omega_k)\, e_j \qquad (\hat H = G^{-1} D,\ \text{eq 15})
 
     Attributes:
-        method: the formulation of ``H`` (``"generalized-inverse"``, ``"null-space"``, ``"kkt"``).
+        method: the formulation of ``H`` (``generalized-inverse``, ``null-space``, ``kkt``).
         omega: circular frequencies (rad/s).
         H: complex ``(n_omega, n_outputs, n_inputs)``.
         inputs, outputs: the names of the input and output points, verbatim.
@@ -113,7 +115,7 @@ class Receptance:
             path both maxima at the checked frequencies).
         tolerance: the largest ``agreement`` the result was allowed.
         quantity: what ``H`` is: ``"receptance"`` (u / F), ``"mobility"`` (velocity / F) or
-            ``"accelerance"`` (acceleration / F) (:mod:`substruct.analysis.frf_quantity`).
+            ``"accelerance"`` (acceleration / F) (:mod:`substruct.analysis.frf.quantity`).
     """
 
     method: str

@@ -15,7 +15,7 @@ split (:func:`split_frf_case`) into
   the interface pairs of point names, each joining two coordinates.
 
 :mod:`substruct.run.frf_route` computes the model's receptances, couples everything by
-LM-FBS (:mod:`substruct.analysis.frf_coupling`) and reports the case's inputs and outputs.
+LM-FBS (:mod:`substruct.analysis.frf.coupling`) and reports the case's inputs and outputs.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 A user constraint is ``sum_k c_k u(p_k) = rhs + sum_j d_j F(p_j)`` (eqs 41, 52); the analyses
 are the coupled modes (eqs 28-34) and the receptances at a frequency grid (eqs 11-15), each by
-one formulation and checked by others (:mod:`substruct.analysis.coupling`).
+one formulation and checked by others (:mod:`substruct.analysis.formulations.coupling`).
 """
 
 from __future__ import annotations
@@ -28,15 +28,19 @@ from substruct.case.fields import (
 )
 from substruct.case.numbers import MAX_MAGNITUDE, RANGE
 from substruct.case.transient import TransientAnalysis
+from substruct.vocabulary import (
+    DEFAULT_TOLERANCE,
+    GENERALIZED_INVERSE,
+    Formulation,
+    FrfMethod,
+    Quantity,
+    Residual,
+    Solver,
+)
 
-__all__ = ["METHODS", "TOLERANCE", "Method", "ConstraintSpec", "Variant", "ModesAnalysis",
+__all__ = ["ConstraintSpec", "Variant", "ModesAnalysis",
            "Omega", "ModalFrf", "FrfAnalysis", "Analysis", "Output"]
 
-#: Formulations that an analysis may name (see :mod:`substruct.analysis.coupling`).
-METHODS = ("generalized-inverse", "null-space", "kkt")
-#: Default ``tolerance`` of the cross-checks (relative), as
-#: ``substruct.analysis.results.DEFAULT_TOLERANCE``.
-TOLERANCE = 1e-6
 
 
 class ConstraintSpec(StrictModel):
@@ -69,22 +73,21 @@ class Variant(StrictModel):
     drop: Annotated[list[Name], Field(min_length=1)]
 
 
-Method = Literal["generalized-inverse", "null-space", "kkt"]
 
 
 class ModesAnalysis(StrictModel):
     """Coupled modes (eqs 28-34) by ``method``, checked by the ``check`` formulations."""
 
     count: Count = 6
-    method: Method = "generalized-inverse"
-    check: list[Method] = Field(default_factory=list)
+    method: Formulation = GENERALIZED_INVERSE
+    check: list[Formulation] = Field(default_factory=list)
     variants: list[Variant] = Field(default_factory=list)
     #: dense (eqs 28-34, all roots), sparse (shift-invert, the lowest count roots) or auto
     #: (sparse above SPARSE_ABOVE coordinates); see substruct.analysis.api.choose_solver
-    solver: Literal["auto", "dense", "sparse"] = "auto"
+    solver: Solver = "auto"
     #: largest relative eigenvalue difference a check may have from the main formulation; a
     #: larger one fails the run (substruct.analysis.checks.require_agreement)
-    tolerance: Positive = TOLERANCE
+    tolerance: Positive = DEFAULT_TOLERANCE
 
 
 class Omega(StrictModel):
@@ -140,15 +143,15 @@ class Omega(StrictModel):
 
 
 class ModalFrf(StrictModel):
-    """How ``method: modal`` sums the coupled modes (:mod:`substruct.analysis.modal_frf`)."""
+    """How ``method: modal`` sums the coupled modes (:mod:`substruct.analysis.frf.modal`)."""
 
     #: the number of modes kept (default: those up to cutoff x the highest frequency)
     count: Count | None = None
     cutoff: Annotated[Number, Field(ge=1)] = 10.0
-    residual: Literal["second-order", "static", "none"] = "second-order"
+    residual: Residual = "second-order"
     #: frequencies of the grid at which the direct solve checks the modal sum
     check_frequencies: Annotated[int, Field(ge=0, le=100)] = 3
-    solver: Literal["auto", "dense", "sparse"] = "auto"
+    solver: Solver = "auto"
 
 
 class FrfAnalysis(StrictModel):
@@ -158,17 +161,17 @@ class FrfAnalysis(StrictModel):
     inputs: Annotated[list[Point], Field(min_length=1)]
     outputs: Annotated[list[Point], Field(min_length=1)]
     #: a direct formulation, modal (modal superposition) or auto (modal on large models)
-    method: Method | Literal["modal", "auto"] = "generalized-inverse"
-    check: list[Method] = Field(default_factory=list)
+    method: FrfMethod = GENERALIZED_INVERSE
+    check: list[Formulation] = Field(default_factory=list)
     modal: ModalFrf = Field(default_factory=ModalFrf)
     #: the unit of the omega grid's values (rad/s or Hz)
     units: Literal["rad/s", "Hz"] = "rad/s"
     #: what the results are reported as: u / F, velocity / F or acceleration / F
-    quantity: Literal["receptance", "mobility", "accelerance"] = "receptance"
+    quantity: Quantity = "receptance"
     #: how the pictures draw |H|: on a log axis, or in decibels, 20 log10 (|H| / 1 unit)
     magnitude: Literal["log", "db"] = "log"
     #: largest max |H_check - H| / max |H| a check may have; a larger one fails the run
-    tolerance: Positive = TOLERANCE
+    tolerance: Positive = DEFAULT_TOLERANCE
 
     def omegas(self) -> np.ndarray:
         """The circular frequencies of the grid (rad/s), converted from Hz if ``units: Hz``."""
@@ -178,7 +181,7 @@ class FrfAnalysis(StrictModel):
     @model_validator(mode="after")
     def _positive(self) -> "FrfAnalysis":
         w = self.omega.grid()
-        if "generalized-inverse" in (self.method, *self.check) and np.any(w <= 0):
+        if GENERALIZED_INVERSE in (self.method, *self.check) and np.any(w <= 0):
             raise FieldError("omega", "the generalized-inverse receptance (eq 15) is singular "
                              "at omega = 0: use frequencies > 0 (or method kkt for statics)",
                              float(w[w <= 0][0]))

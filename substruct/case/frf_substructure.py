@@ -9,7 +9,7 @@ r"""A substructure known only by its receptances: ``type: frf``.
       decouple: false           # true: a known part removed from the assembly it is joined to
 
 Its points are its labels, ``meas@3:z``.  It has no mass, damping or stiffness matrices: the
-case is coupled by frequency-based substructuring (:mod:`substruct.analysis.frf_coupling`) on
+case is coupled by frequency-based substructuring (:mod:`substruct.analysis.frf.coupling`) on
 the grid of ``analysis.frf``, after the other substructures' receptances are computed at the
 coordinates joined to it (``docs/frf.md``).  With ``decouple: true`` its receptance enters
 negated, :math:`Y = \operatorname{diag}(\dots, -Y_R)`: coupling it to a measured assembly at

@@ -43,7 +43,6 @@ from pydantic import (
 )
 
 from substruct.case.analysis import (
-    METHODS,
     Analysis,
     ConstraintSpec,
     FrfAnalysis,
@@ -97,7 +96,6 @@ __all__ = [
     "apply_overrides",
     "read_case_text",
     "MAX_CASE_FILE",
-    "METHODS",
     "MEMORY_LIMIT",
     "MAX_ASSUMED_MODES",
     "MAX_ELEMENTS",
@@ -285,7 +283,9 @@ def _names_in(node: Any, out: set[str], depth: int = 0) -> None:
 
 def _refuse_unused_parameters(data: dict, source: str, set_paths: Sequence[str]) -> None:
     """Every key is used or refused: a parameter that no expression, point, other parameter or
-    study names is refused (a misspelt name, or one set with ``--set`` that does nothing)."""
+    study names is refused (a misspelt name, or one set with ``--set`` that does nothing); a
+    parameter of the file that ``--set`` overrides of other fields leave unused is not (the
+    file as written uses it)."""
     params = data.get("parameters")
     if not isinstance(params, dict) or not params:
         return
@@ -298,6 +298,8 @@ def _refuse_unused_parameters(data: dict, source: str, set_paths: Sequence[str])
             problem = "a parameter that nothing uses (no expression, point or study names it)"
             if path in set_paths:
                 problem += " (set on the command line)"
+            elif set_paths:  # the file's own parameter, left unused by what --set rewired
+                continue
             raise CaseError(source, path, problem, params[name])
 
 

@@ -34,6 +34,7 @@ from substruct.case.numbers import (
     MIN_MAGNITUDE,
     number_problem,
 )
+from substruct.vocabulary import Support
 
 __all__ = ["AssumedModes", "FiniteElements", "Discretization", "ModalDamping", "Reduce",
            "RodSpec", "DiscreteSpec", "SpringSpec", "MassSpec"]
@@ -149,7 +150,7 @@ class RodSpec(StrictModel):
     length: Positive
     EA: Distribution
     m: Distribution
-    support: Literal["fixed-free", "fixed-fixed", "free-free", "free-fixed"] = "fixed-free"
+    support: Support = "fixed-free"
     discretization: Discretization
     reduce: Reduce | None = None
     _EA: Any = PrivateAttr(default=None)

@@ -1,5 +1,5 @@
 r"""The ``analysis: transient:`` block of a case file: the constrained transient response
-(eqs 5, 10; :mod:`substruct.analysis.transient`).
+(eqs 5, 10; :mod:`substruct.analysis.transient.response`).
 
 Loads act at points; each is ``amplitude`` times a shape of ``t`` (a signal,
 :mod:`substruct.case.transient_signals`: ``step``, ``ramp``, ``half-sine``, ``harmonic``,
@@ -31,6 +31,12 @@ from substruct.case.fields import (
 )
 from substruct.case.transient_files import MAX_TABLE_ROWS, read_table
 from substruct.case.transient_signals import Signal, TransientLoad, load_values
+from substruct.vocabulary import (
+    DEFAULT_TOLERANCE,
+    GENERALIZED_INVERSE,
+    Integrator,
+    TransientForm,
+)
 
 __all__ = ["MAX_STEPS", "MAX_TABLE_ROWS", "MAX_LOAD_VALUES", "RECORD_BYTES", "Signal", "TransientLoad", "BaseExcitation",
            "InitialState", "TransientAnalysis", "load_values", "read_table", "memory_need",
@@ -38,8 +44,6 @@ __all__ = ["MAX_STEPS", "MAX_TABLE_ROWS", "MAX_LOAD_VALUES", "RECORD_BYTES", "Si
 
 #: The most steps a run may take.
 MAX_STEPS = 10_000_000
-#: Default tolerance of the checks (as substruct.analysis.results.DEFAULT_TOLERANCE).
-TOLERANCE = 1e-6
 #: The most values a load table may hold (loads times instants: 800 MB), whatever the memory.
 MAX_LOAD_VALUES = 100_000_000
 #: Bytes a recorded sample takes besides its values (measured, :func:`memory_need`).
@@ -51,7 +55,7 @@ RHO_INF = 0.9
 class BaseExcitation(StrictModel):
     r"""A prescribed ground motion :math:`g(t)` of the supports at the points ``at``: each
     point must be held by a constraint row on it alone (``terms: {p: c}``), which becomes
-    :math:`c\, u(p) = \text{rhs} + c\, g(t)` (:mod:`substruct.analysis.transient_base`).
+    :math:`c\, u(p) = \text{rhs} + c\, g(t)` (:mod:`substruct.analysis.transient.base`).
     Give the ``acceleration`` :math:`\ddot g` (the ground starts at rest) or the
     ``displacement`` :math:`g`, each a signal as a load's."""
 
@@ -155,13 +159,13 @@ class TransientAnalysis(StrictModel):
 
     t_end: Positive
     dt: Positive
-    integrator: Literal["newmark", "generalized-alpha"] = "newmark"
+    integrator: Integrator = "newmark"
     #: generalized-alpha only (Newmark's average acceleration has 1)
     rho_inf: Annotated[float, Field(ge=0, le=1)] | None = None
-    method: Literal["generalized-inverse", "null-space", "modal"] = "generalized-inverse"
-    check: list[Literal["generalized-inverse", "null-space", "modal"]] = Field(
+    method: TransientForm = GENERALIZED_INVERSE
+    check: list[TransientForm] = Field(
         default_factory=list)
-    tolerance: Positive = TOLERANCE
+    tolerance: Positive = DEFAULT_TOLERANCE
     loads: list[TransientLoad] = Field(default_factory=list)
     #: a prescribed ground motion of grounded supports
     base: BaseExcitation | None = None

@@ -23,7 +23,7 @@ expression" instead of running as a unit step; any other key is refused as unkno
 
 :func:`waveform` gives a signal's values and its breakpoints, the instants where it or its
 slope jumps (the start of a step; the start and end of a ramp, of a half-sine, of a table), so
-that the integration can treat them exactly (:mod:`substruct.analysis.transient_loads`).
+that the integration can treat them exactly (:mod:`substruct.analysis.transient.loads`).
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """``substruct compare A.h5 B.h5``: the modes of two results (or two variants) side by side.
 
 Prints a frequency table (each mode of the first paired with the mode of the second of largest
-MAC, :mod:`substruct.analysis.mac`; by order when no coordinates are shared) and the MAC
+MAC, :mod:`substruct.analysis.modes.mac`; by order when no coordinates are shared) and the MAC
 matrix; ``--image PNG`` draws the matrix (:mod:`substruct.viz.mac_picture`), ``--json`` prints
 all of it as JSON.  The shapes are compared on the coordinates the two models share by label
 (all of them for two variants or two runs of one case).
@@ -23,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from substruct.analysis.mac import mac_matrix, pair_modes
+from substruct.analysis.modes.mac import mac_matrix, pair_modes
 from substruct.cli.errors import InputError
 from substruct.cli.files import check_out_file, check_targets, load_result, optional_module
 

@@ -10,7 +10,7 @@ from typing import TYPE_CHECKING, Any, TextIO
 import numpy as np
 
 if TYPE_CHECKING:
-    from substruct.analysis.transient_results import Transient
+    from substruct.analysis.transient.results import Transient
 
 __all__ = ["peaks", "transient_json", "print_transient", "MAX_FORCES"]
 

@@ -1,5 +1,5 @@
 r"""The ``/transient/`` group of a results file (docs/results.md): the time histories of
-:class:`substruct.analysis.transient_results.Transient`.
+:class:`substruct.analysis.transient.results.Transient`.
 
 ============================  ======================================================  =========
 dataset                       contents                                                units attr
@@ -37,7 +37,7 @@ import h5py
 import numpy as np
 
 from substruct.analysis.results import DEFAULT_TOLERANCE
-from substruct.analysis.transient_results import ENERGY_LABELS, Transient
+from substruct.analysis.transient.results import ENERGY_LABELS, Transient
 
 __all__ = ["write_transient", "read_transient", "ArrayReader"]
 

@@ -9,7 +9,7 @@ per-column overhead (SuperLU: 11 ms for 400 right-hand sides of a 399-coordinate
 LAPACK's substitutions ``gbtrs`` call a BLAS ``tbsv`` a right-hand side, so with hundreds of
 them :func:`band_solve_many` does the substitutions in compiled loops instead
 (:mod:`substruct.linalg.band_kernel`).  The frequency sweeps use these solves when ``b`` is at
-most :data:`BAND_MAX` (:mod:`substruct.analysis.sparse_sweep`).
+most :data:`BAND_MAX` (:mod:`substruct.analysis.frf.sparse`).
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 r"""The one shift-invert Lanczos eigensolver of the package.
 
-Every sparse eigen solve (the coupled modes of :mod:`substruct.analysis.sparse_modes`, modal
+Every sparse eigen solve (the coupled modes of :mod:`substruct.analysis.modes.sparse`, modal
 truncation and the fixed-interface modes of Craig-Bampton in :mod:`substruct.models`) is
 
 .. math::  K u = \omega^2 M u, \qquad (K - \sigma M)^{-1} M u = \frac{1}{\omega^2 - \sigma} u,

@@ -14,12 +14,12 @@ import numpy as np
 import scipy.sparse as sp
 
 from substruct.substructure import Geometry, PointError
+from substruct.vocabulary import SUPPORTS
 
 __all__ = ["SUPPORTS", "Profile", "check_support", "check_length", "as_profile",
            "check_positive", "rod_point", "point_label", "line_geometry", "drawing_points",
            "ritz_functions"]
 
-SUPPORTS = ("fixed-free", "fixed-fixed", "free-free", "free-fixed")
 """Support names: end condition at ``x = 0``, then at ``x = L``."""
 
 #: A distribution along the rod: a numpy-vectorized callable of ``x``.

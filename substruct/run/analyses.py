@@ -28,8 +28,8 @@ import scipy.sparse as sp
 from substruct.analysis.api import Progress, modes, receptance_sweep
 from substruct.analysis.errors import INPUT_ERRORS, CheckError
 from substruct.analysis.events import Phase
-from substruct.analysis.frf_quantity import as_quantity
-from substruct.analysis.modal_frf import ModalOptions
+from substruct.analysis.frf.quantity import as_quantity
+from substruct.analysis.frf.modal import ModalOptions
 from substruct.analysis.results import Modes, Receptance
 from substruct.assembly.stack import Assembly
 from substruct.builder.model import Model

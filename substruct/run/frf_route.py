@@ -9,7 +9,7 @@ receptances at the coordinates the coupling needs, then LM-FBS with the FRF part
 square on the model's points joined to the FRF parts and asked for; an assembly of FRF parts
 only has none, and its parts are put on the grid of ``analysis.frf`` (equal, or interpolated
 with ``interpolate: linear``).  A part with ``decouple: true`` enters as ``-Y_R`` (decoupling).  The coupled receptance is
-checked by the generalized-inverse form (:func:`substruct.analysis.frf_coupling.couple`); its
+checked by the generalized-inverse form (:func:`substruct.analysis.frf.coupling.couple`); its
 ``constraint_residual`` is the interface compatibility :math:`\max |B Y_c| / \max |Y_c|`.
 """
 
@@ -20,20 +20,21 @@ import numpy as np
 from substruct.analysis.api import Progress
 from substruct.analysis.checks import require_agreement
 from substruct.analysis.errors import CheckError
-from substruct.analysis.frf_coupling import (
+from substruct.analysis.frf.coupling import (
     boolean_rows,
     common_grid,
     couple,
     generalized_inverse_fbs,
     stack,
 )
-from substruct.analysis.frf_quantity import as_quantity
+from substruct.analysis.frf.quantity import as_quantity
 from substruct.analysis.results import Receptance
 from substruct.builder.frf_parts import MODEL_PART, FrfPart, split_frf_case
 from substruct.builder.model import Model
 from substruct.case.fields import parse_point
 from substruct.case.loader import Case
 from substruct.run.analyses import frf_result
+from substruct.vocabulary import GENERALIZED_INVERSE
 
 __all__ = ["coupled_frf_result", "decouple_parts", "ANALYSIS_GRID"]
 
@@ -104,9 +105,9 @@ def coupled_frf_result(case: Case, model: Model, progress: Progress | None = Non
     scale = max(float(np.abs(Yc).max(initial=0.0)), 1e-300)
     residual = float(np.abs(B @ Yc).max(initial=0.0) / scale) if len(pairs) else 0.0
     if not decoupling:
-        checks = {"generalized-inverse": agreement, **checks}
+        checks = {GENERALIZED_INVERSE: agreement, **checks}
         try:
-            require_agreement("frf (lm-fbs)", "lm-fbs", {"generalized-inverse": agreement},
+            require_agreement("frf (lm-fbs)", "lm-fbs", {GENERALIZED_INVERSE: agreement},
                               spec.tolerance)
         except CheckError as err:
             raise CheckError(f"{err}; to accept it, raise analysis.frf.tolerance") from None

@@ -16,7 +16,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from substruct.analysis.results import Modes, Receptance
-from substruct.analysis.transient_results import Transient
+from substruct.analysis.transient.results import Transient
 from substruct.builder.drawing import Drawing
 
 __all__ = ["ModelInfo", "Result"]

@@ -1,9 +1,9 @@
 r"""``analysis.transient`` of a case on its model: a thin adapter to
-:func:`substruct.analysis.transient.transient` (eqs 5, 10).
+:func:`substruct.analysis.transient.response.transient` (eqs 5, 10).
 
 A force at point ``p`` is the generalized force :math:`r(p)^T f(t)`; an output is
 :math:`r(p)\, q(t)`.  A ground motion at point ``p`` moves the constraint rows that hold ``p``
-alone, :math:`A_i = c\, r(p)` (:mod:`substruct.analysis.transient_base`).  Input the analysis cannot take becomes a
+alone, :math:`A_i = c\, r(p)` (:mod:`substruct.analysis.transient.base`).  Input the analysis cannot take becomes a
 :class:`~substruct.case.loader.CaseError` at ``analysis.transient`` (exit 2); a check beyond
 the tolerance stays a :class:`~substruct.analysis.errors.CheckError` (exit 1).
 """
@@ -17,14 +17,14 @@ import scipy.sparse as sp
 
 from substruct.analysis.api import modes
 from substruct.analysis.errors import CheckError
-from substruct.analysis.transient import TransientOptions, transient
-from substruct.analysis.transient_base import BaseMotion
-from substruct.analysis.transient_initial import InitialStateError
-from substruct.analysis.transient_results import Transient
+from substruct.analysis.transient.response import TransientOptions, transient
+from substruct.analysis.transient.base import BaseMotion
+from substruct.analysis.transient.initial import InitialStateError
+from substruct.analysis.transient.results import Transient
 from substruct.builder.model import Model
 from substruct.case.fields import MEMORY_LIMIT, gigabytes
 from substruct.case.loader import Case
-from substruct.analysis.transient_loads import merge_pairs, step_pairs
+from substruct.analysis.transient.loads import merge_pairs, step_pairs
 from substruct.case.transient import load_values
 from substruct.case.transient_files import npz_vector
 from substruct.case.transient_signals import waveform
@@ -95,7 +95,7 @@ def _base(case: Case, model: Model, t: np.ndarray) -> BaseMotion | None:
 def _loads(case: Case, t: np.ndarray, steps: int
            ) -> tuple[np.ndarray, dict[int, tuple[np.ndarray, np.ndarray]]]:
     """``(f, pairs)``: the load factors at the instants ``t`` and the pairs of the steps over
-    which a load jumps or kinks (:mod:`substruct.analysis.transient_loads`)."""
+    which a load jumps or kinks (:mod:`substruct.analysis.transient.loads`)."""
     spec = case.analysis.transient
     assert spec is not None
     f = np.zeros((steps + 1, len(spec.loads)))

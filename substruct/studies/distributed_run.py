@@ -26,6 +26,7 @@ from typing import Sequence
 
 import numpy as np
 
+from substruct.analysis.formulations import FORMULATIONS
 from substruct.analysis.results import Receptance
 from substruct.builder.model import Model
 from substruct.builder.parts import reduced_names
@@ -37,11 +38,8 @@ from substruct.studies.study_backend import Backend, Session, Tick
 from substruct.studies.study_plan import number_text
 from substruct.studies.study_task import PartJob
 
-__all__ = ["ChunkJob", "DIRECT_METHODS", "chunk_bounds", "sweep_chunk", "join_chunks",
+__all__ = ["ChunkJob", "chunk_bounds", "sweep_chunk", "join_chunks",
            "run_distributed"]
-
-#: Sweeps that solve each frequency on its own, and so can be split into chunks.
-DIRECT_METHODS = ("generalized-inverse", "null-space", "kkt")
 
 
 @dataclass(frozen=True)
@@ -100,7 +98,7 @@ def run_distributed(case: Case, backend: Backend = Backend(), chunks: int = 1,
     with Session(backend) as session:
         parts = session.parts(jobs, tick) if jobs else {}
         model = build_model(case, prebuilt=parts)
-        if frf is None or frf.method not in DIRECT_METHODS or chunks <= 1:
+        if frf is None or frf.method not in FORMULATIONS or chunks <= 1:  # one solve a frequency
             return run_case(case, model=model)
         grid = np.asarray(frf.omega.grid(), dtype=float)
         rest = case.model_copy(update={"analysis": case.analysis.model_copy(

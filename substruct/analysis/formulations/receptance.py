@@ -12,7 +12,7 @@ the impedance (eq 13)
 * :func:`kkt_sweep`: Lagrange multipliers,
   :math:`[Z, A_k^T; A_k, 0] [q; \lambda] = [F; R_k F]`.
 
-They take the constraints as :func:`substruct.analysis.coupling.receptance` hands them over:
+They take the constraints as :func:`substruct.analysis.formulations.coupling.receptance` hands them over:
 rows equilibrated (:func:`substruct.linalg.scaling.equilibrate`, ``D A q = D R F``), ``R``
 consistent.  Each returns ``out[k] = O q(omega_k)`` for the force patterns ``E``, complex
 ``(n_omega, n_outputs, n_inputs)``.  Sparse matrices are factorized by the registry
@@ -28,7 +28,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from substruct.analysis.errors import AnalysisInputError
-from substruct.analysis.projection import constraint_gain, split_mass
+from substruct.analysis.formulations.projection import constraint_gain, split_mass
 from substruct.linalg.constraints import IndependentRows, particular_solution
 from substruct.linalg.dense import dense
 from substruct.linalg.factorize import factorizer

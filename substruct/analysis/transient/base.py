@@ -40,7 +40,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from substruct.analysis.integrators import Scheme
+from substruct.analysis.transient.integrators import Scheme
 from substruct.linalg.constraints import independent_rows
 from substruct.linalg.factorize import factorizer
 

@@ -3,7 +3,7 @@ r"""The receptance of constrained systems, eqs (11)-(15), and the generalized-in
 Paper equations in the paper's order, each beside its code:
 
 * eqs (5)-(10), the projection of the generalized inverse and the semidefinite mass split
-  (:mod:`substruct.analysis.projection`, whose names are exported here too:
+  (:mod:`substruct.analysis.formulations.projection`, whose names are exported here too:
   :class:`MassSplit`, :func:`split_mass`, :func:`constraint_gain`, :func:`projected_inverse`,
   :func:`constrained_acceleration`);
 * eq (13), the receptance of the unconstrained system, :func:`receptance_unconstrained`;
@@ -11,7 +11,7 @@ Paper equations in the paper's order, each beside its code:
   ``\hat H = G^{-1} D`` of a system under ``A q = R F``, :func:`receptance`.
 
 Two independent formulations check the receptance: null-space elimination ``q = N p + q_p`` and
-Lagrange multipliers (the KKT system), :mod:`substruct.analysis.receptance_forms`.  All three
+Lagrange multipliers (the KKT system), :mod:`substruct.analysis.formulations.receptance`.  All three
 must agree (:func:`receptance_agreement`).
 """
 
@@ -22,14 +22,14 @@ from typing import Any, Literal, Sequence
 import numpy as np
 import scipy.sparse as sp
 
-from substruct.analysis.projection import (
+from substruct.analysis.formulations.projection import (
     MassSplit,
     constrained_acceleration,
     constraint_gain,
     projected_inverse,
     split_mass,
 )
-from substruct.analysis.receptance_forms import (
+from substruct.analysis.formulations.receptance import (
     generalized_inverse_sweep,
     impedance,
     inputs_matrix,
@@ -43,9 +43,10 @@ from substruct.linalg.constraints import (
 )
 from substruct.linalg.dense import dense
 from substruct.linalg.scaling import equilibrate, mass_column_scale
+from substruct.vocabulary import FORMULATIONS, GENERALIZED_INVERSE, KKT, NULL_SPACE
 
 __all__ = [
-    "METHODS",
+    "FORMULATIONS",
     "ConstraintError",
     "MassSplit",
     "split_mass",
@@ -58,9 +59,6 @@ __all__ = [
     "receptance_agreement",
 ]
 
-Method = Literal["generalized-inverse", "null-space", "kkt"]
-#: The three independent formulations of the coupled problem.
-METHODS: tuple[str, ...] = ("generalized-inverse", "null-space", "kkt")
 
 
 def _csr(mat: sp.sparray | np.ndarray | None, shape: tuple[int, int]) -> sp.csr_array:
@@ -113,7 +111,7 @@ def paper_G_D(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
 def receptance(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
                C: sp.sparray | np.ndarray | None, A: sp.sparray | np.ndarray,
                omegas: float | Sequence[float] | np.ndarray,
-               R: sp.sparray | np.ndarray | None = None, method: str = "generalized-inverse",
+               R: sp.sparray | np.ndarray | None = None, method: str = GENERALIZED_INVERSE,
                inputs: sp.sparray | np.ndarray | None = None,
                outputs: sp.sparray | np.ndarray | None = None,
                labels: list[str] | None = None) -> np.ndarray:
@@ -126,7 +124,7 @@ def receptance(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
         A: ``m x n`` constraint matrix, any rank.
         omegas: one circular frequency (rad/s) or a sequence.
         R: ``m x n`` matrix tying the constraint to the force, ``A q = R F`` (``None``: ``A q = 0``).
-        method: ``"generalized-inverse"`` (eq 15), ``"null-space"`` or ``"kkt"``.
+        method: ``generalized-inverse`` (eq 15), ``null-space`` or ``kkt``.
         inputs: ``n x k`` force patterns (columns of ``F``); ``None`` for all coordinates.
         outputs: ``k_o x n`` rows giving the outputs; ``None`` for all coordinates.
         labels: constraint names used in error messages.
@@ -161,14 +159,14 @@ def receptance(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
     rows = independent_rows(A, col_scale=mass_column_scale(M))
     if Rs is not None:
         check_consistent(A, Rs, rows, labels)
-    if method == "generalized-inverse":
+    if method == GENERALIZED_INVERSE:
         H = generalized_inverse_sweep(K, M, C, A, Rs, w, E, O)
-    elif method == "null-space":
+    elif method == NULL_SPACE:
         H = null_space_sweep(K, M, C, A, Rs, w, E, O, rows)
-    elif method == "kkt":
+    elif method == KKT:
         H = kkt_sweep(K, M, C, A, Rs, w, E, O, rows)
     else:
-        raise ValueError(f"unknown method {method!r}; expected one of {', '.join(METHODS)}")
+        raise ValueError(f"unknown method {method!r}; expected one of {', '.join(FORMULATIONS)}")
     return H[0] if scalar else H
 
 
@@ -176,7 +174,7 @@ def receptance_agreement(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
                          C: sp.sparray | np.ndarray | None, A: sp.sparray | np.ndarray,
                          omegas: float | Sequence[float] | np.ndarray,
                          R: sp.sparray | np.ndarray | None = None,
-                         methods: Sequence[str] = METHODS, **kwargs: Any) -> dict[str, float]:
+                         methods: Sequence[str] = FORMULATIONS, **kwargs: Any) -> dict[str, float]:
     r"""Largest relative difference of each method's receptance from the first method's.
 
     .. math::  \delta = \max_\omega \|\hat H_{method} - \hat H_{ref}\|_\max / \|\hat H_{ref}\|_\max

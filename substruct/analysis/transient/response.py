@@ -5,20 +5,20 @@ substructures,
            Q^c = M \ddot q - (P - C \dot q - K q) \quad \text{(eq 5)},
 
 integrated by Newmark's average acceleration or the generalized-alpha method
-(:mod:`substruct.analysis.integrators`) in one of three forms:
+(:mod:`substruct.analysis.transient.integrators`) in one of three forms:
 
-* ``"generalized-inverse"``: every coordinate is integrated and the acceleration of each step
+* ``generalized-inverse``: every coordinate is integrated and the acceleration of each step
   is eq (5) with the effective matrix :math:`S` of the step in the place of :math:`M`
   (:math:`S` is definite where :math:`M` is semidefinite, eq 10); displacements, velocities
   and accelerations are projected onto :math:`A q = b` with the :math:`S`-orthogonal projector
   at every step, so the constraints hold to rounding over any number of steps;
-* ``"null-space"``: :math:`q = T p + q_p` with ``T`` from the master-slave elimination
+* ``null-space``: :math:`q = T p + q_p` with ``T`` from the master-slave elimination
   (:func:`substruct.linalg.nullspace.master_slave`), and :math:`T^T M T \ddot p + \dots
   = T^T (P - K q_p)`;
 * ``"modal"``: superposition of the coupled modes (:func:`substruct.analysis.api.modes`) with
-  a static correction for the truncated ones (:mod:`substruct.analysis.transient_modal`).
+  a static correction for the truncated ones (:mod:`substruct.analysis.transient.modal`).
 
-The initial acceleration is eq (10) (:func:`substruct.analysis.projection.constrained_acceleration`):
+The initial acceleration is eq (10) (:func:`substruct.analysis.formulations.projection.constrained_acceleration`):
 consistent with the constraints and with the massless coordinates of the absorbers.  Each
 form factorizes its effective matrix once for the run.  The forms named in ``checks`` are
 computed as well and their agreement held to ``tolerance``
@@ -38,7 +38,7 @@ from substruct.analysis.checks import (
     receptance_difference,
     require_agreement,
 )
-from substruct.analysis.integrators import (
+from substruct.analysis.transient.integrators import (
     Correction,
     LoadSteps,
     Restart,
@@ -48,19 +48,19 @@ from substruct.analysis.integrators import (
     integrate,
     scheme,
 )
-from substruct.analysis.krylov import eliminate
-from substruct.analysis.projection import constrained_acceleration
+from substruct.analysis.modes.krylov import eliminate
+from substruct.analysis.formulations.projection import constrained_acceleration
 from substruct.analysis.results import DEFAULT_TOLERANCE
-from substruct.analysis.transient_base import BaseMotion, Motion, ground_history, influence
-from substruct.analysis.transient_loads import for_scheme
-from substruct.analysis.transient_initial import InitialStateError, check_initial, static_state
-from substruct.analysis.transient_modal import modal_run
-from substruct.analysis.transient_record import (
+from substruct.analysis.transient.base import BaseMotion, Motion, ground_history, influence
+from substruct.analysis.transient.loads import for_scheme
+from substruct.analysis.transient.initial import InitialStateError, check_initial, static_state
+from substruct.analysis.transient.modal import modal_run
+from substruct.analysis.transient.record import (
     Physical,
     Recorder,
     constraint_force_solver,
 )
-from substruct.analysis.transient_results import Transient, TransientOptions
+from substruct.analysis.transient.results import Transient, TransientOptions
 from substruct.linalg.constraints import independent_rows, particular_solution, pinv_sym
 from substruct.linalg.factorize import Solve, factorizer
 from substruct.linalg.scaling import (
@@ -68,12 +68,11 @@ from substruct.linalg.scaling import (
     mass_column_scale,
     massless_coordinates,
 )
+from substruct.vocabulary import GENERALIZED_INVERSE, MODAL, NULL_SPACE, TRANSIENT_FORMS
 
-__all__ = ["TRANSIENT_METHODS", "DENSE_STEP", "TransientOptions", "transient", "direct_run",
+__all__ = ["TRANSIENT_FORMS", "DENSE_STEP", "TransientOptions", "transient", "direct_run",
            "initial_state"]
 
-#: The forms a transient analysis may name.
-TRANSIENT_METHODS = ("generalized-inverse", "null-space", "modal")
 #: Up to this many coordinates the step runs on dense arrays (an explicit inverse of S).
 DENSE_STEP = 200
 
@@ -129,7 +128,7 @@ def initial_state(M: sp.csr_array, K: sp.csr_array, A: sp.csr_array, load: np.nd
                   accel: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     r"""``(d0, a0)``: the initial displacement and acceleration, consistent with
     :math:`A \ddot q = 0` and the massless coordinates.  The acceleration is eq (10)
-    (:func:`substruct.analysis.projection.constrained_acceleration`, ``force(d0)`` the force
+    (:func:`substruct.analysis.formulations.projection.constrained_acceleration`, ``force(d0)`` the force
     :math:`P - C \dot q - K q`; ``accel``: :math:`A \ddot q` of a moving ground, else 0).
     Where eq (10) cannot determine a massless coordinate (one held
     by springs only, not by a constraint), its equation is algebraic, :math:`K_s q = P_s`: the
@@ -204,7 +203,7 @@ def direct_run(phys: Physical, form: str, s: Scheme, h: float, n_steps: int, d0:
     n = M.shape[0]
     rows = independent_rows(phys.A, col_scale=mass_column_scale(M))
     forces = constraint_force_solver(phys.A, rows.keep) if opts.forces else None
-    if form == "generalized-inverse":
+    if form == GENERALIZED_INVERSE:
         if n <= DENSE_STEP:
             M, C, K, B = _small(M, C, K, B)  # type: ignore[assignment]
         S = effective_matrix(M, C, K, s, h)
@@ -266,7 +265,7 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
               n_steps: int, outputs: sp.sparray | np.ndarray, *,
               output_names: Sequence[str] = (), constraint_labels: Sequence[str] = (),
               d0: np.ndarray | None = None, v0: np.ndarray | None = None,
-              method: str = "generalized-inverse", checks: Sequence[str] = (),
+              method: str = GENERALIZED_INVERSE, checks: Sequence[str] = (),
               tolerance: float = DEFAULT_TOLERANCE, options: TransientOptions | None = None,
               base: BaseMotion | None = None, what: str = "transient",
               pairs: Mapping[int, tuple[np.ndarray, np.ndarray]] | None = None,
@@ -286,21 +285,21 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
             :math:`A q_0 = b`, :math:`A \dot q_0 = 0` (refused otherwise, with the residual).
         static: start from the constrained static state under :math:`P(0) = B f_0`,
             :math:`K q + A^T \lambda = P(0)`, :math:`A q = b(0)`
-            (:func:`substruct.analysis.transient_initial.static_state`; ``d0`` must be
+            (:func:`substruct.analysis.transient.initial.static_state`; ``d0`` must be
             ``None``).
         pairs: step -> the load factors at its start and end, for the steps over which a load
-            jumps or kinks (:func:`substruct.analysis.transient_loads.step_pairs`): the
+            jumps or kinks (:func:`substruct.analysis.transient.loads.step_pairs`): the
             integration stays second order at the discontinuity.
-        method, checks: forms of :data:`TRANSIENT_METHODS`.
+        method, checks: forms of :data:`TRANSIENT_FORMS`.
         tolerance: the largest agreement a check may have.
         options: :class:`TransientOptions`.
         base: a prescribed ground motion at grounding rows of ``A``
-            (:mod:`substruct.analysis.transient_base`): :math:`A q = b + e g(t)`; ``d0`` and
+            (:mod:`substruct.analysis.transient.base`): :math:`A q = b + e g(t)`; ``d0`` and
             ``v0`` are then relative to the pseudo-static position :math:`r g(0)`,
             :math:`r \dot g(0)`.
 
     Returns:
-        :class:`~substruct.analysis.transient_results.Transient` of the main form, with the
+        :class:`~substruct.analysis.transient.results.Transient` of the main form, with the
         checks' ``agreement``.
 
     Raises:
@@ -310,9 +309,9 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
     """
     opts = options or TransientOptions()
     for name in (method, *checks):
-        if name not in TRANSIENT_METHODS:
+        if name not in TRANSIENT_FORMS:
             raise ValueError(f"unknown method {name!r}; expected one of "
-                             f"{', '.join(TRANSIENT_METHODS)}")
+                             f"{', '.join(TRANSIENT_FORMS)}")
     if not dt > 0 or n_steps < 1:
         raise ValueError(f"need dt > 0 and at least one step, got dt={dt!r}, {n_steps} steps")
     s = scheme(opts.integrator, opts.rho_inf)

@@ -9,14 +9,14 @@ by a main formulation and the check formulations, and returns one
 :func:`choose_solver`, and nowhere else:
 
 * ``"dense"``: every root of the balanced pencils
-  (:func:`substruct.analysis.dense_modes.coupled_modes`; the generalized-inverse one is the
+  (:func:`substruct.analysis.modes.dense.coupled_modes`; the generalized-inverse one is the
   paper's eqs 28-34);
 * ``"sparse"``: the lowest roots of an undamped model, computed by the null-space form with
-  the others as residual checks (:mod:`substruct.analysis.production`);
+  the others as residual checks (:mod:`substruct.analysis.modes.production`);
 * ``"sparse-damped"``: the lowest roots of a damped model by shift-invert Arnoldi on the
   first-order pencil of the null-space form
-  (:func:`substruct.analysis.sparse_damped.damped_sparse_modes`), the others again as
-  residual checks (:mod:`substruct.analysis.production`).
+  (:func:`substruct.analysis.modes.damped.damped_sparse_modes`), the others again as
+  residual checks (:mod:`substruct.analysis.modes.production`).
 
 It fails with :class:`~substruct.analysis.errors.CheckError` when a check disagrees with the
 main formulation by more than ``tolerance``, and with ``ValueError`` on input it cannot analyse.
@@ -39,26 +39,25 @@ from substruct.analysis.checks import (
     modes_agreement,
     require_agreement,
 )
-from substruct.analysis.dense_modes import MODE_METHODS, coupled_modes
+from substruct.analysis.modes.dense import FORMULATIONS, coupled_modes
 from substruct.analysis.errors import INPUT_ERRORS, AnalysisInputError
 from substruct.analysis.events import Phase
-from substruct.analysis.krylov import (
+from substruct.analysis.modes.krylov import (
     check_inputs,
     eliminate,
     free_coordinates,
     krylov_size,
 )
-from substruct.analysis.production import production_modes
+from substruct.analysis.modes.production import production_modes
 from substruct.analysis.results import DEFAULT_TOLERANCE, Modes
-from substruct.analysis.sparse_modes import has_damping, sparse_coupled_modes
+from substruct.analysis.modes.sparse import has_damping, sparse_coupled_modes
 from substruct.linalg.nullspace import Elimination
 from substruct.linalg.scaling import massless_coordinates
+from substruct.vocabulary import GENERALIZED_INVERSE, NULL_SPACE, SOLVERS
 
 __all__ = ["SOLVERS", "SPARSE_ABOVE", "SolverChoice", "choose_solver", "modes"]
 
 
-#: What ``solver`` may ask for.
-SOLVERS = ("auto", "dense", "sparse")
 #: ``solver="auto"`` takes the sparse path above this many coordinates, damped or not: the dense
 #: state-space pencil (eqs 28-34) of a 605-coordinate free-free rod took 62 s on two busy
 #: cores, the sparse path 1 s with the same frequencies to 1e-13.
@@ -95,7 +94,7 @@ def choose_solver(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
     nonzeros); ``"auto"`` dense up to :data:`SPARSE_ABOVE` coordinates and sparse above.  An
     undamped sparse choice falls back to dense, with a note saying so, when the constraints
     leave too few free coordinates for ``count`` roots and a Krylov basis around them
-    (:func:`substruct.analysis.krylov.krylov_size`; ARPACK fails there), and when every mode
+    (:func:`substruct.analysis.modes.krylov.krylov_size`; ARPACK fails there), and when every mode
     is asked for (``count`` ``None``).  (The damped sparse solver takes pencils that small
     densely itself.)
 
@@ -140,7 +139,7 @@ def _sparse(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
 
 def modes(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
           K: sp.sparray | np.ndarray, A: sp.sparray | np.ndarray | None,
-          count: int | None = None, *, method: str = "generalized-inverse",
+          count: int | None = None, *, method: str = GENERALIZED_INVERSE,
           checks: Sequence[str] = (), solver: str = "auto",
           tolerance: float = DEFAULT_TOLERANCE, what: str = "modes",
           full_checks: bool = False, events: Phase | None = None) -> Modes:
@@ -152,14 +151,14 @@ def modes(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
     The strategy (dense, sparse, sparse-damped) is :func:`choose_solver`'s.  Dense: the main
     formulation is ``method``, each check formulation is solved by the same strategy and
     compared with it (:func:`substruct.analysis.checks.modes_agreement`).  Sparse and
-    sparse-damped: the production path (:func:`substruct.analysis.production.production_modes`),
+    sparse-damped: the production path (:func:`substruct.analysis.modes.production.production_modes`),
     whatever ``method`` names: the numbers from the null-space form (``method`` of the result
     ``"null-space/sparse"``), the KKT and generalized-inverse forms as residual checks
     (``agreement`` keys ``"kkt-residual"`` and ``"generalized-inverse-residual"``; a check
     skipped as too costly is named in ``solver``); ``full_checks`` solves the named method and
     checks in full instead (the sparse eigensolves of each formulation, compared).  On a
-    damped model the sparse ``"null-space"`` and ``"generalized-inverse"`` are one pencil, so
-    with ``full_checks`` neither is reported as a check of the other (``"kkt"`` is an
+    damped model the sparse ``null-space`` and ``generalized-inverse`` are one pencil, so
+    with ``full_checks`` neither is reported as a check of the other (``kkt`` is an
     independent one).
 
     Args:
@@ -167,7 +166,7 @@ def modes(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
             ``None``).
         A: ``m x n`` constraint rows of any rank (``None`` for none).
         count: the lowest ``count`` modes (all if ``None``; the sparse solvers need a count).
-        method: the main formulation, one of :data:`substruct.analysis.dense_modes.MODE_METHODS`.
+        method: the main formulation, one of :data:`substruct.analysis.modes.dense.FORMULATIONS`.
         checks: check formulations (the main one and repeats are skipped).
         solver: ``"auto"``, ``"dense"`` or ``"sparse"`` (:func:`choose_solver`).
         tolerance: the largest relative eigenvalue disagreement a check may have.
@@ -187,13 +186,13 @@ def modes(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
         ValueError: an unknown method or solver (a programming error).
     """
     for name in (method, *checks):
-        if name not in MODE_METHODS:
+        if name not in FORMULATIONS:
             raise ValueError(f"unknown method {name!r}; expected one of "
-                             f"{', '.join(MODE_METHODS)}")
+                             f"{', '.join(FORMULATIONS)}")
     choice = choose_solver(M, C, A, count, solver)
     others = check_methods(method, checks)
     if choice.strategy == "sparse-damped":  # one pencil for both: no check of one by the other
-        same = {"null-space", "generalized-inverse"}
+        same = {NULL_SPACE, GENERALIZED_INVERSE}
         others = [m for m in others if not (m in same and method in same)]
 
     def solve(formulation: str) -> Modes:

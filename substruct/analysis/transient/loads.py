@@ -17,7 +17,7 @@ over the step,
 The forced response over a step is :math:`\int_0^h e^{A(h - s)} g(t_n + s)\, ds
 = \sum_k A^k/k! \int_0^h (h - s)^k g\, ds`: matching :math:`m_0` and :math:`m_1` leaves an error
 of order :math:`h^3` in the one step that holds the breakpoint, so the scheme stays second order
-(:func:`substruct.analysis.integrators.integrate` recomputes the acceleration where the load at
+(:func:`substruct.analysis.transient.integrators.integrate` recomputes the acceleration where the load at
 the start of a step differs from the one it was computed with, as at :math:`t = 0`).  The
 moments are Gauss-Legendre sums over the smooth pieces between the breakpoints (5 points each,
 exact for polynomials of degree 9), so the load is never evaluated at a breakpoint.  A step at
@@ -30,7 +30,7 @@ from typing import Callable, Mapping, Sequence
 
 import numpy as np
 
-from substruct.analysis.integrators import Scheme
+from substruct.analysis.transient.integrators import Scheme
 
 __all__ = ["GAUSS_POINTS", "step_pairs", "merge_pairs", "for_scheme"]
 

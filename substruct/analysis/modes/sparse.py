@@ -34,11 +34,11 @@ become the eigenvalue 0 of the shift-inverted operator and are never computed.
 
 Both return :class:`substruct.analysis.results.Modes` with real mode shapes (undamped),
 ``u^T M u = 1``.  The constraint rows are equilibrated first
-(:func:`substruct.analysis.krylov.check_inputs`), so ``1e-8 q_1 = 0`` is ``q_1 = 0``; the Krylov
+(:func:`substruct.analysis.modes.krylov.check_inputs`), so ``1e-8 q_1 = 0`` is ``q_1 = 0``; the Krylov
 basis is capped by the coordinates the constraints leave free
-(:func:`substruct.analysis.krylov.krylov_size`).
+(:func:`substruct.analysis.modes.krylov.krylov_size`).
 
-**Damped models** (any ``C``): :mod:`substruct.analysis.sparse_damped`, to which
+**Damped models** (any ``C``): :mod:`substruct.analysis.modes.damped`, to which
 :func:`sparse_coupled_modes` dispatches when ``C`` has nonzeros.
 """
 
@@ -50,7 +50,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from substruct.analysis.krylov import (
+from substruct.analysis.modes.krylov import (
     check_inputs,
     constraint_residuals,
     default_shift,
@@ -60,14 +60,15 @@ from substruct.analysis.krylov import (
     stiffness_over_mass,
 )
 from substruct.analysis.results import Modes
-from substruct.analysis.sparse_damped import damped_sparse_modes
+from substruct.analysis.modes.damped import damped_sparse_modes
 from substruct.linalg.factorize import Factorize, Solve, factorizer
 from substruct.linalg.lanczos import shift_invert_lanczos
 from substruct.linalg.nullspace import Elimination
 from substruct.linalg.scaling import massless_coordinates
+from substruct.vocabulary import FORMULATIONS, GENERALIZED_INVERSE, KKT, NULL_SPACE
 
 __all__ = [
-    "SPARSE_METHODS",
+    "FORMULATIONS",
     "generalized_inverse_modes",
     "has_damping",
     "null_space_modes",
@@ -75,7 +76,6 @@ __all__ = [
 ]
 
 #: The formulations of :func:`sparse_coupled_modes`.
-SPARSE_METHODS = ("null-space", "generalized-inverse", "kkt")
 
 
 def _finish(lam: np.ndarray, U: np.ndarray, K: sp.csr_array, M: sp.csr_array,
@@ -124,7 +124,7 @@ def null_space_modes(M: sp.sparray, K: sp.sparray, A: sp.sparray | None, n_modes
             docs/performance.md), ``"superlu"``, ``"cholmod"`` or a callable
             (:func:`substruct.linalg.factorize.factorizer`).
         ncv: Lanczos basis size (``max(2 k + 1, 20)`` if ``None``), capped by the free
-            coordinates (:func:`substruct.analysis.krylov.krylov_size`).
+            coordinates (:func:`substruct.analysis.modes.krylov.krylov_size`).
         elimination: a precomputed :func:`~substruct.linalg.nullspace.master_slave` of ``A``.
 
     Raises:
@@ -222,37 +222,37 @@ def has_damping(C: sp.sparray | np.ndarray | None) -> bool:
 
 
 def sparse_coupled_modes(M: sp.sparray, K: sp.sparray, A: sp.sparray | None, n_modes: int,
-                         method: str = "null-space", *, C: sp.sparray | None = None,
+                         method: str = NULL_SPACE, *, C: sp.sparray | None = None,
                          **options: Any) -> Modes:
     """Lowest ``n_modes`` modes under ``A u = 0``, sparse; damped when ``C`` has nonzeros.
 
-    Undamped (``C`` ``None`` or zero), ``method``: ``"null-space"`` (:func:`null_space_modes`,
+    Undamped (``C`` ``None`` or zero), ``method``: ``null-space`` (:func:`null_space_modes`,
     the default: the smallest factorization, SPD so CHOLMOD can serve),
-    ``"generalized-inverse"`` (:func:`generalized_inverse_modes`, the paper's projected
-    operator in scalable form) or ``"kkt"`` (the same saddle-point shift-invert without the
+    ``generalized-inverse`` (:func:`generalized_inverse_modes`, the paper's projected
+    operator in scalable form) or ``kkt`` (the same saddle-point shift-invert without the
     projection: Lagrange multipliers).  ``options`` go to the chosen function.
 
-    Damped: :func:`substruct.analysis.sparse_damped.damped_sparse_modes`, ``method``
-    ``"null-space"`` or ``"kkt"`` (the formulation); ``"generalized-inverse"`` is solved by the
+    Damped: :func:`substruct.analysis.modes.damped.damped_sparse_modes`, ``method``
+    ``null-space`` or ``kkt`` (the formulation); ``generalized-inverse`` is solved by the
     null-space pencil too (the projected state-space form of eqs 28-34 needs the dense
-    projector), so it is not an independent check of ``"null-space"``: ``"kkt"`` is.
+    projector), so it is not an independent check of ``null-space``: ``kkt`` is.
     ``ncv``, ``extra`` and ``elimination`` of ``options`` go to it; the others (``sigma`` in
     units of ``omega^2``, ``factorization``) belong to the undamped functions and are ignored.
 
     The method string of the result is ``"<method>/sparse"``, its ``solver`` ``"sparse"``
     (``"sparse-damped"`` for a damped model).
     """
-    if method not in SPARSE_METHODS:
+    if method not in FORMULATIONS:
         raise ValueError(f"unknown method {method!r}; expected one of "
-                         f"{', '.join(map(repr, SPARSE_METHODS))}")
+                         f"{', '.join(map(repr, FORMULATIONS))}")
     if has_damping(C):
         keep = {k: v for k, v in options.items() if k in ("ncv", "extra", "elimination")}
         modes = damped_sparse_modes(M, C, K, A, n_modes,
-                                    formulation="kkt" if method == "kkt" else "null-space",
+                                    formulation=KKT if method == KKT else NULL_SPACE,
                                     **keep)
-    elif method == "null-space":
+    elif method == NULL_SPACE:
         modes = null_space_modes(M, K, A, n_modes, **options)
     else:
-        modes = generalized_inverse_modes(M, K, A, n_modes, project=method != "kkt", **options)
+        modes = generalized_inverse_modes(M, K, A, n_modes, project=method != KKT, **options)
     modes.method = f"{method}/sparse"
     return modes

@@ -17,8 +17,8 @@ from typing import Callable, Mapping, TypeAlias
 import numpy as np
 import scipy.sparse as sp
 
-from substruct.analysis.integrators import LoadSteps, Work
-from substruct.analysis.transient_base import Motion
+from substruct.analysis.transient.integrators import LoadSteps, Work
+from substruct.analysis.transient.base import Motion
 from substruct.linalg.factorize import factorizer
 
 __all__ = ["Physical", "Recorder", "constraint_force_solver"]
@@ -55,9 +55,9 @@ class Physical:
         A, b: equilibrated constraint rows.
         O: output rows (``n_out x n``).
         T, qp: the integrated coordinates' map and particular solution.
-        motion: a moving ground (:mod:`substruct.analysis.transient_base`), or ``None``.
+        motion: a moving ground (:mod:`substruct.analysis.transient.base`), or ``None``.
         pairs: step -> the load factors at its start and end, where a load jumps or kinks
-            within it (:mod:`substruct.analysis.transient_loads`).
+            within it (:mod:`substruct.analysis.transient.loads`).
     """
 
     M: Matrix
@@ -75,7 +75,7 @@ class Physical:
 
     @property
     def loads(self) -> LoadSteps:
-        """The load factors as the steps see them (:class:`~substruct.analysis.integrators.
+        """The load factors as the steps see them (:class:`~substruct.analysis.transient.integrators.
         LoadSteps`: nodal values, pairs where a load jumps)."""
         return LoadSteps(self.f, self.pairs)
 
@@ -97,7 +97,7 @@ class Physical:
 
 @dataclass
 class Recorder:
-    """Collects the recorded steps of one run (a :class:`substruct.analysis.integrators.Sink`).
+    """Collects the recorded steps of one run (a :class:`substruct.analysis.transient.integrators.Sink`).
 
     ``M_x``, ``K_x``: the matrices of the integrated coordinates (for the energies);
     ``forces``: ``Q -> lambda`` or ``None`` (no constraint forces); ``field_every``: keep the

@@ -33,7 +33,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from substruct.analysis.errors import AnalysisInputError, require_analysis_memory
-from substruct.analysis.krylov import eliminate
+from substruct.analysis.modes.krylov import eliminate
 from substruct.linalg.banded import (
     BAND_MAX,
     band_ordering,

@@ -12,7 +12,7 @@ and its roots are found from the state-space pencil of eqs (32)-(34),
            R = \begin{bmatrix} I - M^* M_o & 0 \\ 0 & -M^* K \end{bmatrix}.
 
 ``M^* K`` has rank ``n - rank(A)``: the pencil returns ``2 rank(A)`` zero roots whose vectors
-violate ``A u = 0``, set aside by :func:`substruct.analysis.roots.classify_roots`.
+violate ``A u = 0``, set aside by :func:`substruct.analysis.modes.roots.classify_roots`.
 
 Checks: null-space elimination ``u = N p``,
 
@@ -20,9 +20,9 @@ Checks: null-space elimination ``u = N p``,
 
 and the Lagrange (KKT) pencil
 ``\lambda^2 [M, 0; 0, 0] + \lambda [C, 0; 0, 0] + [K, A^T; A, 0]``.  All three are balanced
-(:func:`substruct.analysis.pencil.fan_lin_van_dooren`) before QZ, their roots sorted out by
-counts (:mod:`substruct.analysis.roots`) and refined on the Rayleigh functional of their own
-vectors (:func:`substruct.analysis.pencil.rayleigh_root`).
+(:func:`substruct.analysis.modes.pencil.fan_lin_van_dooren`) before QZ, their roots sorted out by
+counts (:mod:`substruct.analysis.modes.roots`) and refined on the Rayleigh functional of their own
+vectors (:func:`substruct.analysis.modes.pencil.rayleigh_root`).
 
 This is the dense strategy of :func:`substruct.analysis.api.modes`, which chooses it.
 """
@@ -33,13 +33,13 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from substruct.analysis.coupling import (
+from substruct.analysis.formulations.coupling import (
     MassSplit,
     constraint_gain,
     projected_inverse,
     split_mass,
 )
-from substruct.analysis.pencil import (
+from substruct.analysis.modes.pencil import (
     Refine,
     fan_lin_van_dooren,
     pencil_roots,
@@ -49,16 +49,15 @@ from substruct.analysis.pencil import (
     rayleigh_root,
 )
 from substruct.analysis.results import Modes
-from substruct.analysis.roots import classify_roots
+from substruct.analysis.modes.roots import classify_roots
 from substruct.linalg.constraints import independent_rows
 from substruct.linalg.dense import dense
 from substruct.linalg.nullspace import null_space_basis
 from substruct.linalg.scaling import equilibrate, mass_column_scale
+from substruct.vocabulary import FORMULATIONS, GENERALIZED_INVERSE, KKT, NULL_SPACE
 
-__all__ = ["MODE_METHODS", "coupled_modes"]
+__all__ = ["FORMULATIONS", "coupled_modes"]
 
-#: The three formulations of the coupled modes.
-MODE_METHODS: tuple[str, ...] = ("generalized-inverse", "null-space", "kkt")
 
 
 def _modes_generalized_inverse(M: np.ndarray, C: np.ndarray, K: np.ndarray,
@@ -83,7 +82,7 @@ def _modes_generalized_inverse(M: np.ndarray, C: np.ndarray, K: np.ndarray,
     Wm = np.block([[np.zeros((n, n)), I], [T, MsC / gamma]])
     Rm = np.block([[I, np.zeros((n, n))], [np.zeros((n, n)), -MsK / gamma**2]])
     lam, U = pencil_roots(Rm, Wm, n, gamma)
-    return classify_roots(lam, U, A, M, C, K, "generalized-inverse",
+    return classify_roots(lam, U, A, M, C, K, GENERALIZED_INVERSE,
                           _gi_polish(ms, M, C, K, A, U))
 
 
@@ -95,7 +94,7 @@ def _gi_polish(ms: MassSplit, M: np.ndarray, C: np.ndarray, K: np.ndarray, A: np
     with a stiffness of ``1e12`` next to ``1`` its soft entries are known to ``1e-4`` only, and
     so are the soft modes' roots and vectors.  The vector ``u`` is projected onto ``null(A)``
     (``P = I - M_d^{-1} A^T S^+ A``, eqs 5, 10) and the root refined on its Rayleigh functional
-    (:func:`~substruct.analysis.pencil.rayleigh_root`); if that moves the root by more than
+    (:func:`~substruct.analysis.modes.pencil.rayleigh_root`); if that moves the root by more than
     ``1e-11`` of itself the vector is not good enough, and one step of inverse iteration with
     the receptance of eq (15) at ``lambda``, which works with ``K`` itself, replaces it.  The
     vector reported is the projected one (the pencil's own has ``|A u|`` of ``eps cond``,
@@ -162,7 +161,7 @@ def _modes_null_space(M: np.ndarray, C: np.ndarray, K: np.ndarray, A: np.ndarray
         lam, P = quadratic_roots(Mr, Cr, Kr)
         U = N @ P
     U = U.astype(complex)
-    return classify_roots(lam, U, A, M, C, K, "null-space", rayleigh_refiner(U, M, C, K))
+    return classify_roots(lam, U, A, M, C, K, NULL_SPACE, rayleigh_refiner(U, M, C, K))
 
 
 def _modes_kkt(M: np.ndarray, C: np.ndarray, K: np.ndarray, A: np.ndarray) -> Modes:
@@ -179,18 +178,18 @@ def _modes_kkt(M: np.ndarray, C: np.ndarray, K: np.ndarray, A: np.ndarray) -> Mo
     lam, V = quadratic_roots(Mq, Cq, Kq)
     # the KKT functional adds 2 mu^T A u (the multipliers of the scaled rows)
     extra = 2 * np.sum(V[n:] * (Ak @ V[:n]), axis=0)
-    return classify_roots(lam, V[:n], A, M, C, K, "kkt", rayleigh_refiner(V[:n], M, C, K, extra))
+    return classify_roots(lam, V[:n], A, M, C, K, KKT, rayleigh_refiner(V[:n], M, C, K, extra))
 
 
 def coupled_modes(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
                   K: sp.sparray | np.ndarray, A: sp.sparray | np.ndarray | None,
-                  method: str = "generalized-inverse", n_modes: int | None = None) -> Modes:
+                  method: str = GENERALIZED_INVERSE, n_modes: int | None = None) -> Modes:
     r"""Physical modes of ``M u'' + C u' + K u = 0`` under ``A u = 0`` (eqs 23-34).
 
     Args:
         M, C, K: ``n x n`` matrices (``M`` may be singular on massless coordinates, eq 6).
         A: ``m x n`` constraint matrix of any rank (``None`` for none).
-        method: ``"generalized-inverse"`` (the paper's eqs 28-34), ``"null-space"`` or ``"kkt"``.
+        method: ``generalized-inverse`` (the paper's eqs 28-34), ``null-space`` or ``kkt``.
         n_modes: keep the lowest ``n_modes`` physical modes (all if ``None``).
 
     Returns:
@@ -211,14 +210,14 @@ def coupled_modes(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
         dense(sp.csr_array(A, dtype=float))
     if Ad.shape[0]:  # D A u = 0, rows of unit norm: rank decided whatever a row's scale
         Ad = np.asarray(equilibrate(Ad).A)
-    if method == "generalized-inverse":
+    if method == GENERALIZED_INVERSE:
         modes = _modes_generalized_inverse(Md, Cd, Kd, Ad)
-    elif method == "null-space":
+    elif method == NULL_SPACE:
         modes = _modes_null_space(Md, Cd, Kd, Ad)
-    elif method == "kkt":
+    elif method == KKT:
         modes = _modes_kkt(Md, Cd, Kd, Ad)
     else:
-        raise ValueError(f"unknown method {method!r}; expected one of {', '.join(MODE_METHODS)}")
+        raise ValueError(f"unknown method {method!r}; expected one of {', '.join(FORMULATIONS)}")
     modes.solver = "dense"
     return modes.lowest(n_modes)
 

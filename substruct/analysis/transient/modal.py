@@ -1,5 +1,5 @@
 r"""Transient response by superposition of the coupled modes, with a static correction for the
-truncated ones: the modal check of :mod:`substruct.analysis.transient`.
+truncated ones: the modal check of :mod:`substruct.analysis.transient.response`.
 
 With the undamped coupled modes :math:`\Phi` (``A \Phi = 0``, :math:`\Phi^T M \Phi = I`,
 :math:`\Phi^T K \Phi = \Omega^2`; :func:`substruct.analysis.api.modes`),
@@ -10,13 +10,13 @@ With the undamped coupled modes :math:`\Phi` (``A \Phi = 0``, :math:`\Phi^T M \P
 .. math::  R = G B - \Phi_e \Omega_e^{-2} \Phi_e^T B ,
 
 where ``G`` is the constrained static flexibility
-(:func:`substruct.analysis.modal_frf.static_solver`, inertia relief against rigid-body modes)
+(:func:`substruct.analysis.frf.modal.static_solver`, inertia relief against rigid-body modes)
 and :math:`\Phi_e` the elastic modes kept: the quasi-static response of the modes left out.
 With every coupled mode kept, :math:`R = 0` to rounding and the superposition is the direct
 integration in other coordinates (the integrators are linear and invariant under a change of
 coordinates); with fewer, the difference is the dynamic part of the truncated modes.  A moving
 ground adds :math:`r g(t)` and the effective loads :math:`-M r \ddot g - C r \dot g - K r g`
-(:mod:`substruct.analysis.transient_base`).  The modal
+(:mod:`substruct.analysis.transient.base`).  The modal
 equations are integrated by the same scheme and step as the direct forms.
 """
 
@@ -26,11 +26,11 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from substruct.analysis.eigen import SPARSE_ABOVE, modes
-from substruct.analysis.integrators import Scheme, Work, effective_matrix, integrate
-from substruct.analysis.modal_frf import RIGID_TOL, static_solver
-from substruct.analysis.transient_record import Physical, Recorder
-from substruct.analysis.transient_results import TransientOptions
+from substruct.analysis.modes.eigen import SPARSE_ABOVE, modes
+from substruct.analysis.transient.integrators import Scheme, Work, effective_matrix, integrate
+from substruct.analysis.frf.modal import RIGID_ROOT_FRACTION, static_solver
+from substruct.analysis.transient.record import Physical, Recorder
+from substruct.analysis.transient.results import TransientOptions
 
 __all__ = ["MODAL_DEFAULT_COUNT", "coupled_basis", "modal_run"]
 
@@ -52,7 +52,7 @@ def coupled_basis(phys: Physical, count: int | None, solver: str
     w2, rot = sla.eigh((Kr + Kr.T) / 2, (Mr + Mr.T) / 2)
     Phi = U @ rot
     scale = max(float(np.abs(w2).max(initial=0.0)), 1e-300)
-    w2 = np.where(w2 < RIGID_TOL ** 2 * scale, 0.0, w2)
+    w2 = np.where(w2 < RIGID_ROOT_FRACTION ** 2 * scale, 0.0, w2)
     return Phi, np.sqrt(w2)
 
 

@@ -1,7 +1,7 @@
 r"""What the sparse eigensolvers share: checked inputs with equilibrated constraint rows, the shift,
 the size of the Krylov basis, the shift-invert Lanczos call and the constraint residuals.
 
-The sparse solvers (:mod:`substruct.analysis.sparse_modes`, :mod:`substruct.analysis.sparse_damped`)
+The sparse solvers (:mod:`substruct.analysis.modes.sparse`, :mod:`substruct.analysis.modes.damped`)
 work on the coordinates the constraints leave free.  Their Krylov basis must fit in that space:
 ARPACK fails ("error -9999") when asked for a basis larger than the invariant subspace the
 operator spans, which is

@@ -20,16 +20,17 @@ import numpy as np
 import scipy.linalg as sla
 
 from substruct.analysis.errors import AnalysisInputError
-from substruct.analysis.pencil import Refine
+from substruct.analysis.modes.pencil import Refine
 from substruct.analysis.results import Modes
 from substruct.linalg.constraints import independent_rows
 from substruct.linalg.nullspace import null_space_basis
 from substruct.linalg.scaling import mass_column_scale
+from substruct.vocabulary import GENERALIZED_INVERSE
 
 __all__ = [
     "RESIDUAL_TOL",
     "REAL_TOL",
-    "RIGID_TOL",
+    "RIGID_SINGULAR_TOL",
     "RIGID_ENERGY_TOL",
     "RIGID_DAMPING_TOL",
     "DAMPING_RANK_TOL",
@@ -55,7 +56,7 @@ RESIDUAL_TOL = 1e-3
 REAL_TOL = 1e-6
 #: Singular-value threshold for rigid-body motions: ``[D K D; A D]`` (``D = diag(K)^{-1/2}``,
 #: rows of ``A D`` of unit norm) has singular values below this on ``null(K) & null(A)``.
-RIGID_TOL = 1e-9
+RIGID_SINGULAR_TOL = 1e-9
 #: ... and its strain energy ``u^T K u`` is below this fraction of ``|u|^T |K| |u|`` (rounding is
 #: a few ``eps`` of it; a ``1e12`` spring in series with a ``1`` leaves ``2.5e-13``).
 RIGID_ENERGY_TOL = 3e-14
@@ -128,7 +129,7 @@ def rigid_basis(K: np.ndarray, A: np.ndarray) -> np.ndarray:
         blocks.append(AD[nrm > 0] / nrm[nrm > 0, None])
     _, sv, Vh = sla.svd(np.vstack(blocks))
     sv = np.concatenate([sv, np.zeros(n - sv.size)])
-    null = Vh.conj().T[:, sv <= RIGID_TOL * max(sv[0], 1.0)]
+    null = Vh.conj().T[:, sv <= RIGID_SINGULAR_TOL * max(sv[0], 1.0)]
     if not null.shape[1]:
         return null
     Q, _ = np.linalg.qr(D[:, None] * null)
@@ -202,7 +203,7 @@ def classify_roots(lam: np.ndarray, U: np.ndarray, A: np.ndarray, M: np.ndarray,
     * the other finite roots must satisfy ``A u = 0`` (checked against :data:`RESIDUAL_TOL`; a
       root that does not is set aside with its residual as the reason); ``refine(j,
       lambda_j)``, given by each formulation, polishes them
-      (:func:`substruct.analysis.pencil.rayleigh_root`) and may return a better vector.
+      (:func:`substruct.analysis.modes.pencil.rayleigh_root`) and may return a better vector.
 
     Reporting is that of :class:`~substruct.analysis.results.Modes`: one root of each complex
     conjugate pair (``Im > 0``); a real root (``|Im| <= REAL_TOL |lambda|``) is a mode of its
@@ -212,14 +213,14 @@ def classify_roots(lam: np.ndarray, U: np.ndarray, A: np.ndarray, M: np.ndarray,
         lam: all roots of the formulation's pencil (``inf`` for infinite ones).
         U: ``n x len(lam)`` displacement parts of their vectors.
         A, M, C, K: the dense matrices of the constrained problem.
-        method: ``"generalized-inverse"`` (eqs 30/34, with the ``2 rank(A)`` artifacts),
-            ``"null-space"`` or ``"kkt"``.
+        method: ``generalized-inverse`` (eqs 30/34, with the ``2 rank(A)`` artifacts),
+            ``null-space`` or ``kkt``.
         refine: the formulation's refinement, or ``None``.
     """
     n = U.shape[0]
     An = np.linalg.norm(A, 2) if A.size else 1.0
     st = root_structure(M, C, K, A)
-    extra = 2 * st.rank if method == "generalized-inverse" else 0
+    extra = 2 * st.rank if method == GENERALIZED_INVERSE else 0
     mag = np.where(np.isfinite(lam), np.abs(lam), np.inf)
     order = np.argsort(mag, kind="stable")
     n_fin = min(st.n_finite + extra, lam.size)

@@ -32,7 +32,7 @@ __all__ = [
 
 class Refine(Protocol):
     """``refine(j, lambda_j) -> (root, better vector or None)``: the polish a formulation gives
-    :func:`substruct.analysis.roots.classify_roots` for the root of column ``j``."""
+    :func:`substruct.analysis.modes.roots.classify_roots` for the root of column ``j``."""
 
     def __call__(self, j: int, lam: complex, /) -> tuple[complex, np.ndarray | None]: ...
 

@@ -7,9 +7,9 @@ runs ``eigs`` (Arnoldi) in shift-invert mode about a small negative real shift, 
 factorization (on the null-space form of the symmetric :math:`\sigma^2 M_r + \sigma C_r + K_r`
 of the reduced size, :func:`_quadratic_operator`): either on the null-space form :math:`u = T p` (``T`` from
 :func:`substruct.linalg.nullspace.master_slave`) or on the Lagrange (KKT) form with multipliers,
-an independent check.  The roots are reported as :func:`substruct.analysis.dense_modes.coupled_modes` reports
+an independent check.  The roots are reported as :func:`substruct.analysis.modes.dense.coupled_modes` reports
 them (complex ``lambda``, ``omega = |lambda|``, ``damping_ratio = -Re lambda / |lambda|``,
-complex shapes).  :func:`substruct.analysis.sparse_modes.sparse_coupled_modes` dispatches here when
+complex shapes).  :func:`substruct.analysis.modes.sparse.sparse_coupled_modes` dispatches here when
 ``C`` has nonzeros.
 """
 
@@ -22,18 +22,19 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from substruct.analysis.krylov import (
+from substruct.analysis.modes.krylov import (
     check_inputs,
     constraint_residuals,
     eliminate,
     krylov_size,
 )
-from substruct.analysis.pencil import rayleigh_root
+from substruct.analysis.modes.pencil import rayleigh_root
 from substruct.analysis.results import Modes
-from substruct.analysis.roots import REAL_TOL
+from substruct.analysis.modes.roots import REAL_TOL
 from substruct.linalg.factorize import factorizer
 from substruct.linalg.nullspace import Elimination
 from substruct.linalg.scaling import massless_coordinates
+from substruct.vocabulary import KKT, NULL_SPACE
 
 __all__ = ["damped_sparse_modes", "DAMPED_SHIFT", "ZERO_ROOT"]
 
@@ -72,7 +73,7 @@ def _scaled_shift_invert(Ab: sp.sparray, Bb: sp.sparray, k: int, sigma: float,
     ``operator``, if given, applies :math:`(A_b - \sigma B_b)^{-1} B_b` (the structured solve
     of :func:`_quadratic_operator`).  The Arnoldi basis is capped by ``finite``, the dimension
     of the space the operator spans
-    (:func:`substruct.analysis.krylov.krylov_size`); pencils too small for it (``k`` too
+    (:func:`substruct.analysis.modes.krylov.krylov_size`); pencils too small for it (``k`` too
     close to that dimension) are solved densely."""
     N = Ab.shape[0]
     try:
@@ -115,7 +116,7 @@ def _damped_finish(mu: np.ndarray, U: np.ndarray, gamma: float, M: sp.csr_array,
         # rigid-body motions (K u = 0, A u = 0): an undamped one is a defective double zero
         # root, which Arnoldi splits by ~sqrt(eps); report each motion once with lambda = 0
         # (the rank of the cluster's vectors), and a slow decay -c/m inside the cluster from
-        # the damping on those motions, as substruct.analysis.roots.root_structure counts them
+        # the damping on those motions, as substruct.analysis.modes.roots.root_structure counts them
         Z = U[:, zero] / np.linalg.norm(U[:, zero], axis=0)
         W, sv, _ = np.linalg.svd(Z, full_matrices=False)
         W = W[:, sv > 1e-6 * sv[0]]
@@ -183,7 +184,7 @@ ZERO_ROOT = 1e-6
 
 
 def damped_sparse_modes(M: sp.sparray, C: sp.sparray | None, K: sp.sparray,
-                        A: sp.sparray | None, n_modes: int, *, formulation: str = "null-space",
+                        A: sp.sparray | None, n_modes: int, *, formulation: str = NULL_SPACE,
                         sigma: float | None = None, ncv: int | None = None,
                         extra: int = 6, elimination: Elimination | None = None) -> Modes:
     r"""Lowest ``n_modes`` roots of :math:`(\lambda^2 M + \lambda C + K) u = A^T \mu`,
@@ -197,13 +198,13 @@ def damped_sparse_modes(M: sp.sparray, C: sp.sparray | None, K: sp.sparray,
     coordinates and multipliers make :math:`\mathcal{B}` singular; their infinite roots are
     :math:`\nu = 0` and never computed.  Two formulations:
 
-    ``"null-space"``: :math:`u = T p` (:func:`~substruct.linalg.nullspace.master_slave`),
+    ``null-space``: :math:`u = T p` (:func:`~substruct.linalg.nullspace.master_slave`),
     :math:`M_r = T^T M' T`, etc., :math:`x = [p; s p]`,
 
     .. math::  \begin{bmatrix} 0 & I \\ -K_r & -C_r \end{bmatrix} x
                = s \begin{bmatrix} I & 0 \\ 0 & M_r \end{bmatrix} x .
 
-    ``"kkt"``: Lagrange multipliers, no ``T``; independent rows ``A_k`` of ``A`` (those kept by
+    ``kkt``: Lagrange multipliers, no ``T``; independent rows ``A_k`` of ``A`` (those kept by
     :func:`~substruct.linalg.nullspace.master_slave`, of unit norm), scaled to the size of
     ``K'``, :math:`x = [u; s u; \mu]`,
 
@@ -213,7 +214,7 @@ def damped_sparse_modes(M: sp.sparray, C: sp.sparray | None, K: sp.sparray,
     Both have the finite roots of the constrained problem and nothing else (the paper's
     state-space form, eqs 28-34, has ``2 rank(A)`` spurious zero roots besides; it needs the
     dense projector and is not used here).  Roots are reported as the dense
-    :func:`substruct.analysis.dense_modes.coupled_modes` reports them (:func:`_damped_finish`): one of each
+    :func:`substruct.analysis.modes.dense.coupled_modes` reports them (:func:`_damped_finish`): one of each
     conjugate pair, real (over-damped) roots one entry each with damping ratio 1, a rigid-body
     motion once with ``lambda = 0``, each root refined on the Rayleigh functional
     :math:`u^T (\lambda^2 M + \lambda C + K) u = 0` of its vector; ``omega = |lambda|``,
@@ -223,7 +224,7 @@ def damped_sparse_modes(M: sp.sparray, C: sp.sparray | None, K: sp.sparray,
         M, C, K: sparse ``n x n`` (``C`` ``None`` for none).
         A: ``m x n`` constraint rows, any rank.
         n_modes: roots wanted (after pairing).
-        formulation: ``"null-space"`` or ``"kkt"``.
+        formulation: ``null-space`` or ``kkt``.
         sigma: the shift in units of :math:`\gamma`.
         ncv: Arnoldi basis size (``eigs`` default if ``None``).
         extra: roots computed beyond ``2 n_modes`` (conjugates, clusters).
@@ -239,7 +240,7 @@ def damped_sparse_modes(M: sp.sparray, C: sp.sparray | None, K: sp.sparray,
     el = elimination or eliminate(M, A)
     # the roots the first-order pencil has: two per free coordinate that has mass
     finite = 2 * (el.T.shape[1] - int(np.count_nonzero(massless_coordinates(M)[el.masters])))
-    if formulation == "null-space":
+    if formulation == NULL_SPACE:
         T = sp.csc_array(el.T)
         r = T.shape[1]
         red = [sp.csr_array(T.T @ (X @ T)) for X in (Ms, Cs, Ks)]
@@ -250,7 +251,7 @@ def damped_sparse_modes(M: sp.sparray, C: sp.sparray | None, K: sp.sparray,
         lift = lambda X: T @ X[:r]  # noqa: E731
         method = "null-space/sparse"
         operator = _quadratic_operator(Mr, Cr, Kr, s)
-    elif formulation == "kkt":
+    elif formulation == KKT:
         r = n - el.rank
         Ak = sp.csr_array(A[el.kept_rows])  # rows of unit 2-norm (check_inputs)
         if Ak.shape[0]:

@@ -3,9 +3,9 @@ named formulations as checks at a few frequencies.
 
 For models above :data:`SWEEP_SPARSE_ABOVE` coordinates under ``A q = 0`` (no force-tied
 constraint, ``R = 0``), whatever direct formulation a case names, the receptances come from
-:func:`substruct.analysis.sparse_sweep.null_space_sparse_sweep` (one sparse factorization of
+:func:`substruct.analysis.frf.sparse.null_space_sparse_sweep` (one sparse factorization of
 :math:`T^T Z(\omega) T` a frequency, all inputs at once).  The generalized-inverse form of eq
-(15) and the KKT form (:func:`substruct.analysis.coupling.receptance`) then check it at
+(15) and the KKT form (:func:`substruct.analysis.formulations.coupling.receptance`) then check it at
 :data:`CHECK_FREQUENCIES` frequencies of the grid (its first, middle and last), for every
 output and up to :data:`CHECK_INPUTS` inputs spread over the list (all of them when there are
 no more; :func:`checked_inputs`), each figure
@@ -34,9 +34,10 @@ import numpy as np
 import scipy.sparse as sp
 
 from substruct.analysis.checks import receptance_difference
-from substruct.analysis.coupling import METHODS, receptance
-from substruct.analysis.sparse_sweep import null_space_sparse_sweep
+from substruct.analysis.formulations.coupling import FORMULATIONS, receptance
+from substruct.analysis.frf.sparse import null_space_sparse_sweep
 from substruct.linalg.scaling import equilibrate
+from substruct.vocabulary import KKT, NULL_SPACE
 
 __all__ = [
     "CHECK_FREQUENCIES",
@@ -63,9 +64,9 @@ PRODUCTION_SWEEP = "null-space/sparse"
 
 def production_sweep_applies(n: int, R: sp.sparray | None, method: str) -> bool:
     """Whether a sweep takes the production path: a direct formulation named (``method`` one of
-    :data:`substruct.analysis.coupling.METHODS`), no force-tied constraint (``R`` ``None``),
+    :data:`substruct.analysis.formulations.coupling.FORMULATIONS`), no force-tied constraint (``R`` ``None``),
     more than :data:`SWEEP_SPARSE_ABOVE` coordinates."""
-    return method in METHODS and R is None and n > SWEEP_SPARSE_ABOVE
+    return method in FORMULATIONS and R is None and n > SWEEP_SPARSE_ABOVE
 
 
 def check_frequencies(count: int) -> np.ndarray:
@@ -86,13 +87,13 @@ def production_sweep(K: sp.csr_array, M: sp.csr_array, C: sp.csr_array | None,
                      A: sp.csr_array, omegas: np.ndarray, inputs: sp.csc_array,
                      rows: sp.csr_array, progress: Callable[[int, int, str], None] | None
                      ) -> np.ndarray:
-    """The production sweep (:func:`~substruct.analysis.sparse_sweep.null_space_sparse_sweep`)
-    with progress reported as ``progress(done, total, "null-space")``."""
+    """The production sweep (:func:`~substruct.analysis.frf.sparse.null_space_sparse_sweep`)
+    with progress reported as ``progress(done, total, NULL_SPACE)``."""
     total = len(omegas)
 
     def report(done: int) -> None:
         if progress is not None:
-            progress(done, total, "null-space")
+            progress(done, total, NULL_SPACE)
 
     return null_space_sparse_sweep(K, M, C, A, omegas, inputs, rows, progress=report)
 
@@ -118,11 +119,11 @@ def sweep_checks(K: sp.csr_array, M: sp.csr_array, C: sp.csr_array | None, A: sp
                  H: np.ndarray, method: str, checks: Sequence[str],
                  labels: list[str] | None) -> dict[str, float]:
     """The check figures of a production sweep ``H``: each of ``method`` and ``checks`` other
-    than ``"null-space"`` (``"kkt"`` if none is left) solved by
-    :func:`substruct.analysis.coupling.receptance` at :func:`check_frequencies` for every
+    than ``null-space`` (``kkt`` if none is left) solved by
+    :func:`substruct.analysis.formulations.coupling.receptance` at :func:`check_frequencies` for every
     output and the :func:`checked_inputs`."""
     names = [m for k, m in enumerate([method, *checks])
-             if m != "null-space" and m not in [method, *checks][:k]] or ["kkt"]
+             if m != NULL_SPACE and m not in [method, *checks][:k]] or [KKT]
     idx = check_frequencies(len(omegas))
     if not idx.size:
         return {m: 0.0 for m in names}

@@ -32,7 +32,7 @@ with :math:`S` in the place of :math:`M`: the acceleration without constraint,
            c = (b - A d^*)/(\beta h^2) ,
 
 which makes :math:`A d_{n+1} = b` (:math:`d^*` the predicted displacement; with a moving
-ground, :math:`b_{n+1} = b + e g_{n+1}`, :mod:`substruct.analysis.transient_base`).  :math:`S` is
+ground, :math:`b_{n+1} = b + e g_{n+1}`, :mod:`substruct.analysis.transient.base`).  :math:`S` is
 definite where :math:`M` is only semidefinite (massless coordinates with a stiffness, eq 10),
 so the same correction serves.  After each step the displacement, velocity and acceleration
 are projected (the :math:`S`-orthogonal projector), which removes the rounding that would
@@ -48,12 +48,11 @@ import numpy as np
 import scipy.sparse as sp
 
 from substruct.linalg.factorize import Solve
+from substruct.vocabulary import INTEGRATORS
 
 __all__ = ["INTEGRATORS", "Scheme", "Correction", "Sink", "LoadSteps", "Restart", "scheme",
            "integrate", "effective_matrix"]
 
-#: The integrators a case may name.
-INTEGRATORS = ("newmark", "generalized-alpha")
 
 Matrix: TypeAlias = sp.sparray | np.ndarray
 
@@ -112,7 +111,7 @@ class Correction:
     A: sp.csr_array
     b: np.ndarray
     gain: np.ndarray
-    #: a moving ground (:mod:`substruct.analysis.transient_base`): ``A q_k = b + e g_k``,
+    #: a moving ground (:mod:`substruct.analysis.transient.base`): ``A q_k = b + e g_k``,
     #: ``A v_k = e g'_k``; ``g`` is ``(n_steps + 1) x 3`` (``None``: a fixed ``b``)
     e: np.ndarray | None = None
     g: np.ndarray | None = None
@@ -165,7 +164,7 @@ class LoadSteps:
     r"""The load factors as the steps see them: the nodal values ``f`` (``(n_steps + 1) x L``,
     :math:`f_k = f(t_k)`) and, for the steps over which a load jumps or kinks, the values at
     the step's start and end that replace them (``pairs[n] = (start, end)``, each ``L``;
-    :mod:`substruct.analysis.transient_loads`).  Step ``n`` integrates the load that varies
+    :mod:`substruct.analysis.transient.loads`).  Step ``n`` integrates the load that varies
     linearly from ``start(n)`` to ``end(n)``."""
 
     f: np.ndarray

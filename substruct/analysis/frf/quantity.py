@@ -16,10 +16,10 @@ import numpy as np
 
 from substruct.analysis.results import Receptance
 
-__all__ = ["QUANTITIES", "quantity_factor", "as_quantity", "quantity_units"]
+__all__ = ["QUANTITY_POWER", "quantity_factor", "as_quantity", "quantity_units"]
 
 #: The quantities, each with its power of ``i omega``.
-QUANTITIES = {"receptance": 0, "mobility": 1, "accelerance": 2}
+QUANTITY_POWER = {"receptance": 0, "mobility": 1, "accelerance": 2}
 
 
 def quantity_factor(omega: np.ndarray, quantity: str) -> np.ndarray:
@@ -28,10 +28,10 @@ def quantity_factor(omega: np.ndarray, quantity: str) -> np.ndarray:
     Raises:
         ValueError: an unknown quantity.
     """
-    if quantity not in QUANTITIES:
+    if quantity not in QUANTITY_POWER:
         raise ValueError(f"unknown quantity {quantity!r}; expected one of "
-                         f"{', '.join(QUANTITIES)}")
-    return (1j * np.asarray(omega, dtype=float)) ** QUANTITIES[quantity]
+                         f"{', '.join(QUANTITY_POWER)}")
+    return (1j * np.asarray(omega, dtype=float)) ** QUANTITY_POWER[quantity]
 
 
 def as_quantity(frf: Receptance, quantity: str) -> Receptance:

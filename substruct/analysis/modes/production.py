@@ -5,20 +5,20 @@ Whatever formulation a case names, on the sparse path the modes come from
 
 .. math::  u = T p, \quad A T = 0: \qquad (T^T K T)\, p = \omega^2 (T^T M T)\, p
 
-(master-slave elimination, :func:`substruct.analysis.sparse_modes.null_space_modes`; with
+(master-slave elimination, :func:`substruct.analysis.modes.sparse.null_space_modes`; with
 damping, the first-order pencil of :math:`T^T M T`, :math:`T^T C T`, :math:`T^T K T` by
-:func:`substruct.analysis.sparse_damped.damped_sparse_modes`, one real LU of twice the reduced
+:func:`substruct.analysis.modes.damped.damped_sparse_modes`, one real LU of twice the reduced
 size, where the KKT pencil would need one of ``2n + m``), with the
 best factorization available (CHOLMOD when scikit-sparse is importable, SuperLU in symmetric
 mode otherwise): one symmetric positive definite factorization of the reduced size, where the
 sparse generalized-inverse and KKT eigensolves need two indefinite saddle-point factorizations
 of ``n + m`` (100k coordinates: 48 s and 1.6 GB against 151 s and 4.7 GB).
 
-The other formulations verify the modes found (:mod:`substruct.analysis.mode_checks`): the
+The other formulations verify the modes found (:mod:`substruct.analysis.modes.checks`): the
 KKT residual always (products and an ``m x m`` solve), the generalized-inverse residual of
 eqs 5/10 where :math:`M_d^{-1} A^T` is cheap.  The figures are relative residuals, held to the
 tolerance like the eigenvalue differences of the dense checks; the full sparse eigensolves of
-the other formulations stay available in :func:`~substruct.analysis.sparse_modes.sparse_coupled_modes`.
+the other formulations stay available in :func:`~substruct.analysis.modes.sparse.sparse_coupled_modes`.
 
 Before factorizing, the memory the factorization will need is estimated from its fill
 (:func:`substruct.linalg.memory.factor_memory`) and compared with the memory the machine has
@@ -30,23 +30,24 @@ from __future__ import annotations
 import scipy.sparse as sp
 
 from substruct.analysis.errors import require_analysis_memory
-from substruct.analysis.krylov import check_inputs, eliminate
-from substruct.analysis.mode_checks import (
+from substruct.analysis.modes.krylov import check_inputs, eliminate
+from substruct.analysis.modes.checks import (
     generalized_inverse_affordable,
     generalized_inverse_residual,
     kkt_residual,
 )
 from substruct.analysis.results import Modes
-from substruct.analysis.sparse_damped import damped_sparse_modes
-from substruct.analysis.sparse_modes import null_space_modes
+from substruct.analysis.modes.damped import damped_sparse_modes
+from substruct.analysis.modes.sparse import null_space_modes
 from substruct.linalg.factorize import has_cholmod
 from substruct.linalg.memory import factor_memory
 from substruct.linalg.nullspace import Elimination
+from substruct.vocabulary import NULL_SPACE
 
 __all__ = ["KKT_CHECK", "GI_CHECK", "MAIN_METHOD", "production_modes", "sparse_memory"]
 
 #: The formulation that computes the modes on the sparse path.
-MAIN_METHOD = "null-space"
+MAIN_METHOD = NULL_SPACE
 #: The names of the residual checks in ``Modes.agreement``.
 KKT_CHECK = "kkt-residual"
 GI_CHECK = "generalized-inverse-residual"
@@ -73,12 +74,12 @@ def production_modes(M: sp.sparray, K: sp.sparray, A: sp.sparray | None, count: 
     Returns:
         ``(modes, agreement, note)``: the modes (``method`` ``"null-space/sparse"``), the
         figures of :data:`KKT_CHECK` and :data:`GI_CHECK` (the latter when affordable,
-        :func:`~substruct.analysis.mode_checks.generalized_inverse_affordable`) and a note
+        :func:`~substruct.analysis.modes.checks.generalized_inverse_affordable`) and a note
         saying which check was skipped and why (empty if none).
 
     Raises:
         AnalysisInputError: the factorization would not fit the memory available; what
-            :func:`~substruct.analysis.sparse_modes.null_space_modes` refuses.
+            :func:`~substruct.analysis.modes.sparse.null_space_modes` refuses.
     """
     Ms, Ks, As, k = check_inputs(M, K, A, count)
     el = elimination or eliminate(Ms, As)
@@ -91,7 +92,7 @@ def production_modes(M: sp.sparray, K: sp.sparray, A: sp.sparray | None, count: 
         roots, Cs = 1j * main.omega, None
     else:
         Cs = sp.csr_array(C, dtype=float)
-        main = damped_sparse_modes(Ms, Cs, Ks, As, k, formulation="null-space", elimination=el)
+        main = damped_sparse_modes(Ms, Cs, Ks, As, k, formulation=NULL_SPACE, elimination=el)
         roots = main.eigenvalues
     main.method = f"{MAIN_METHOD}/sparse"
     U = main.shapes

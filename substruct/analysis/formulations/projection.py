@@ -13,8 +13,8 @@ Paper equations in the paper's order, each beside its code:
   ``M^* = [I - M_d^{-1} A^T (A M_d^{-1} A^T)^+ A] M_d^{-1}``.
 
 ``I - M_d^{-1} A^T (A M_d^{-1} A^T)^+ A`` is the ``M_d``-orthogonal projector onto
-:math:`\operatorname{null}(A)`; the receptance (eqs 11-15, :mod:`substruct.analysis.coupling`)
-and the coupled modes (eqs 28-34, :mod:`substruct.analysis.dense_modes`) are built on it.
+:math:`\operatorname{null}(A)`; the receptance (eqs 11-15, :mod:`substruct.analysis.formulations.coupling`)
+and the coupled modes (eqs 28-34, :mod:`substruct.analysis.modes.dense`) are built on it.
 """
 
 from __future__ import annotations

@@ -8,7 +8,7 @@ rows of ``A`` scaled to unit norm (``D``), and the drift figure of a run is
 
 The energy history holds, per recorded instant, the kinetic energy
 :math:`\tfrac12 \dot q^T M \dot q`, the strain energy :math:`\tfrac12 q^T K q`, the work of the
-loads and the energy dissipated by ``C`` since the start (:mod:`substruct.analysis.integrators`);
+loads and the energy dissipated by ``C`` since the start (:mod:`substruct.analysis.transient.integrators`);
 the balance :math:`T + V - W + D` is constant for Newmark's average acceleration.
 """
 
@@ -32,7 +32,7 @@ class Transient:
     r"""Time histories of a constrained system.
 
     Attributes:
-        method: the main form (``"generalized-inverse"``, ``"null-space"``, ``"modal"``).
+        method: the main form (``generalized-inverse``, ``null-space``, ``"modal"``).
         integrator: ``"newmark"`` or ``"generalized-alpha"``; ``rho_inf`` the spectral radius
             at infinite frequency the integrator used (1 for Newmark).
         dt: the step; ``t``: the recorded instants (``n_samples``).
@@ -50,7 +50,7 @@ class Transient:
         solver: how it was solved (factorization, notes).
         base_motion: ``n_samples x 3``, the ground's displacement, velocity and acceleration
             :math:`g, \dot g, \ddot g` at the recorded instants (empty without a moving ground,
-            :mod:`substruct.analysis.transient_base`).
+            :mod:`substruct.analysis.transient.base`).
         base_influence: ``n_outputs``, the influence vector at the outputs, :math:`O r`.
 
     The histories are absolute; :meth:`relative` gives them relative to the moving ground.
@@ -104,7 +104,7 @@ class TransientOptions:
     """How a transient run is made.
 
     Attributes:
-        integrator, rho_inf: :func:`substruct.analysis.integrators.scheme`.
+        integrator, rho_inf: :func:`substruct.analysis.transient.integrators.scheme`.
         every: record every this many steps; ``field_every``: keep the full field every this
             many steps (0: never).
         forces: compute the constraint forces.

@@ -31,7 +31,7 @@ elastic part,
 
 A damped model with rigid-body modes, and constraints tied to the force (``R != 0``), are
 refused with a one-line ``ValueError``.  The sweep itself costs one small matrix product per
-frequency; the direct solve (:func:`substruct.analysis.coupling.receptance`) at a few check
+frequency; the direct solve (:func:`substruct.analysis.formulations.coupling.receptance`) at a few check
 frequencies is its cross-check.
 """
 
@@ -49,16 +49,17 @@ from substruct.analysis.checks import (
     receptance_difference,
     require_agreement,
 )
-from substruct.analysis.coupling import receptance
-from substruct.analysis.eigen import modes
+from substruct.analysis.formulations.coupling import receptance
+from substruct.analysis.modes.eigen import modes
 from substruct.analysis.errors import AnalysisInputError
 from substruct.analysis.results import DEFAULT_TOLERANCE, Modes, Receptance
-from substruct.analysis.sparse_modes import has_damping
+from substruct.analysis.modes.sparse import has_damping
 from substruct.linalg.constraints import independent_rows
 from substruct.linalg.factorize import factorizer
+from substruct.vocabulary import GENERALIZED_INVERSE, KKT
 
 __all__ = ["MODAL_ABOVE", "ModalOptions", "frf_method", "DEFAULT_CUTOFF", "CHECK_FREQUENCIES", "ModalBasis", "modal_basis",
-           "static_solver", "static_moments", "modal_terms", "modal_moment", "RESIDUALS", "modal_receptance_sweep", "check_indices"]
+           "static_solver", "static_moments", "modal_terms", "modal_moment", "RESIDUAL_ORDER", "modal_receptance_sweep", "check_indices"]
 
 #: ``method: auto`` takes the modal sweep above this many coordinates.
 MODAL_ABOVE = 2000
@@ -68,9 +69,9 @@ DEFAULT_CUTOFF = 10.0
 CHECK_FREQUENCIES = 3
 #: Residual terms: none, the static flexibility (``G - sum_r T_r(0)``), or the Taylor terms
 #: up to ``s^2`` (:func:`static_moments`; error of the truncation then ``O((w / w_c)^3)``).
-RESIDUALS = {"none": -1, "static": 0, "second-order": 2}
+RESIDUAL_ORDER = {"none": -1, "static": 0, "second-order": 2}
 #: A root below this fraction of the frequency scale is a rigid-body mode.
-RIGID_TOL = 1e-6
+RIGID_ROOT_FRACTION = 1e-6
 
 
 @dataclass(frozen=True)
@@ -81,7 +82,7 @@ class ModalOptions:
         count: the number of roots kept (``None``: those up to ``cutoff`` times the highest
             frequency of the grid).
         cutoff: the cut-off as a multiple of the highest frequency.
-        residual: one of :data:`RESIDUALS`.
+        residual: one of :data:`RESIDUAL_ORDER`.
         n_check: how many frequencies of the grid the direct solve checks.
         solver: the eigensolver strategy (:func:`substruct.analysis.api.choose_solver`).
     """
@@ -95,11 +96,11 @@ class ModalOptions:
 
 def frf_method(method: str, n: int, R: sp.sparray | np.ndarray | None) -> str:
     """``method`` with ``"auto"`` resolved: ``"modal"`` above :data:`MODAL_ABOVE` coordinates
-    (unless a constraint is tied to the force), ``"generalized-inverse"`` otherwise."""
+    (unless a constraint is tied to the force), ``generalized-inverse`` otherwise."""
     if method != "auto":
         return method
     tied = R is not None and bool(np.any(sp.csr_array(R).data != 0))
-    return "modal" if n > MODAL_ABOVE and not tied else "generalized-inverse"
+    return "modal" if n > MODAL_ABOVE and not tied else GENERALIZED_INVERSE
 
 
 @dataclass(frozen=True)
@@ -164,7 +165,7 @@ def modal_basis(M: sp.csr_array, C: sp.csr_array | None, K: sp.csr_array, A: sp.
     U = np.asarray(md.shapes, dtype=complex)
     highest = float(np.abs(lam).max(initial=0.0))
     scale = max(omega_max, highest, 1e-300)
-    rigid = np.abs(lam) <= RIGID_TOL * scale
+    rigid = np.abs(lam) <= RIGID_ROOT_FRACTION * scale
     if np.any(rigid) and damped:
         raise AnalysisInputError("modal receptance of a damped model with rigid-body modes is not "
                          "supported; use method: generalized-inverse")
@@ -291,7 +292,7 @@ def modal_receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarra
                            inputs: sp.sparray | np.ndarray, outputs: sp.sparray | np.ndarray,
                            *, R: sp.sparray | np.ndarray | None = None,
                            options: ModalOptions = ModalOptions(),
-                           checks: Sequence[str] = ("kkt",), tolerance: float = DEFAULT_TOLERANCE,
+                           checks: Sequence[str] = (KKT,), tolerance: float = DEFAULT_TOLERANCE,
                            input_names: Sequence[str] | None = None,
                            output_names: Sequence[str] | None = None,
                            what: str = "frf") -> Receptance:
@@ -306,12 +307,12 @@ def modal_receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarra
         omegas: circular frequencies (rad/s).
         inputs, outputs: ``n x p`` force patterns and ``q x n`` output rows.
         R: must be zero: a force-tied constraint is refused.
-        options: the roots kept, the residual (:data:`RESIDUALS`: ``"static"``, exact at
+        options: the roots kept, the residual (:data:`RESIDUAL_ORDER`: ``"static"``, exact at
             ``omega = 0``; ``"second-order"``, also the ``s`` and ``s^2`` terms from two more
             back-substitutions; ``"none"`` only to show what the others are worth), the
             number of check frequencies, the eigensolver (:class:`ModalOptions`).
-        checks: direct formulations (``"kkt"``, ``"generalized-inverse"``, ``"null-space"``;
-            ``"kkt"`` if none).
+        checks: direct formulations (``kkt``, ``generalized-inverse``, ``null-space``;
+            ``kkt`` if none).
         tolerance: the largest ``max |H_direct - H| / max |H|`` at the check frequencies.
 
     Returns:
@@ -348,10 +349,10 @@ def modal_receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarra
     if basis.rigid.shape[1]:
         OPhi, PhiE = O @ basis.rigid, basis.rigid.T @ E
         H -= (OPhi @ PhiE)[None] / w[:, None, None] ** 2
-    if residual not in RESIDUALS:
+    if residual not in RESIDUAL_ORDER:
         raise ValueError(f"unknown residual {residual!r}; expected one of "
-                         f"{', '.join(RESIDUALS)}")
-    order = RESIDUALS[residual]
+                         f"{', '.join(RESIDUAL_ORDER)}")
+    order = RESIDUAL_ORDER[residual]
     if order >= 0:
         flex = static_solver(Ks, Ms, As, basis.rigid)
         X = static_moments(flex, Ms, Cs if has_damping(Cs) else None, E, order)
@@ -367,7 +368,7 @@ def modal_receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarra
         initial=0.0)) if As.shape[0] and vectors.shape[1] else 0.0
     idx = check_indices(len(w), options.n_check)
     agreement = {}
-    for check in check_methods("modal", list(checks) or ["kkt"]) if idx.size else []:
+    for check in check_methods("modal", list(checks) or [KKT]) if idx.size else []:
         Hd = receptance(Ks, Ms, Cs, As, w[idx], None, method=check, inputs=E, outputs=O)
         agreement[f"{check} ({len(idx)} frequencies)"] = receptance_difference(Hd, H[idx])
     what_modes = f"modal: {basis.count} root(s) up to {basis.highest:.4g} rad/s" + \

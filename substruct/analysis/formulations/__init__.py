@@ -1,0 +1,45 @@
+r"""The three independent formulations of a constrained system ``M q'' + C q' + K q = F``,
+``A q = b + R F``: generalized inverse (the paper's eqs 5, 10, 15), null-space elimination
+``q = N p + q_p`` and Lagrange multipliers (the KKT system).
+
+* :mod:`~substruct.analysis.formulations.projection`: the projection of eq 5,
+  ``M^-1/2 (A M^-1/2)^+ = M^-1 A^T (A M^-1 A^T)^+``, and the semidefinite mass split of
+  eqs 6-10;
+* :mod:`~substruct.analysis.formulations.receptance`: one frequency sweep per formulation
+  (eq 15 by a bordered solve; null space; KKT);
+* :mod:`~substruct.analysis.formulations.coupling`: the receptance of a constrained system by
+  any of them, the paper's ``G`` and ``D`` as printed, and their agreement.
+
+The names of the formulations are :data:`substruct.vocabulary.FORMULATIONS`; the analyses of
+:mod:`substruct.analysis.modes`, :mod:`substruct.analysis.frf` and
+:mod:`substruct.analysis.transient` take one of them as their main formulation and the others
+as checks, so that each result is checked by a formulation that shares no code with it.
+"""
+
+from substruct.analysis.formulations.coupling import (
+    FORMULATIONS,
+    paper_G_D,
+    receptance,
+    receptance_agreement,
+    receptance_unconstrained,
+)
+from substruct.analysis.formulations.projection import (
+    MassSplit,
+    constrained_acceleration,
+    constraint_gain,
+    projected_inverse,
+    split_mass,
+)
+
+__all__ = [
+    "FORMULATIONS",
+    "MassSplit",
+    "constrained_acceleration",
+    "constraint_gain",
+    "paper_G_D",
+    "projected_inverse",
+    "receptance",
+    "receptance_agreement",
+    "receptance_unconstrained",
+    "split_mass",
+]

@@ -1,0 +1,17 @@
+r"""Transient response of a constrained system (the paper's eqs 5 and 10 integrated in time):
+:func:`~substruct.analysis.transient.response.transient`, by the generalized-inverse,
+null-space or modal form, each checked by the others.
+
+* :mod:`~substruct.analysis.transient.integrators`: Newmark and generalized-alpha steps;
+* :mod:`~substruct.analysis.transient.loads`: loads with jumps kept second order;
+* :mod:`~substruct.analysis.transient.initial`: initial states and the constrained static start;
+* :mod:`~substruct.analysis.transient.base`: ground motion;
+* :mod:`~substruct.analysis.transient.modal`: the modal form;
+* :mod:`~substruct.analysis.transient.record`, :mod:`~substruct.analysis.transient.results`:
+  what is recorded and returned.
+"""
+
+from substruct.analysis.transient.response import TRANSIENT_FORMS, transient
+from substruct.analysis.transient.results import Transient, TransientOptions
+
+__all__ = ["TRANSIENT_FORMS", "Transient", "TransientOptions", "transient"]
