@@ -14,14 +14,15 @@ absorbers, one multi-point constraint) at about ``size`` coordinates:
   ``w = 2 pi 100 rad/s`` with stiffness-proportional damping ``b = 2 (0.01) / w`` (1 % at 100 Hz),
   as a frequency sweep factorizes it.
 
-Each backend of substruct.linalg.backends that is installed and takes the matrix is measured
+Each backend of substruct.linalg.backends that is installed and takes the matrix (whether or
+not ``auto`` would choose it) is measured
 in a fresh process (the matrix read from a file; peak memory is the process's high-water mark
 ``VmHWM`` during the factorization and solve, reset just before, less the resident memory
 before): factorization time (median of 3 runs under 20 s, else one; wall clock and CPU), the
 solve of a 20-column block, the relative residual ``||A X - B|| / (||A||_1 ||X||)``, and the
 factor's stored entries where the backend tells them.  Ratios are to the fastest backend of the
-same matrix in the same run, on CPU time (wall-clock time on a shared machine includes waiting).  ``--full`` adds the 100k size (SuperLU without METIS on the
-indefinite matrices is left out there unless ``--all``: hours and tens of GB).
+same matrix in the same run, on CPU time (wall-clock time on a shared machine includes waiting).  ``--full`` adds the 100k size (SuperLU without METIS is left out
+there unless ``--all``: minutes and 7 GB for the SPD matrix, more for the others).
 """
 
 from __future__ import annotations
@@ -146,7 +147,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--sizes", type=int, nargs="+", default=[10000, 30000])
     parser.add_argument("--full", action="store_true", help="add the 100k size")
     parser.add_argument("--all", action="store_true",
-                        help="at 100k, also SuperLU without METIS on the indefinite matrices")
+                        help="at 100k, also SuperLU without METIS")
     parser.add_argument("--kinds", nargs="+", default=list(KINDS), choices=KINDS)
     parser.add_argument("--backends", nargs="+", default=None)
     parser.add_argument("--repeat", type=int, default=3)
@@ -158,7 +159,7 @@ def main(argv: list[str] | None = None) -> None:
     if args.worker:
         print(json.dumps(worker(args.worker, args.kind, args.backend, args.repeat)))
         return
-    from substruct.linalg.backends import BACKENDS, available_backends
+    from substruct.linalg.backends import BACKENDS, backend_status
     sizes = args.sizes + ([100000] if args.full and 100000 not in args.sizes else [])
     print(f"machine: {machine()}")
     print(f"libraries: {versions()}")
@@ -174,9 +175,10 @@ def main(argv: list[str] | None = None) -> None:
             for kind in args.kinds:
                 path = os.path.join(tmp, f"{kind}-{size}.npz")
                 sp.save_npz(path, sp.csr_matrix(build(kind, size)))
-                names = [b for b in available_backends(kind)
-                         if args.backends is None or b in args.backends]
-                if size >= 100000 and not args.all and kind != "spd":
+                names = [b for b, backend in BACKENDS.items() if kind in backend.kinds and
+                         backend_status(b) is None and
+                         (args.backends is None or b in args.backends)]
+                if size >= 100000 and not args.all:
                     names = [b for b in names if b != "superlu"]
                 found = [measure(path, kind, b, args.repeat) for b in names]
                 ok = [r for r in found if "error" not in r]

@@ -151,6 +151,7 @@ def test_absent_backends_are_skipped_silently_down_to_superlu(matrices, kind, mo
         diff = float(np.max(abs(x - x_ref).sum(axis=0) / abs(x_ref).sum(axis=0)))
         assert diff <= 10 * kappa * (eta + eta_ref)
     assert bk.auto_backend(kind) == "superlu"
+    monkeypatch.setitem(sys.modules, "pypardiso", None)
     with pytest.raises(ValueError, match="'pardiso' cannot be used: pypardiso not installed"):
         fz.factorizer("pardiso")
 
@@ -163,14 +164,14 @@ def test_a_broken_backend_is_named_and_skipped(matrices, monkeypatch):
 
     monkeypatch.setitem(bk.BACKENDS, "pardiso",
                         dataclasses.replace(bk.BACKENDS["pardiso"], load=broken))
-    A = matrices["symmetric"]
-    b = _rhs(A, "symmetric")
-    nxt = [m for m in bk.AUTO_ORDER["symmetric"] if m != "pardiso" and
+    A = matrices["complex-symmetric"]
+    b = _rhs(A, "complex-symmetric")
+    nxt = [m for m in bk.AUTO_ORDER["complex-symmetric"] if m != "pardiso" and
            bk.backend_status(m) is None][0]
     with pytest.warns(bk.FactorizationFallback,
                       match=rf"PARDISO cannot be loaded \(OSError: libmkl_rt.so.2: cannot "
                             rf"open .*\); falling back to {re.escape(bk.BACKENDS[nxt].label)}"):
-        x = bk.auto_factorizer("symmetric")(A)(b)
+        x = bk.auto_factorizer("complex-symmetric")(A)(b)
     assert backward_error(A, x, b) < bound(A)
 
 
@@ -231,3 +232,21 @@ def test_factorizer_names_and_refusals(matrices):
         bk.auto_factorizer("hermitian")
     with pytest.raises(ValueError, match="unknown factorization backend 'mumps'"):
         bk.backend_factorizer("mumps", "spd")
+
+
+@pytest.mark.skipif(bk.backend_status("pardiso") is not None, reason="PARDISO not installed")
+@pytest.mark.parametrize("kind", ["spd", "symmetric", "complex-symmetric"])
+def test_the_memory_model_covers_what_pardiso_says_it_holds(matrices, kind):
+    """PARDISO's peak-memory model is at least the memory PARDISO reports holding after the
+    factorization (``iparm[15] + iparm[16]`` kB: its permanent data and the factor), and its
+    growing part :math:`c \\operatorname{nnz}(A) n^p` at most 4 times that (the measured peaks
+    the model was fitted to include the matrix copies and a solve)."""
+    from substruct.linalg.memory import PEAK, factor_memory
+
+    A = matrices[kind]
+    solve = bk.backend_factorizer("pardiso", kind)(A)
+    ip = solve.handle.iparm
+    held = 1024.0 * (int(ip[15]) + int(ip[16]))
+    model = factor_memory(A, "pardiso", matrix=kind)
+    assert model >= held
+    assert model - PEAK[("pardiso", kind)][0] <= 4 * held, (held, model)

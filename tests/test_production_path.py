@@ -100,7 +100,7 @@ def test_memory_is_refused_only_past_what_the_machine_has(coupled, monkeypatch):
     monkeypatch.setattr(production, "require_memory",
                         lambda need, what: require_memory(need, what, available=1e6))
     with pytest.raises(ValueError, match=r"sparse eigensolver: the sparse eigensolve of \d+ "
-                                         r"coordinates \((CHOLMOD|SuperLU)\) needs about"):
+                                         r"coordinates \((PARDISO|CHOLMOD|SuperLU|SuperLU \(METIS\))\) needs about"):
         modes(asm.M, None, asm.K, asm.A, 4, solver="sparse")
 
 
