@@ -21,8 +21,9 @@ in a fresh process (the matrix read from a file; peak memory is the process's hi
 before): factorization time (median of 3 runs under 20 s, else one; wall clock and CPU), the
 solve of a 20-column block, the relative residual ``||A X - B|| / (||A||_1 ||X||)``, and the
 factor's stored entries where the backend tells them.  Ratios are to the fastest backend of the
-same matrix in the same run, on CPU time (wall-clock time on a shared machine includes waiting).  ``--full`` adds the 100k size (SuperLU without METIS is left out
-there unless ``--all``: minutes and 7 GB for the SPD matrix, more for the others).
+same matrix in the same run, on CPU time (wall-clock time on a shared machine includes
+waiting).  ``--full`` adds the 100k size (SuperLU without METIS is left out there unless
+``--all``: minutes and 7 GB for the SPD matrix, more for the others).
 """
 
 from __future__ import annotations
