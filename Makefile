@@ -24,13 +24,19 @@ test: $(STAMP)
 	$(BIN)/mypy substruct
 	OMP_NUM_THREADS=1 MPLBACKEND=Agg $(BIN)/python -m pytest -q
 
-# CHOLMOD for the sparse eigensolvers: Debian's SuiteSparse headers (apt-get, as root: sudo
-# when not root), then scikit-sparse through the [cholmod] extra. Without it the code falls
-# back to SuperLU.
+# CHOLMOD for the SPD factorizations, on an optimised BLAS: Debian's SuiteSparse headers and
+# OpenBLAS (which becomes the system's libblas.so.3), as root or through sudo, then
+# scikit-sparse through the [cholmod] extra, then a check that CHOLMOD's BLAS is OpenBLAS.
+# Without it the factorizations are PARDISO's (x86_64) or SuperLU's.
 fast: $(STAMP)
-	if [ "$$(id -u)" = 0 ]; then apt-get install -y libsuitesparse-dev; \
-	else sudo apt-get install -y libsuitesparse-dev; fi
+	if [ "$$(id -u)" = 0 ]; then apt-get install -y libsuitesparse-dev libopenblas-dev; \
+	else sudo apt-get install -y libsuitesparse-dev libopenblas-dev; fi
 	$(BIN)/pip install -e '.[test,cholmod]'
+	$(BIN)/python -c "import sksparse.cholmod, threadpoolctl; \
+	  blas = [i for i in threadpoolctl.threadpool_info() if i['user_api'] == 'blas' \
+	          and 'site-packages' not in i['filepath']]; \
+	  assert blas, 'CHOLMOD runs on the reference BLAS'; \
+	  print('CHOLMOD BLAS:', *{i['internal_api'] + ' ' + i['filepath'] for i in blas})"
 
 bench: $(STAMP)
 	OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 $(BIN)/python benchmarks/modes.py

@@ -197,7 +197,6 @@ def test_factorizer_names(monkeypatch):
     assert la.factorizer(mine) is mine
     assert la.factorizer("superlu") is fz.superlu_spd
     monkeypatch.setattr(fz, "has_cholmod", lambda: False)
-    assert la.factorizer("auto") is fz.superlu_spd
     with pytest.raises(ValueError, match="unknown factorization 'mumps'"):
         la.factorizer("mumps")
     with pytest.raises(ValueError, match="needs scikit-sparse"):

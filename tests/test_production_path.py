@@ -102,7 +102,7 @@ def test_memory_is_refused_only_past_what_the_machine_has(coupled, monkeypatch):
                         lambda need, what: require_memory(need, what, available=1e6))
     # bad input (a model too large for this machine), typed as such: exit 2, not a bug
     with pytest.raises(AnalysisInputError, match=r"sparse eigensolver: the sparse eigensolve of \d+ "
-                                         r"coordinates \((CHOLMOD|SuperLU)\) needs about"):
+                       r"coordinates \((PARDISO|CHOLMOD|SuperLU|SuperLU \(METIS\))\) needs about"):
         modes(asm.M, None, asm.K, asm.A, 4, solver="sparse")
 
 

@@ -1,39 +1,47 @@
 r"""The sparse factorizations, in one registry: ``factorizer(kind)(A)`` is a solve ``b -> A^{-1} b``.
 
 Every shift-invert eigensolve, static condensation and frequency sweep of the package gets its
-factorization here, never from ``eigsh(sigma=...)`` itself (DESIGN.md section 6: on 95k
-coordinates the factorization ``eigsh`` makes took 279 s and 5.5 GB, SuperLU in symmetric mode
-27.6 s, CHOLMOD 13.0 s).
+factorization here, never from ``eigsh(sigma=...)`` itself (``eigsh``'s own factorization of
+95k coordinates took 279 s and 5.5 GB).  The backends and the automatic choice among them are
+in :mod:`substruct.linalg.backends`; the names accepted here:
 
-=================  ===========================================================================
-kind               matrices and method
-=================  ===========================================================================
-``"superlu"``      SPD: SuperLU in symmetric mode (``MMD_AT_PLUS_A`` ordering, diagonal pivots,
-                   ``diag_pivot_thresh = 0``); otherwise partial pivoting, same ordering
-``"cholmod"``      SPD only: supernodal Cholesky (scikit-sparse, when installed)
-``"auto"``         CHOLMOD when importable and the matrix is SPD, else ``"superlu"``
-``"saddle"``       symmetric indefinite saddle points ``[B, A^T; A, 0]`` (KKT): symmetric mode
-                   with threshold pivoting (``diag_pivot_thresh = 0.1``)
-``"complex-lu"``   any square matrix, real or complex (the impedances of frequency sweeps):
-                   SuperLU with its default ``COLAMD`` ordering and partial pivoting
-=================  ===========================================================================
+===================  =========================================================================
+kind                 matrices and method
+===================  =========================================================================
+``"auto"``           the fastest backend installed (:data:`~substruct.linalg.backends.\
+AUTO_ORDER`) for SPD matrices (``spd=True``) or any square matrix, with fallback
+``"pardiso"``        PARDISO (oneMKL, ``pypardiso`` wheels): Cholesky for SPD, else ``L U``
+``"cholmod"``        SPD only: CHOLMOD supernodal Cholesky (scikit-sparse)
+``"superlu-metis"``  SPD only: SuperLU in symmetric mode after a METIS nested dissection
+``"superlu"``        SPD: SuperLU in symmetric mode (``MMD_AT_PLUS_A``, diagonal pivots);
+                     otherwise partial pivoting, same ordering
+``"saddle"``         symmetric indefinite saddle points ``[B, A^T; A, 0]`` (KKT): the fastest
+                     backend for symmetric indefinite matrices, with fallback
+``"complex-lu"``     any square matrix, real or complex (the impedances of frequency sweeps
+                     and the bordered systems on them): the fastest backend, with fallback
+===================  =========================================================================
 
-Frequency sweeps of one structure factorize matrices of one sparsity pattern many times:
-:func:`fill_ordering` computes a fill-reducing symmetric ordering once and
-:func:`complex_symmetric` factorizes each (complex symmetric, not Hermitian) impedance in that
-order, so SuperLU skips its ordering step at every frequency.
-
-SuperLU factors real matrices in real arithmetic; a complex right-hand side is solved as its
-real and imaginary parts.
+:func:`complex_symmetric` and :func:`fill_ordering` serve the frequency sweeps: PARDISO where
+it is installed, else SuperLU in one ordering for every frequency (:mod:`substruct.linalg.superlu`).
 """
 
 from __future__ import annotations
 
-from typing import Callable
-
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
+
+from substruct.linalg.backends import auto_factorizer, backend_factorizer
+from substruct.linalg.cholmod import cholmod, has_cholmod
+from substruct.linalg.pardiso import available as has_pardiso
+from substruct.linalg.solve_type import Factorize, Solve
+from substruct.linalg.superlu import complex_symmetric as superlu_complex_symmetric
+from substruct.linalg.superlu import (
+    complex_lu,
+    fill_ordering,
+    superlu,
+    superlu_saddle,
+    superlu_spd,
+)
 
 __all__ = [
     "FACTORIZATIONS",
@@ -46,135 +54,16 @@ __all__ = [
     "factorizer",
     "fill_ordering",
     "has_cholmod",
+    "has_pardiso",
     "superlu",
     "superlu_saddle",
     "superlu_spd",
 ]
 
-#: A solve ``b -> A^{-1} b`` (``b`` a vector or an ``n x k`` block).
-Solve = Callable[[np.ndarray], np.ndarray]
-#: A factorization ``A -> Solve``.
-Factorize = Callable[[sp.sparray], Solve]
-
 #: The factorizations of symmetric positive definite matrices a user may choose by name.
-FACTORIZATIONS = ("superlu", "cholmod", "auto")
+FACTORIZATIONS = ("superlu", "cholmod", "pardiso", "superlu-metis", "auto")
 #: Every name :func:`factorizer` accepts.
 KINDS = FACTORIZATIONS + ("saddle", "complex-lu")
-
-
-def _solver(lu: spla.SuperLU, A: sp.spmatrix) -> Solve:
-    """``lu.solve``, with a complex right-hand side split when the factors (of ``A``) are
-    real."""
-    real = not np.iscomplexobj(A.data)
-
-    def solve(b: np.ndarray) -> np.ndarray:
-        b = np.asarray(b)
-        if real and np.iscomplexobj(b):
-            return lu.solve(np.ascontiguousarray(b.real)) + \
-                1j * lu.solve(np.ascontiguousarray(b.imag))
-        return lu.solve(b)
-
-    return solve
-
-
-def superlu(A: sp.sparray | sp.spmatrix) -> Solve:
-    """SuperLU with the ``MMD_AT_PLUS_A`` ordering and partial pivoting (any square ``A``)."""
-    Ac = sp.csc_matrix(A)
-    return _solver(spla.splu(Ac, permc_spec="MMD_AT_PLUS_A"), Ac)
-
-
-def superlu_spd(A: sp.sparray | sp.spmatrix) -> Solve:
-    """SuperLU in symmetric mode for symmetric positive definite ``A``: ``MMD_AT_PLUS_A``
-    ordering, diagonal pivots (``diag_pivot_thresh=0``, stable for SPD).  Same fill as with
-    partial pivoting, 5 times faster on 3D elasticity (30k DOF: 14 s instead of 80 s)."""
-    Ac = sp.csc_matrix(A)
-    return _solver(spla.splu(Ac, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                             options={"SymmetricMode": True}), Ac)
-
-
-def superlu_saddle(A: sp.sparray | sp.spmatrix) -> Solve:
-    r"""SuperLU of a symmetric saddle-point matrix :math:`[B, A^T; A, 0]`: symmetric mode with
-    threshold pivoting (``diag_pivot_thresh=0.1``), diagonal pivots where they are large enough,
-    off-diagonal ones for the zero block; 4 times faster than partial pivoting on 3D elasticity
-    with ties (10k DOF), same residual."""
-    Ac = sp.csc_matrix(A)
-    return _solver(spla.splu(Ac, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.1,
-                             options={"SymmetricMode": True}), Ac)
-
-
-def complex_lu(A: sp.sparray | sp.spmatrix) -> Solve:
-    r"""SuperLU of a general square matrix, real or complex, with the ``COLAMD`` ordering and
-    partial pivoting: the impedance :math:`Z = K - \omega^2 M + i \omega C` of a frequency
-    sweep and the bordered systems built on it (not symmetric, not definite)."""
-    Ac = sp.csc_matrix(A)
-    return _solver(spla.splu(Ac), Ac)
-
-
-def fill_ordering(pattern: sp.sparray | sp.spmatrix) -> np.ndarray:
-    r"""A fill-reducing symmetric ordering of a square sparse matrix: SuperLU's
-    ``MMD_AT_PLUS_A`` column permutation (minimum degree on :math:`|A| + |A|^T`), taken from a
-    factorization (one a sweep) of a matrix with ``pattern``'s structure and a dominant
-    diagonal (unit off-diagonal entries, diagonal the row count, so no pivoting moves it)."""
-    P = sp.csc_matrix(abs(sp.csc_matrix(pattern)))
-    P = sp.csc_matrix(P + P.T)
-    P.data[:] = 1.0
-    n = P.shape[0]
-    A = sp.csc_matrix(P + sp.diags(np.asarray(P.sum(axis=1)).ravel() + 1.0))
-    lu = spla.splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                   options={"SymmetricMode": True})
-    # SuperLU factorizes Pr A Pc with Pc[i, perm_c[i]] = 1: column j of A Pc is column
-    # argsort(perm_c)[j] of A, so that is the order A[order][:, order] must take
-    order = np.argsort(np.asarray(lu.perm_c, dtype=np.int64))
-    return order if order.size == n else np.arange(n)
-
-
-def complex_symmetric(A: sp.sparray | sp.spmatrix, order: np.ndarray | None = None, *,
-                      ordered: bool = False) -> Solve:
-    r"""SuperLU of a complex symmetric matrix (the impedance
-    :math:`Z = K - \omega^2 M + i \omega C` in a null-space basis) in the symmetric ordering
-    ``order`` (:func:`fill_ordering`; computed here if ``None``): ``A[order][:, order]``
-    factorized in natural order, symmetric mode, threshold pivoting preferring the diagonal
-    (``diag_pivot_thresh = 0.1``, as the saddle-point systems).  ``ordered``: ``A`` is
-    already in its order (a sweep permutes its matrices once), nothing is permuted here."""
-    Ac = sp.csc_matrix(A)
-    if ordered:
-        return _solver(spla.splu(Ac, permc_spec="NATURAL", diag_pivot_thresh=0.1,
-                                 options={"SymmetricMode": True}), Ac)
-    p = fill_ordering(Ac) if order is None else np.asarray(order)
-    inner = complex_symmetric(Ac[p][:, p], ordered=True)
-    inverse = np.empty_like(p)
-    inverse[p] = np.arange(p.size)
-
-    def solve(b: np.ndarray) -> np.ndarray:
-        return inner(np.asarray(b)[p])[inverse]
-
-    return solve
-
-
-def cholmod(A: sp.sparray | sp.spmatrix) -> Solve:
-    """CHOLMOD supernodal Cholesky (scikit-sparse), for symmetric positive definite ``A``; a
-    complex right-hand side is solved as its real and imaginary parts."""
-    from sksparse.cholmod import cholesky  # optional dependency
-
-    factor = cholesky(sp.csc_matrix(A))
-
-    def solve(b: np.ndarray) -> np.ndarray:
-        b = np.asarray(b)
-        if np.iscomplexobj(b):  # real factors: CHOLMOD refuses a complex right-hand side
-            return factor(np.ascontiguousarray(b.real)) + \
-                1j * factor(np.ascontiguousarray(b.imag))
-        return factor(b)
-
-    return solve
-
-
-def has_cholmod() -> bool:
-    """Whether scikit-sparse's CHOLMOD can be imported."""
-    try:
-        import sksparse.cholmod  # noqa: F401
-    except ImportError:
-        return False
-    return True
 
 
 def factorizer(kind: str | Factorize = "auto", spd: bool = True) -> Factorize:
@@ -182,32 +71,46 @@ def factorizer(kind: str | Factorize = "auto", spd: bool = True) -> Factorize:
 
     Args:
         kind: one of :data:`KINDS` (see the module docstring) or a callable.
-        spd: for ``"superlu"``, ``"cholmod"`` and ``"auto"``: whether the matrices will be
-            symmetric positive definite (CHOLMOD needs it; SuperLU then pivots on the diagonal).
+        spd: for the names of :data:`FACTORIZATIONS`: whether the matrices will be symmetric
+            positive definite (CHOLMOD needs it; SuperLU then pivots on the diagonal,
+            PARDISO factorizes by Cholesky).
 
     Raises:
-        ValueError: an unknown name, ``"cholmod"`` without scikit-sparse or for a matrix that is
-            not SPD.
+        ValueError: an unknown name; ``"cholmod"`` or ``"superlu-metis"`` for a matrix that
+            is not SPD; a backend named that is not installed.
     """
     if callable(kind):
         return kind
     if kind == "superlu":
         return superlu_spd if spd else superlu
+    if kind in ("cholmod", "superlu-metis") and not spd:
+        raise ValueError(f"factorization {kind!r} needs a symmetric positive definite "
+                         f"matrix; the saddle-point (KKT) systems need 'saddle'")
     if kind == "cholmod":
-        if not spd:
-            raise ValueError("CHOLMOD needs a symmetric positive definite matrix; the "
-                             "saddle-point (KKT) systems need 'superlu'")
         if not has_cholmod():
-            raise ValueError("factorization 'cholmod' needs scikit-sparse (pip install "
-                             "scikit-sparse, with libsuitesparse-dev)")
+            raise ValueError("factorization 'cholmod' needs scikit-sparse (make fast: "
+                             "libsuitesparse-dev, then pip install scikit-sparse)")
         return cholmod
+    if kind in ("pardiso", "superlu-metis"):
+        return backend_factorizer(kind, "spd" if spd else "general")
     if kind == "auto":
-        if spd:
-            return cholmod if has_cholmod() else superlu_spd
-        return superlu
+        return auto_factorizer("spd" if spd else "general")
     if kind == "saddle":
-        return superlu_saddle
+        return auto_factorizer("symmetric")
     if kind == "complex-lu":
-        return complex_lu
+        return auto_factorizer("general")
     raise ValueError(f"unknown factorization {kind!r}; expected one of "
                      f"{', '.join(FACTORIZATIONS)} or a callable")
+
+
+def complex_symmetric(A: sp.sparray | sp.spmatrix, order: np.ndarray | None = None, *,
+                      ordered: bool = False) -> Solve:
+    r"""A factorization of the complex symmetric impedance :math:`Z = K - \omega^2 M + i \omega C`
+    of a frequency sweep: PARDISO (``mtype`` 6, its own nested-dissection ordering) where it
+    is installed and succeeds, else SuperLU in the symmetric ordering ``order``
+    (:func:`substruct.linalg.superlu.complex_symmetric`; ``ordered``: ``A`` is in it already).
+    """
+    def own(B: sp.sparray) -> Solve:
+        return superlu_complex_symmetric(B, order, ordered=ordered)
+
+    return auto_factorizer("complex-symmetric", superlu=own)(sp.csc_array(A))

@@ -9,8 +9,8 @@ Whatever formulation a case names, on the sparse path the modes come from
 damping, the first-order pencil of :math:`T^T M T`, :math:`T^T C T`, :math:`T^T K T` by
 :func:`substruct.analysis.modes.damped.damped_sparse_modes`, one real LU of twice the reduced
 size, where the KKT pencil would need one of ``2n + m``), with the
-best factorization available (CHOLMOD when scikit-sparse is importable, SuperLU in symmetric
-mode otherwise): one symmetric positive definite factorization of the reduced size, where the
+fastest factorization installed (:func:`substruct.linalg.backends.auto_factorizer`: PARDISO,
+CHOLMOD, SuperLU after METIS, SuperLU, with fallback): one symmetric positive definite factorization of the reduced size, where the
 sparse generalized-inverse and KKT eigensolves need two indefinite saddle-point factorizations
 of ``n + m`` (100k coordinates: 48 s and 1.6 GB against 151 s and 4.7 GB).
 
@@ -39,7 +39,7 @@ from substruct.analysis.modes.checks import (
 from substruct.analysis.results import Modes
 from substruct.analysis.modes.damped import damped_sparse_modes
 from substruct.analysis.modes.sparse import null_space_modes
-from substruct.linalg.factorize import has_cholmod
+from substruct.linalg.backends import BACKENDS, auto_backend
 from substruct.linalg.memory import factor_memory
 from substruct.linalg.nullspace import Elimination
 from substruct.vocabulary import NULL_SPACE
@@ -84,11 +84,11 @@ def production_modes(M: sp.sparray, K: sp.sparray, A: sp.sparray | None, count: 
     Ms, Ks, As, k = check_inputs(M, K, A, count)
     el = elimination or eliminate(Ms, As)
     if C is None:
-        kind = "cholmod" if has_cholmod() else "superlu"
-        label = "CHOLMOD" if kind == "cholmod" else "SuperLU"
+        kind = auto_backend("spd")
         require_analysis_memory(sparse_memory(Ks, k, kind),
-                                f"the sparse eigensolve of {Ks.shape[0]} coordinates ({label})")
-        main = null_space_modes(Ms, Ks, As, k, factorization=kind, elimination=el)
+                                f"the sparse eigensolve of {Ks.shape[0]} coordinates "
+                                f"({BACKENDS[kind].label})")
+        main = null_space_modes(Ms, Ks, As, k, factorization="auto", elimination=el)
         roots, Cs = 1j * main.omega, None
     else:
         Cs = sp.csr_array(C, dtype=float)
