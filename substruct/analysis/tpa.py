@@ -65,9 +65,15 @@ def blocked_forces_matrix_inverse(Y_cc: np.ndarray, u_c: np.ndarray) -> np.ndarr
 
 
 def blocked_forces_in_situ(Y_bc: np.ndarray, u_b: np.ndarray,
-                           reg: Regularisation = Regularisation()) -> np.ndarray:
+                           reg: Regularisation = Regularisation(),
+                           scale: np.ndarray | None = None) -> np.ndarray:
     r""":math:`f^{bl} = (Y^{AB}_{bc})^{\dagger} u_b` from ``n_b >= n_c`` indicator responses
     (module docstring; ``reg`` chooses the pseudo-inverse).
+
+    ``scale`` (``n_c`` positive numbers) makes the unknowns of one unit before a regularised
+    inversion: :math:`f = S (Y_{bc} S)^\dagger u_b`, :math:`S = \mathrm{diag}(s)`; for a
+    virtual point, ``1`` for the forces and a length ``L`` of the joint for the moments (the
+    unknowns are then forces and moments divided by ``L``).
 
     Raises:
         ValueError: fewer indicators than interface coordinates, shapes that do not match,
@@ -78,7 +84,11 @@ def blocked_forces_in_situ(Y_bc: np.ndarray, u_b: np.ndarray,
     if n_b < n_c:
         raise ValueError(f"in-situ blocked forces need at least as many indicator responses "
                          f"as interface coordinates: {n_b} < {n_c}")
-    return (regularised_inverse(Y_bc, reg) @ u_b[:, :, None])[:, :, 0]
+    sc = np.ones(n_c) if scale is None else np.asarray(scale, dtype=float).ravel()
+    if sc.shape != (n_c,) or not np.all(np.isfinite(sc)) or not np.all(sc > 0):
+        raise ValueError(f"in-situ blocked forces: scale must be {n_c} finite positive numbers")
+    g = (regularised_inverse(Y_bc * sc[None, None, :], reg) @ u_b[:, :, None])[:, :, 0]
+    return g * sc[None, :]
 
 
 @dataclass(frozen=True)
