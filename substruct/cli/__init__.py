@@ -18,8 +18,9 @@
 Exit codes (:mod:`substruct.cli.main`): 0 success; 2 bad input (one line
 ``substruct: error: <message>`` on stderr, no traceback, nothing written); 1 a result that
 failed its cross-checks (one line, nothing written) or an internal error (its traceback, then
-one closing line ``substruct: internal error: ...``); 130 interrupted (Ctrl-C); 143 terminated
-(SIGTERM; partly written files are removed either way).
+one closing line ``substruct: internal error: ...``); 130 interrupted (Ctrl-C, also while the
+command's own modules load: one line ``substruct: interrupted``); 143 terminated (SIGTERM;
+partly written files are removed either way).
 
 The files of the package, one command or one concern each: :mod:`~substruct.cli.arguments`
 (the parser), :mod:`~substruct.cli.run_command`, :mod:`~substruct.cli.converge_command`,
@@ -38,6 +39,12 @@ import os
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
-from substruct.cli.main import main  # noqa: E402
+import sys  # noqa: E402
+
+try:  # the command's modules take a second or two to load: Ctrl-C there ends it in one line
+    from substruct.cli.main import main  # noqa: E402
+except KeyboardInterrupt:
+    sys.stderr.write("substruct: interrupted\n")
+    raise SystemExit(130) from None
 
 __all__ = ["main"]
