@@ -3,17 +3,20 @@
 
 ::
 
-    substruct run CASE.yaml [--out DIR] [--set key.path=value ...] [--force] [--quiet] [--json]
+    substruct run CASE.yaml [--out DIR] [--set key.path=value ...] [--force] [--no-pictures]
+                  [--quiet] [--json]
     substruct converge CASE.yaml [--levels quick|default|fine|"assumed=4:256; ..."]
                        [--variants constrained,unconstrained,bare] [--out DIR]
                        [--set key.path=value ...] [--tol 1e-6] [--reference richardson|finest]
                        [--force] [--quiet] [--json]
     substruct info RESULT.h5 [--json]
-    substruct export RESULT.h5 --format vtu|xdmf|uff [--modes 1-6] [--variant NAME] [--out DIR]
-                     [--force]
+    substruct export RESULT.h5 --format vtu|xdmf|uff [--modes 1-6] [--variant NAME]
+                     [--transient] [--out DIR] [--force]
     substruct compare A.h5 B.h5 [--variant-a NAME] [--variant-b NAME] [--image MAC.png]
                       [--force] [--json]
-    substruct study CASE.yaml [--workers N | --scheduler tcp://HOST:PORT] [--out DIR] [--force]
+    substruct study CASE.yaml [--workers N | --scheduler tcp://HOST:PORT [--connect-timeout S]]
+                    [--out DIR] [--set key.path=value ...] [--force] [--no-pictures] [--quiet]
+                    [--json]
 
 Exit codes (:mod:`substruct.cli.main`): 0 success; 2 bad input (one line
 ``substruct: error: <message>`` on stderr, no traceback, nothing written); 1 a result that
