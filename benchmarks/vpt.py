@@ -108,8 +108,8 @@ def receptances(data: dict, noise: float) -> tuple[list[np.ndarray], list[np.nda
 
 def run_substruct(data: dict, Ys: list[np.ndarray], repeat: int) -> dict:
     sys.path.insert(0, str(HERE.parent))
-    from substruct.analysis.virtual_point import VirtualPoint, virtual_point_transform
-    from substruct.analysis.vp_coupling import couple_virtual_points, vp_part
+    from substruct.analysis.frf.virtual_point import VirtualPoint, virtual_point_transform
+    from substruct.analysis.frf.vp_coupling import couple_virtual_points, vp_part
     from substruct.case.channels import parse_channels
 
     omega = np.linspace(1.0, 1000.0, data["n_freq"])

@@ -421,7 +421,8 @@ def test_compare_refuses_a_result_with_a_nan_frequency(result, tmp_path, capsys)
         f["modes/omega"][0] = np.nan
     for args in ([bad, result], [result, bad], [result, bad, "--json"]):
         code, out, err = run(capsys, "compare", *args)
-        assert_one_line_error(code, out, err, f"{bad}: modes.omega: must be finite, got nan")
+        assert_one_line_error(code, out, err, f"{bad}: not a substruct result: /modes/omega "
+                              "holds values that are not finite: nan at index 0")
         assert "nan" not in out
 
 

@@ -15,14 +15,14 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from substruct.analysis.tpa import (
+from substruct.analysis.frf.tpa import (
     blocked_forces_in_situ,
     blocked_forces_matrix_inverse,
     on_board_validation,
     path_contributions,
 )
-from substruct.analysis.virtual_point import VirtualPoint, virtual_point_transform
-from substruct.analysis.vp_coupling import Regularisation
+from substruct.analysis.frf.virtual_point import VirtualPoint, virtual_point_transform
+from substruct.analysis.frf.vp_coupling import Regularisation
 from substruct.case.channels import parse_channels
 from testlab_models import (
     OMEGA,

@@ -19,13 +19,13 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-from substruct.analysis.frf_coupling import lm_fbs
-from substruct.analysis.virtual_point import (
+from substruct.analysis.frf.coupling import lm_fbs
+from substruct.analysis.frf.virtual_point import (
     VirtualPoint,
     consistency,
     virtual_point_transform,
 )
-from substruct.analysis.vp_coupling import (
+from substruct.analysis.frf.vp_coupling import (
     Regularisation,
     couple_virtual_points,
     decouple_virtual_points,

@@ -20,6 +20,7 @@ from typing import Any, Sequence
 import numpy as np
 import scipy.sparse as sp
 
+from substruct.linalg.constraints import ConstraintError
 from substruct.substructure import PointError, Substructure
 
 __all__ = ["PointRef", "Connection", "LinearConstraint", "Assembly", "assemble"]
@@ -134,6 +135,10 @@ def assemble(substructures: Sequence[Substructure], connections: Sequence[Connec
     r"""Stack substructures (eq 23) and build ``A``, ``b``, ``R`` (eqs 24-27, 52-53).
 
     Rows come in order: connections first, then user constraints.
+
+    Raises:
+        ConstraintError: a constraint with no term, or whose terms cancel (an empty row).
+        PointError: a point no substructure has.
     """
     names = [s.name for s in substructures]
     dupes = sorted({n for n in names if names.count(n) > 1})
@@ -158,12 +163,13 @@ def assemble(substructures: Sequence[Substructure], connections: Sequence[Connec
     for k, lc in enumerate(constraints):
         label = lc.name or f"constraint {k + 1}"
         if not lc.terms:
-            raise ValueError(f"{label}: a constraint needs at least one term")
+            raise ConstraintError(f"{label}: a constraint needs at least one term")
         row = sp.csr_array((1, N))
         for point, coef in lc.terms:
             row = row + float(coef) * asm.row(point)
         if row.count_nonzero() == 0 or abs(row).max() == 0:
-            raise ValueError(f"{label}: its terms cancel or reference nothing (an empty row)")
+            raise ConstraintError(f"{label}: its terms cancel or reference nothing (an empty "
+                                  "row)")
         rrow = sp.csr_array((1, N))
         for point, coef in lc.force_terms:
             rrow = rrow + float(coef) * asm.row(point)

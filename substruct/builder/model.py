@@ -35,6 +35,7 @@ from substruct.builder.points import PointUse, point_uses, resolve_point
 from substruct.builder.solids import tie_and_reduce
 from substruct.case.loader import Case, RodSpec, parse_point
 from substruct.case.solids import SolidSpec
+from substruct.linalg.constraints import ConstraintError
 from substruct.substructure import PointError, Substructure
 
 __all__ = ["Model", "assemble_case", "point_positions"]
@@ -138,7 +139,7 @@ def assemble_case(case: Case, prebuilt: Mapping[str, Substructure] | None = None
     connections += interface_ties  # rows of A after the case's connections
     try:
         asm = assemble(subs, connections, constraints + link_rows)
-    except ValueError as err:
+    except (ConstraintError, PointError) as err:  # any other ValueError is a bug
         name = str(err).split(":")[0]
         k = next((k for k, c in enumerate(case.constraints) if c.name == name), None)
         if k is None:

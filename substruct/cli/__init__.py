@@ -3,23 +3,27 @@
 
 ::
 
-    substruct run CASE.yaml [--out DIR] [--set key.path=value ...] [--force] [--quiet] [--json]
+    substruct run CASE.yaml [--out DIR] [--set key.path=value ...] [--force] [--no-pictures]
+                  [--quiet] [--json]
     substruct converge CASE.yaml [--levels quick|default|fine|"assumed=4:256; ..."]
                        [--variants constrained,unconstrained,bare] [--out DIR]
                        [--set key.path=value ...] [--tol 1e-6] [--reference richardson|finest]
                        [--force] [--quiet] [--json]
     substruct info RESULT.h5 [--json]
-    substruct export RESULT.h5 --format vtu|xdmf|uff [--modes 1-6] [--variant NAME] [--out DIR]
-                     [--force]
+    substruct export RESULT.h5 --format vtu|xdmf|uff [--modes 1-6] [--variant NAME]
+                     [--transient] [--out DIR] [--force]
     substruct compare A.h5 B.h5 [--variant-a NAME] [--variant-b NAME] [--image MAC.png]
                       [--force] [--json]
-    substruct study CASE.yaml [--workers N | --scheduler tcp://HOST:PORT] [--out DIR] [--force]
+    substruct study CASE.yaml [--workers N | --scheduler tcp://HOST:PORT [--connect-timeout S]]
+                    [--out DIR] [--set key.path=value ...] [--force] [--no-pictures] [--quiet]
+                    [--json]
 
 Exit codes (:mod:`substruct.cli.main`): 0 success; 2 bad input (one line
 ``substruct: error: <message>`` on stderr, no traceback, nothing written); 1 a result that
 failed its cross-checks (one line, nothing written) or an internal error (its traceback, then
-one closing line ``substruct: internal error: ...``); 130 interrupted (Ctrl-C); 143 terminated
-(SIGTERM; partly written files are removed either way).
+one closing line ``substruct: internal error: ...``); 130 interrupted (Ctrl-C, also while the
+command's own modules load: one line ``substruct: interrupted``); 143 terminated (SIGTERM;
+partly written files are removed either way).
 
 The files of the package, one command or one concern each: :mod:`~substruct.cli.arguments`
 (the parser), :mod:`~substruct.cli.run_command`, :mod:`~substruct.cli.converge_command`,
@@ -38,6 +42,12 @@ import os
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
 
-from substruct.cli.main import main  # noqa: E402
+import sys  # noqa: E402
+
+try:  # the command's modules take a second or two to load: Ctrl-C there ends it in one line
+    from substruct.cli.main import main  # noqa: E402
+except KeyboardInterrupt:
+    sys.stderr.write("substruct: interrupted\n")
+    raise SystemExit(130) from None
 
 __all__ = ["main"]

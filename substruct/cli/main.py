@@ -14,7 +14,8 @@ code   meaning
        one line ``substruct: error: <message>``, nothing written
 1      an internal error (any other exception): its traceback, then one closing line
        ``substruct: internal error: <type>: <message> (...)``
-130    interrupted (Ctrl-C); partly written files removed
+130    interrupted (Ctrl-C, at any point of the command: while its modules load too, see
+       :mod:`substruct.cli`); one line ``substruct: interrupted``; partly written files removed
 143    terminated (SIGTERM); partly written files removed; the line
        ``substruct: terminated`` also when SIGTERM comes after the command's files were
        committed (:func:`~substruct.cli.signals.terminate_until_exit`)
@@ -43,6 +44,8 @@ from substruct.cli.uff_export import export_dispatch
 
 __all__ = ["main", "BAD_INPUT", "FAILED"]
 
+#: What Ctrl-C prints (exit code 130).
+INTERRUPTED_LINE = "substruct: interrupted\n"
 #: Exit code of bad input.
 BAD_INPUT = 2
 #: Exit code of a failed cross-check or an internal error.
@@ -93,6 +96,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except Terminated:  # arrived while another outcome was being reported
         sys.stderr.write(TERMINATED_LINE)
         code = 143
+    except KeyboardInterrupt:  # before the command's own handling: parsing, late imports
+        sys.stderr.write(INTERRUPTED_LINE)
+        code = 130
     try:  # SIGTERM waits while the handler changes, then meets the new one
         try:
             restore()
@@ -130,7 +136,7 @@ def _main(argv: Sequence[str] | None) -> int:
     except CheckError as err:  # computed, but not to be trusted: nothing was written
         return _error(err, FAILED)
     except KeyboardInterrupt:
-        sys.stderr.write("substruct: interrupted\n")
+        sys.stderr.write(INTERRUPTED_LINE)
         return 130
     except Terminated:  # temporary files were removed on the way out
         sys.stderr.write(TERMINATED_LINE)

@@ -8,7 +8,13 @@ members.  Once read, the parts must agree: ``n`` coordinates in ``dof_labels``, 
 the columns of ``A``, ``R``, the drawings' interpolations and the rows of the mode shapes;
 ``k`` modes in every per-mode dataset; CSR matrices with ordered row pointers and column
 indices in range; cells of a known type, with their number of nodes, pointing at points that
-exist.  Anything else is a one-line :class:`ValueError` naming the file and the dataset.
+exist; every value finite (no NaN, no inf) in the frequencies, eigenvalues, damping ratios,
+shapes and residuals of the modes, the frequencies and receptances of ``/frf``, the
+transient histories, every matrix, ``b`` and the drawings' points, and in the numbers of the
+checks (agreements, tolerances): a result is written with finite values only, so anything
+else is a corrupt file, refused by every command that reads results (``info``, ``export``,
+``compare``) before it prints or writes a number.  Anything else is a one-line
+:class:`ValueError` naming the file and the dataset.
 """
 
 from __future__ import annotations
@@ -73,7 +79,10 @@ class _Reader:
         return [(k, self.node(group, k, h5py.Group)) for k in group]
 
     def array(self, g: h5py.Group, name: str, kinds: str, ndim: int,
-              shape: tuple[int | None, ...] | None = None) -> np.ndarray:
+              shape: tuple[int | None, ...] | None = None, finite: bool = False
+              ) -> np.ndarray:
+        """The dataset ``g/name`` checked (rank, kind, declared size, shape) before it is
+        read; ``finite``: every value must be finite (no NaN, no inf)."""
         ds = self.node(g, name, h5py.Dataset)
         if ds.shape is None or len(ds.shape) != ndim:
             raise _Bad(f"{ds.name} has shape {ds.shape}, expected {ndim} dimension(s)")
@@ -92,8 +101,10 @@ class _Reader:
                 if want is not None and got != want:
                     raise _Bad(f"{ds.name} has shape {ds.shape}, expected "
                                f"{tuple('*' if w is None else w for w in shape)}")
-        data = ds.asstr()[()] if is_str else ds[()]
-        return np.asarray(data)
+        data = np.asarray(ds.asstr()[()] if is_str else ds[()])
+        if finite:
+            _require_finite(ds.name, data)
+        return data
 
     def strings(self, g: h5py.Group, name: str, count: int | None = None) -> list[str]:
         return [str(s) for s in self.array(g, name, "s", 1, (count,))]
@@ -101,7 +112,7 @@ class _Reader:
     def csr(self, g: h5py.Group, name: str, rows: int | None, cols: int) -> sp.csr_array:
         m = self.node(g, name, h5py.Group)
         shape = self.array(m, "shape", "iu", 1, (2,))
-        data = self.array(m, "data", "fiuc", 1)
+        data = self.array(m, "data", "fiuc", 1, finite=True)
         indices = self.array(m, "indices", "iu", 1, (len(data),))
         indptr = self.array(m, "indptr", "iu", 1)
         r, c = int(shape[0]), int(shape[1])
@@ -116,6 +127,25 @@ class _Reader:
                        f"{c} columns")
         return sp.csr_array((data, indices.astype(np.int64), indptr.astype(np.int64)),
                             shape=(r, c))
+
+
+def _require_finite(where: str, values: np.ndarray) -> None:
+    """Refuse an array with a NaN or an infinite value (a corrupt file: the writer stores
+    finite results only), naming the first one and how many there are."""
+    bad = ~np.isfinite(values)
+    if bad.any():
+        first = int(np.flatnonzero(bad.ravel())[0])
+        raise _Bad(f"{where} holds values that are not finite: {values.ravel()[first]} at "
+                   f"index {first} ({int(bad.sum())} of {values.size})")
+
+
+def _number(attrs: dict[str, Any], key: str, where: str, default: float | None = None
+            ) -> float:
+    """The attribute ``key`` as a finite float."""
+    value = float(attrs[key] if default is None else attrs.get(key, default))
+    if not math.isfinite(value):
+        raise _Bad(f"{where} attribute {key} is not finite, got {value}")
+    return value
 
 
 def _text(value: Any) -> str:
@@ -139,37 +169,37 @@ def _scalar_attrs(obj: h5py.HLObject) -> dict[str, Any]:
     return out
 
 
-def _agreement(attrs: dict[str, Any]) -> dict[str, float]:
+def _agreement(attrs: dict[str, Any], where: str) -> dict[str, float]:
     prefix = "agreement_"
-    return {k[len(prefix):]: float(v) for k, v in attrs.items() if k.startswith(prefix)}
+    return {k[len(prefix):]: _number(attrs, k, where) for k in attrs if k.startswith(prefix)}
 
 
 def _modes(rd: _Reader, g: h5py.Group, n: int) -> Modes:
     attrs = _scalar_attrs(g)
-    omega = rd.array(g, "omega", "f", 1)
+    omega = rd.array(g, "omega", "f", 1, finite=True)
     k = len(omega)
-    spurious = rd.array(g, "spurious_eigenvalues", "fc", 1)
+    spurious = rd.array(g, "spurious_eigenvalues", "fc", 1)  # roots set aside: may be inf
     return Modes(
         method=_text(attrs["method"]), omega=omega,
-        eigenvalues=rd.array(g, "eigenvalues", "fc", 1, (k,)),
-        damping_ratio=rd.array(g, "damping_ratio", "f", 1, (k,)),
-        shapes=rd.array(g, "shapes", "fc", 2, (n, k)),
-        residual=rd.array(g, "constraint_residual", "f", 1, (k,)),
+        eigenvalues=rd.array(g, "eigenvalues", "fc", 1, (k,), finite=True),
+        damping_ratio=rd.array(g, "damping_ratio", "f", 1, (k,), finite=True),
+        shapes=rd.array(g, "shapes", "fc", 2, (n, k), finite=True),
+        residual=rd.array(g, "constraint_residual", "f", 1, (k,), finite=True),
         spurious=spurious, spurious_reason=rd.strings(g, "spurious_reason", len(spurious)),
-        agreement=_agreement(attrs), solver=_text(attrs.get("solver", "")),
-        tolerance=float(attrs.get("tolerance", DEFAULT_TOLERANCE)))
+        agreement=_agreement(attrs, g.name), solver=_text(attrs.get("solver", "")),
+        tolerance=_number(attrs, "tolerance", g.name, DEFAULT_TOLERANCE))
 
 
 def _frf(rd: _Reader, g: h5py.Group) -> Receptance:
     attrs = _scalar_attrs(g)
-    omega = rd.array(g, "omega", "f", 1)
+    omega = rd.array(g, "omega", "f", 1, finite=True)
     inputs, outputs = rd.strings(g, "inputs"), rd.strings(g, "outputs")
     return Receptance(
         method=_text(attrs["method"]), omega=omega,
-        H=rd.array(g, "H", "fc", 3, (len(omega), len(outputs), len(inputs))),
-        inputs=inputs, outputs=outputs, agreement=_agreement(attrs),
-        constraint_residual=float(attrs["constraint_residual"]),
-        tolerance=float(attrs.get("tolerance", DEFAULT_TOLERANCE)),
+        H=rd.array(g, "H", "fc", 3, (len(omega), len(outputs), len(inputs)), finite=True),
+        inputs=inputs, outputs=outputs, agreement=_agreement(attrs, g.name),
+        constraint_residual=_number(attrs, "constraint_residual", g.name),
+        tolerance=_number(attrs, "tolerance", g.name, DEFAULT_TOLERANCE),
         quantity=_text(attrs.get("quantity", "receptance")))
 
 
@@ -225,7 +255,8 @@ def _model(rd: _Reader, g: h5py.Group) -> ModelInfo:
     drawings = _numbered(rd.members(g, "drawings"), f"{g.name}/drawings")
     return ModelInfo(
         dof_labels=labels, substructure_names=names, substructure_kinds=kinds,
-        offsets=offsets, A=A, b=rd.array(g, "b", "fiu", 1, (m,)), R=rd.csr(g, "R", m, n),
+        offsets=offsets, A=A, b=rd.array(g, "b", "fiu", 1, (m,), finite=True),
+        R=rd.csr(g, "R", m, n),
         constraint_labels=rd.strings(g, "constraint_labels", m),
         drawings=[_drawing(rd, dg, n) for dg in drawings],
         matrices={k: rd.csr(g, k, n, n) for k in ("M", "K", "C") if k in g})

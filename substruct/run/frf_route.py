@@ -11,6 +11,10 @@ only has none, and its parts are put on the grid of ``analysis.frf`` (equal, or 
 with ``interpolate: linear``).  A part with ``decouple: true`` enters as ``-Y_R`` (decoupling).  The coupled receptance is
 checked by the generalized-inverse form (:func:`substruct.analysis.frf.coupling.couple`); its
 ``constraint_residual`` is the interface compatibility :math:`\max |B Y_c| / \max |Y_c|`.
+
+A singular interface receptance (connections that repeat each other) is bad input, exit 2
+(the coupling's :class:`~substruct.analysis.errors.AnalysisInputError`; the frequency is found
+by :func:`singular_interface`); any other error of the coupling is an internal error.
 """
 
 from __future__ import annotations
@@ -19,7 +23,7 @@ import numpy as np
 
 from substruct.analysis.api import Progress
 from substruct.analysis.checks import require_agreement
-from substruct.analysis.errors import CheckError
+from substruct.analysis.errors import AnalysisInputError, CheckError
 from substruct.analysis.frf.coupling import (
     boolean_rows,
     common_grid,
@@ -36,7 +40,7 @@ from substruct.case.loader import Case
 from substruct.run.analyses import frf_result
 from substruct.vocabulary import GENERALIZED_INVERSE
 
-__all__ = ["coupled_frf_result", "decouple_parts", "ANALYSIS_GRID"]
+__all__ = ["coupled_frf_result", "decouple_parts", "singular_interface", "ANALYSIS_GRID"]
 
 #: The name of the empty part that carries the analysis grid of an FRF-only assembly (the
 #: grid the FRF parts are compared with, or interpolated onto).
@@ -57,6 +61,23 @@ def decouple_parts(parts: list[FrfPart], pairs: list[tuple[str, str]]
     w, same = common_grid(parts)
     Y, labels = stack(same)
     return w, generalized_inverse_fbs(Y, boolean_rows(labels, pairs)), labels
+
+
+def singular_interface(parts: list[FrfPart], pairs: list[tuple[str, str]]) -> float | None:
+    r"""The first frequency at which the interface receptance :math:`B Y B^T` of the coupling
+    (eq 15 with ``A = B``) is singular (its LU factorization breaks down, as in
+    :func:`~substruct.analysis.frf.coupling.lm_fbs`), or ``None`` if it is regular at every
+    frequency.  The grids and labels were checked when the case was split
+    (:func:`~substruct.builder.frf_parts.split_frf_case`)."""
+    w, same = common_grid(parts)
+    Y, labels = stack(same)
+    B = boolean_rows(labels, pairs)
+    for k in range(len(w)):
+        try:
+            np.linalg.solve(B @ Y[k] @ B.T, np.eye(B.shape[0]))
+        except np.linalg.LinAlgError:
+            return float(w[k])
+    return None
 
 
 def coupled_frf_result(case: Case, model: Model, progress: Progress | None = None
@@ -91,13 +112,18 @@ def coupled_frf_result(case: Case, model: Model, progress: Progress | None = Non
 
     pairs = [(stacked(a), stacked(b)) for a, b in split.pairs]
     decoupling = any(p.decouple for p in split.parts)
-    try:
-        if decoupling:
-            w, Yc, labels = decouple_parts([first, *split.parts], pairs)
-        else:
+    if decoupling:
+        w, Yc, labels = decouple_parts([first, *split.parts], pairs)
+    else:
+        try:
             w, Yc, labels, agreement = couple([first, *split.parts], pairs)
-    except ValueError as err:
-        raise case.error(("substructures",), " ".join(str(err).split())) from None
+        except AnalysisInputError:  # the interface receptance is singular
+            at = singular_interface([first, *split.parts], pairs)
+            at_text = "" if at is None else f" at omega = {at:g} rad/s"
+            raise case.error(("connections",), f"the interface receptance B Y B^T is singular"
+                             f"{at_text}: connections that repeat each other, or "
+                             f"receptances of zero at the interface", [list(p) for p in split.pairs]
+                             ) from None
     where = {lab: i for i, lab in enumerate(labels)}
     outs = [where[stacked(p)] for p in spec.outputs]
     ins = [where[stacked(p)] for p in spec.inputs]

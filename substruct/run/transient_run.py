@@ -3,9 +3,15 @@ r"""``analysis.transient`` of a case on its model: a thin adapter to
 
 A force at point ``p`` is the generalized force :math:`r(p)^T f(t)`; an output is
 :math:`r(p)\, q(t)`.  A ground motion at point ``p`` moves the constraint rows that hold ``p``
-alone, :math:`A_i = c\, r(p)` (:mod:`substruct.analysis.transient.base`).  Input the analysis cannot take becomes a
-:class:`~substruct.case.loader.CaseError` at ``analysis.transient`` (exit 2); a check beyond
-the tolerance stays a :class:`~substruct.analysis.errors.CheckError` (exit 1).
+alone, :math:`A_i = c\, r(p)` (:mod:`substruct.analysis.transient.base`).
+
+Input the analysis cannot take (:data:`~substruct.analysis.errors.INPUT_ERRORS`,
+:class:`~substruct.analysis.transient.initial.InitialStateError`) becomes a
+:class:`~substruct.case.loader.CaseError` at ``analysis.transient`` (exit 2), and so does a
+signal, table or state file the case layer's readers refuse (their ``ValueError``, caught
+around those calls only); a check beyond the tolerance stays a
+:class:`~substruct.analysis.errors.CheckError` (exit 1).  Any other exception, a plain
+``ValueError`` of the analysis included, is an internal error: a bug never passes as bad input.
 """
 
 from __future__ import annotations
@@ -16,13 +22,14 @@ import numpy as np
 import scipy.sparse as sp
 
 from substruct.analysis.api import modes
-from substruct.analysis.errors import CheckError
-from substruct.analysis.transient.response import TransientOptions, transient
+from substruct.analysis.errors import INPUT_ERRORS, CheckError
+from substruct.analysis.transient import TransientOptions, transient
 from substruct.analysis.transient.base import BaseMotion
 from substruct.analysis.transient.initial import InitialStateError
 from substruct.analysis.transient.results import Transient
 from substruct.builder.model import Model
 from substruct.case.fields import MEMORY_LIMIT, gigabytes
+from substruct.case.expressions import ExpressionError
 from substruct.case.loader import Case
 from substruct.analysis.transient.loads import merge_pairs, step_pairs
 from substruct.case.transient import load_values
@@ -38,7 +45,11 @@ def _mode(case: Case, model: Model, k: int, field: str) -> np.ndarray:
     if k > asm.n_dof:
         raise case.error(("analysis", "transient", "initial", field),
                          f"more than the {asm.n_dof} coordinates", k)
-    md = modes(asm.M, None, asm.K, asm.A, k, what="transient (initial mode)")
+    try:
+        md = modes(asm.M, None, asm.K, asm.A, k, what="transient (initial mode)")
+    except INPUT_ERRORS as err:
+        raise case.error(("analysis", "transient", "initial", field),
+                         " ".join(str(err).split()), k) from None
     if len(md) < k:
         raise case.error(("analysis", "transient", "initial", field),
                          f"the model has {len(md)} modes", k)
@@ -77,17 +88,19 @@ def _base(case: Case, model: Model, t: np.ndarray) -> BaseMotion | None:
         return None
     sig, kind = spec.base.signal, spec.base.kind
     params = dict(case.parameters)
-    try:
+    d = max(1e-3 * float(t[1] - t[0]), 1e-12)
+    try:  # the case layer's reading and evaluation of the signal, nothing else
         values = load_values(sig, t, case.base_dir, params)
-        rate0 = accel0 = 0.0
-        if kind == "displacement":  # g'(0), g''(0): one-sided differences of the signal
-            d = max(1e-3 * float(t[1] - t[0]), 1e-12)
-            g0, g1, g2 = load_values(sig, np.array([0.0, d, 2 * d]), case.base_dir, params)
-            rate0, accel0 = (-3 * g0 + 4 * g1 - g2) / (2 * d), (g0 - 2 * g1 + g2) / d ** 2
+        g = (load_values(sig, np.array([0.0, d, 2 * d]), case.base_dir, params)
+             if kind == "displacement" else None)
     except ValueError as err:
         field = sig.shape if sig.shape in ("table", "expression") else "amplitude"
         raise case.error(("analysis", "transient", "base", kind, field),
                          " ".join(str(err).split()), getattr(sig, field)) from None
+    rate0 = accel0 = 0.0
+    if g is not None:  # g'(0), g''(0): one-sided differences of the signal
+        g0, g1, g2 = g
+        rate0, accel0 = (-3 * g0 + 4 * g1 - g2) / (2 * d), (g0 - 2 * g1 + g2) / d ** 2
     return BaseMotion(rows=_grounding_rows(case, model), kind=kind, values=values,
                       rate0=float(rate0), accel0=float(accel0))
 
@@ -101,17 +114,20 @@ def _loads(case: Case, t: np.ndarray, steps: int
     f = np.zeros((steps + 1, len(spec.loads)))
     columns = []
     for j, load in enumerate(spec.loads):
-        try:
+        field = load.shape if load.shape in ("table", "expression") else "amplitude"
+        loc, shown = ("analysis", "transient", "loads", j, field), getattr(load, field,
+                                                                            load.amplitude)
+        try:  # the case layer's reading and evaluation of the signal, nothing else
             wave = waveform(load, case.base_dir, dict(case.parameters))
             f[:, j] = wave.values(t)
-            if not np.all(np.isfinite(f[:, j])):
-                raise ValueError("the load is not finite at some time")
-            columns.append(step_pairs(wave.values, wave.breaks, spec.dt, steps))
         except ValueError as err:
-            field = load.shape if load.shape in ("table", "expression") else "amplitude"
-            raise case.error(("analysis", "transient", "loads", j, field),
-                             " ".join(str(err).split()),
-                             getattr(load, field, load.amplitude)) from None
+            raise case.error(loc, " ".join(str(err).split()), shown) from None
+        if not np.all(np.isfinite(f[:, j])):
+            raise case.error(loc, "the load is not finite at some time", shown)
+        try:  # evaluates the signal again, inside the steps where it jumps or kinks
+            columns.append(step_pairs(wave.values, wave.breaks, spec.dt, steps))
+        except ExpressionError as err:
+            raise case.error(loc, " ".join(str(err).split()), shown) from None
     return f, merge_pairs(columns, f)
 
 
@@ -220,7 +236,7 @@ def transient_result(case: Case, model: Model) -> Transient:
     except InitialStateError as err:
         raise case.error(("analysis", "transient", "initial"), " ".join(str(err).split())
                          ) from None
-    except ValueError as err:
+    except INPUT_ERRORS as err:  # any other ValueError is a bug: an internal error
         raise case.error(("analysis", "transient"), " ".join(str(err).split())) from None
     except CheckError as err:
         raise CheckError(f"{err}; to accept it, raise analysis.transient.tolerance") from None

@@ -175,6 +175,31 @@ OTHERS = [
     ("`compare` of a result with a NaN frequency",
      ["compare", "results/three_dof_frf.h5", "nan.h5"]),
     ("another study writes into `--out`", ["study", "tuning.yaml", "--out", "busy"]),
+    ("`info` of a result with an infinite receptance", ["info", "inf.h5"]),
+    ("`export --format uff` of a result with a NaN frequency",
+     ["export", "nan.h5", "--format", "uff", "--out", "uff"]),
+    ("`export --transient` of a result without a transient response",
+     ["export", "results/three_dof_frf.h5", "--format", "xdmf", "--transient", "--out", "x"]),
+    ("`export --variant` that the result does not hold",
+     ["export", "results/three_dof_frf.h5", "--format", "vtu", "--variant", "nope", "--out",
+      "v"]),
+    ("`export --format uff` with `--modes`",
+     ["export", "results/three_dof_frf.h5", "--format", "uff", "--modes", "1", "--out", "u"]),
+    ("`compare --variant-a` that the result does not hold",
+     ["compare", "results/three_dof_frf.h5", "results/three_dof_frf.h5", "--variant-a", "nope"]),
+    ("`compare` of a file that is not a result", ["compare", "results/three_dof_frf.h5",
+                                                  "case.yaml"]),
+    ("`study --workers 0`", ["study", "tuning.yaml", "--workers", "0", "--out", "s"]),
+    ("`study --scheduler` with a web address (nothing is sent)",
+     ["study", "tuning.yaml", "--scheduler", "http://127.0.0.1:8786", "--out", "s"]),
+    ("`study --scheduler` with a protocol other than tcp",
+     ["study", "tuning.yaml", "--scheduler", "tls://127.0.0.1:8786", "--out", "s"]),
+    ("`study --connect-timeout` without `--scheduler`",
+     ["study", "tuning.yaml", "--connect-timeout", "2", "--out", "s"]),
+    ("`study --connect-timeout` of NaN",
+     ["study", "tuning.yaml", "--scheduler", "tcp://127.0.0.1:8786", "--connect-timeout",
+      "nan", "--out", "s"]),
+    ("`study` of a case without a `study:` block", ["study", "case.yaml", "--out", "s"]),
 ]
 
 
@@ -208,6 +233,9 @@ def other_messages() -> list[tuple[str, str]]:
 
             with h5py.File("nan.h5", "r+") as f:
                 f["modes/omega"][0] = float("nan")
+            Path("inf.h5").write_bytes(Path("results/three_dof_frf.h5").read_bytes())
+            with h5py.File("inf.h5", "r+") as f:
+                f["frf/H"][0, 0, 0] = complex("inf")
             Path("tuning.yaml").write_bytes((ROOT / "cases" / "tapered_rod_tuning.yaml")
                                             .read_bytes())
             from substruct.io.file_set import OutputDir

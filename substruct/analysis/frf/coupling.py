@@ -31,6 +31,7 @@ from typing import Sequence
 
 import numpy as np
 
+from substruct.analysis.errors import AnalysisInputError
 from substruct.builder.frf_parts import FrfPart
 from substruct.case.frf_files import GRID_DIGITS_RTOL
 
@@ -146,7 +147,7 @@ def lm_fbs(Y: np.ndarray, B: np.ndarray) -> np.ndarray:
     try:
         X = np.linalg.solve(BYBt, BY)
     except np.linalg.LinAlgError:
-        raise ValueError("the interface receptance B Y B^T is singular (redundant interface "
+        raise AnalysisInputError("the interface receptance B Y B^T is singular (redundant interface "
                          "rows?)") from None
     return Y - YBt @ X
 

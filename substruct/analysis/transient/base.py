@@ -40,6 +40,7 @@ import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from substruct.analysis.errors import AnalysisInputError
 from substruct.analysis.transient.integrators import Scheme
 from substruct.linalg.constraints import independent_rows
 from substruct.linalg.factorize import factorizer
@@ -131,11 +132,11 @@ def influence(K: sp.sparray, A: sp.csr_array, e: np.ndarray) -> np.ndarray:
     try:
         x = factorizer("saddle")(big)(np.concatenate([np.zeros(n), beta * ek]))
     except Exception:
-        raise ValueError("the influence vector of the ground motion is not determined: the "
+        raise AnalysisInputError("the influence vector of the ground motion is not determined: the "
                          "structure is a mechanism with its supports held") from None
     r = np.asarray(x[:n], dtype=float)
     bad = float(np.abs(A @ r - e).max(initial=0.0))
     if not np.all(np.isfinite(r)) or bad > 1e-8 * max(float(np.abs(e).max()), 1e-300):
-        raise ValueError("the ground motion moves constraint rows that other rows hold fixed "
+        raise AnalysisInputError("the ground motion moves constraint rows that other rows hold fixed "
                          f"(residual {bad:.3g})")
     return r

@@ -33,6 +33,7 @@ from typing import Callable, Mapping, Sequence
 import numpy as np
 import scipy.sparse as sp
 
+from substruct.analysis.errors import AnalysisInputError
 from substruct.analysis.checks import (
     check_methods,
     receptance_difference,
@@ -166,7 +167,7 @@ def initial_state(M: sp.csr_array, K: sp.csr_array, A: sp.csr_array, load: np.nd
         try:
             x = factorizer("superlu", spd=False)(big)(np.concatenate([rhs, held]))
         except RuntimeError:
-            raise ValueError("initial state (eq 10): a massless coordinate held neither by a "
+            raise AnalysisInputError("initial state (eq 10): a massless coordinate held neither by a "
                              "constraint nor by a stiffness") from None
         return np.asarray(x[:M.shape[0]])
 

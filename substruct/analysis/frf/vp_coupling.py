@@ -1,7 +1,7 @@
 r"""Coupling and decoupling at virtual points, with a regularised interface inversion and
 interface weakening.
 
-A part after the virtual point transformation (:mod:`substruct.analysis.virtual_point`) has
+A part after the virtual point transformation (:mod:`substruct.analysis.frf.virtual_point`) has
 receptances from its inputs (virtual-point loads and impacts that pass through) to its outputs
 (virtual-point motions and sensors that pass through): :class:`VpPart`, not square.  Parts
 are stacked block-diagonally and joined by signed Boolean rows on the virtual-point
@@ -13,8 +13,8 @@ inputs).  The coupled receptance is the LM-FBS form
 which needs only the receptances from the inputs and the interface to the outputs and the
 interface, so the stacked ``Y`` is embedded in a square one on the union of a part's labels
 (entries from an output-only row to an input-only column are never used).  With
-:math:`B_u = B_f` and no regularisation it is :func:`substruct.analysis.frf_coupling.lm_fbs`
-itself, checked by :func:`~substruct.analysis.frf_coupling.generalized_inverse_fbs`.
+:math:`B_u = B_f` and no regularisation it is :func:`substruct.analysis.frf.coupling.lm_fbs`
+itself, checked by :func:`~substruct.analysis.frf.coupling.generalized_inverse_fbs`.
 
 **Interface weakening** drops chosen virtual-point coordinates (e.g. the rotations, which
 impacts excite poorly) from compatibility (rows of :math:`B_u`) or equilibrium (rows of
@@ -38,8 +38,8 @@ from typing import Sequence
 
 import numpy as np
 
-from substruct.analysis.frf_coupling import generalized_inverse_fbs, lm_fbs
-from substruct.analysis.virtual_point import VirtualPointTransform
+from substruct.analysis.frf.coupling import generalized_inverse_fbs, lm_fbs
+from substruct.analysis.frf.virtual_point import VirtualPointTransform
 
 #: The components of a virtual point that are rotations.
 ROTATIONS = ("rx", "ry", "rz")
@@ -141,7 +141,7 @@ def interface_fbs(Y: np.ndarray, Bu: np.ndarray, Bf: np.ndarray,
                   sf: np.ndarray | None = None) -> np.ndarray:
     r""":math:`Y_c = Y - Y B_f^T (B_u Y B_f^T)^{\dagger} B_u Y` at every frequency, ``Y``
     square ``(k, n, n)``.  With ``Bu`` equal to ``Bf`` and ``reg.kind == "none"`` it is
-    :func:`~substruct.analysis.frf_coupling.lm_fbs` (a linear solve).
+    :func:`~substruct.analysis.frf.coupling.lm_fbs` (a linear solve).
 
     ``su``, ``sf`` scale the interface rows before the regularised inversion, so that its
     singular values compare quantities of one unit:
@@ -226,7 +226,7 @@ def couple_virtual_points(parts: Sequence[VpPart], pairs: Sequence[tuple[str, st
     Returns:
         The coupled receptances from every stacked input to every stacked output, and, without
         regularisation or weakening and with ``check``, ``max |Y_c^+ - Y_c| / max |Y_c|``
-        against :func:`~substruct.analysis.frf_coupling.generalized_inverse_fbs` (``nan``
+        against :func:`~substruct.analysis.frf.coupling.generalized_inverse_fbs` (``nan``
         otherwise; the check doubles the time).
 
     Raises:

@@ -14,7 +14,7 @@ at every receptor point ``b`` (and at the interface itself):
 * :func:`blocked_forces_in_situ`: from responses at indicator points ``b`` (at least as many as
   interface coordinates, usually more: overdetermined),
   :math:`f^{bl} = (Y^{AB}_{bc})^{\dagger} u_b` (least squares, optionally regularised:
-  :class:`~substruct.analysis.vp_coupling.Regularisation`);
+  :class:`~substruct.analysis.frf.vp_coupling.Regularisation`);
 * :func:`on_board_validation`: the response predicted at validation points ``t`` not used to
   find the forces, :math:`\hat u_t = Y^{AB}_{tc} f^{bl}`, against the measured :math:`u_t`,
   with the relative error :math:`\lVert \hat u_t - u_t \rVert / \lVert u_t \rVert` per frequency;
@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from substruct.analysis.vp_coupling import Regularisation, regularised_inverse
+from substruct.analysis.frf.vp_coupling import Regularisation, regularised_inverse
 
 __all__ = ["blocked_forces_matrix_inverse", "blocked_forces_in_situ", "Validation",
            "on_board_validation", "path_contributions"]
