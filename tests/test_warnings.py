@@ -99,3 +99,19 @@ def test_an_overflow_in_the_receptances_is_one_line_exit_1_nothing_written(
     assert "inf or NaN" in stderr and "Traceback" not in stderr
     assert "inf" not in stdout  # no table of inf
     assert not out.exists() or not any(out.iterdir())
+
+
+@pytest.mark.filterwarnings("error::RuntimeWarning")
+def test_a_transient_whose_histories_overflow_is_one_line_exit_1_nothing_written(
+        tmp_path, capsys):
+    """exp(1000 t) stays finite as a load but its response and energy overflow: one line,
+    exit 1, no RuntimeWarning printed first, nothing written."""
+    text = (CASES.parent / "tests" / "bad_cases" / "transient_expression_overflow.yaml").read_text()
+    case = tmp_path / "overflow.yaml"
+    case.write_text(text.replace("exp(2000", "exp(1000"))
+    out = tmp_path / "out"
+    code, stdout, stderr = run(capsys, "run", case, "--out", out)
+    assert code == 1, stderr
+    assert stderr.startswith("substruct: error: transient: ") and stderr.count("\n") == 1
+    assert "inf or NaN" in stderr and "Warning" not in stderr
+    assert not out.exists() or not any(out.iterdir())

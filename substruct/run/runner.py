@@ -11,6 +11,7 @@ from __future__ import annotations
 from datetime import datetime, timezone
 from typing import Mapping
 
+import numpy as np
 import scipy.sparse as sp
 
 from substruct.analysis.checks import require_finite
@@ -127,7 +128,9 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
         if events is not None:
             events("sweep", f"transient: {case.analysis.transient.steps} steps, "
                    f"{asm.n_dof} coordinates", case.analysis.transient.steps)
-        result.transient = transient_result(case, model)
+        # an overflow of the histories is refused below in one line, not warned about first
+        with np.errstate(over="ignore", invalid="ignore"):
+            result.transient = transient_result(case, model)
     _require_finite_result(result)
     return result
 
@@ -148,4 +151,5 @@ def _require_finite_result(result: Result) -> None:
     tr = result.transient
     if tr is not None:
         require_finite("transient", displacement=tr.displacement, velocity=tr.velocity,
-                       acceleration=tr.acceleration, constraint_forces=tr.constraint_forces)
+                       acceleration=tr.acceleration, constraint_forces=tr.constraint_forces,
+                       energy=tr.energy)
