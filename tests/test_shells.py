@@ -208,3 +208,54 @@ def test_bad_shells_are_refused():
         frame("f", nodes, [], shells=[Shell((1, 2, 9), 0.01, MAT)])
     with pytest.raises(ValueError, match="divisions"):
         frame("f", nodes, [], shells=[Shell((1, 2, 4), 0.01, MAT, divisions=(2, 3))])
+
+
+def _deck_case(**shell) -> dict:
+    item = {"nodes": [1, 2, 3, 4], "thickness": 0.01, "material": "s", "divisions": [8, 8],
+            **shell}
+    return {"name": "deck", "substructures": [{
+        "name": "p", "type": "frame",
+        "nodes": {1: [0, 0, 0], 2: [1, 0, 0], 3: [1, 1, 0], 4: [0, 1, 0]},
+        "materials": {"s": {"E": E, "G": E / (2 * (1 + NU)), "rho": RHO}},
+        "shells": [item], "supports": {1: "123456", 2: "123456"}}],
+        "analysis": {"modes": {"count": 3}}}
+
+
+def test_case_file_shells_are_the_api_shells():
+    """``shells:`` in a ``type: frame`` item builds the same matrices as the Python API."""
+    from substruct.builder.model import assemble_case
+    from substruct.case.loader import load_case
+
+    asm = assemble_case(load_case(_deck_case())).assembly
+    nodes = {1: (0, 0, 0), 2: (1, 0, 0), 3: (1, 1, 0), 4: (0, 1, 0)}
+    api = frame("p", nodes, [], supports={1: "123456", 2: "123456"},
+                shells=[Shell((1, 2, 3, 4), 0.01, MAT, divisions=(8, 8))])
+    assert abs(asm.K - api.K).max() <= 1e-13 * abs(api.K).max()
+    assert abs(asm.M - api.M).max() <= 1e-13 * abs(api.M).max()
+
+
+@pytest.mark.parametrize("shell, field, text", [
+    ({"nodes": [1, 2, 9]}, "shells.0.nodes", "no node 9"),
+    ({"nodes": [1, 2, 4], "divisions": [2, 3]}, "shells.0.divisions", "divided equally"),
+    ({"material": "x"}, "shells.0.material", "no material"),
+    ({"thickness": -1}, "shells.0.thickness", ""),
+])
+def test_case_file_bad_shells_name_their_field(shell, field, text):
+    from substruct.case.errors import CaseError
+    from substruct.case.loader import load_case
+
+    with pytest.raises(CaseError) as err:
+        load_case(_deck_case(**shell))
+    assert field.replace(".", "") in str(err.value).replace(".", "").replace("[", "") \
+        .replace("]", "") and text in str(err.value)
+
+
+def test_case_file_warped_shell_is_refused_naming_it():
+    from substruct.builder.model import assemble_case
+    from substruct.case.errors import CaseError
+    from substruct.case.loader import load_case
+
+    case = _deck_case(divisions=1)
+    case["substructures"][0]["nodes"][4] = [0, 1, 0.5]
+    with pytest.raises(CaseError, match=r"shells\[0\]: the quadrilateral is warped by 0.0833"):
+        assemble_case(load_case(case))

@@ -72,15 +72,19 @@ def _grid(shell: Shell, X: np.ndarray) -> tuple[np.ndarray, list[tuple[int, ...]
     """Local node positions of the divided shell and its elements (local node indices)."""
     nx, ny = shell.divisions
     if len(X) == 4:
-        s, r = np.meshgrid(np.linspace(0, 1, nx + 1), np.linspace(0, 1, ny + 1), indexing="ij")
-        s, r = s.ravel(), r.ravel()
+        S, Rr = np.meshgrid(np.linspace(0, 1, nx + 1), np.linspace(0, 1, ny + 1), indexing="ij")
+        s, r = S.ravel(), Rr.ravel()
         W = np.column_stack([(1 - s) * (1 - r), s * (1 - r), s * r, (1 - s) * r])
-        at = lambda i, j: i * (ny + 1) + j  # noqa: E731
-        quads = [(at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1))
-                 for i in range(nx) for j in range(ny)]
+
+        def at(i: int, j: int) -> int:
+            return i * (ny + 1) + j
+
+        quads: list[tuple[int, ...]] = [(at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1))
+                                        for i in range(nx) for j in range(ny)]
         return W @ X, quads
     d = nx
-    pts, index = [], {}
+    pts: list[tuple[float, float, float]] = []
+    index: dict[tuple[int, int], int] = {}
     for i in range(d + 1):
         for j in range(d + 1 - i):
             index[i, j] = len(pts)
