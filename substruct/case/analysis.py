@@ -29,8 +29,8 @@ from substruct.case.fields import (
 from substruct.case.numbers import MAX_MAGNITUDE, RANGE
 from substruct.case.transient import TransientAnalysis
 
-__all__ = ["METHODS", "TOLERANCE", "Method", "ConstraintSpec", "Variant", "ModesAnalysis",
-           "Omega", "ModalFrf", "FrfAnalysis", "Analysis", "Output"]
+__all__ = ["METHODS", "TOLERANCE", "Method", "ConstraintSpec", "Variant", "ModesBand",
+           "ModesAnalysis", "Omega", "ModalFrf", "FrfAnalysis", "Analysis", "Output"]
 
 #: Formulations that an analysis may name (see :mod:`substruct.analysis.coupling`).
 METHODS = ("generalized-inverse", "null-space", "kkt")
@@ -72,10 +72,26 @@ class Variant(StrictModel):
 Method = Literal["generalized-inverse", "null-space", "kkt"]
 
 
+class ModesBand(StrictModel):
+    """A frequency band of the modes kept, ``min`` to ``max`` rad/s (``max`` blank: no upper
+    end)."""
+
+    min: NonNegative = 0.0
+    max: Positive | None = None
+
+    @model_validator(mode="after")
+    def _order(self) -> "ModesBand":
+        if self.max is not None and self.max <= self.min:
+            raise FieldError("max", f"the band ends above its start ({self.min})", self.max)
+        return self
+
+
 class ModesAnalysis(StrictModel):
-    """Coupled modes (eqs 28-34) by ``method``, checked by the ``check`` formulations."""
+    """Coupled modes (eqs 28-34) by ``method``, checked by the ``check`` formulations; with a
+    ``band``, only the modes in it, ``count`` at most (Nastran's EIGRL ``V1``, ``V2``)."""
 
     count: Count = 6
+    band: ModesBand | None = None
     method: Method = "generalized-inverse"
     check: list[Method] = Field(default_factory=list)
     variants: list[Variant] = Field(default_factory=list)

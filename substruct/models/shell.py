@@ -157,12 +157,19 @@ def _area(xy: np.ndarray) -> float:
 
 
 def shell_matrices(X: np.ndarray, E: float, nu: float, t: float, rho: float,
-                   mass: str = "consistent", nsm: float = 0.0
+                   mass: str = "consistent", nsm: float = 0.0, *,
+                   bending_material: tuple[float, float] | None = None, bend: float = 1.0,
+                   membrane: bool = True, bending: bool = True, rotary: bool = True
                    ) -> tuple[np.ndarray, np.ndarray]:
     r"""Stiffness and mass ``(6n, 6n)``, global axes, of a flat shell element with corners
     ``X`` ``(n, 3)``, ``n`` = 3 or 4, six coordinates ``(ux, uy, uz, rx, ry, rz)`` per corner
     (module docstring).  ``nsm`` is a non-structural mass per area, added to :math:`\rho t`
     on the translations.
+
+    For Nastran's PSHELL: ``bending_material`` ``(E, nu)`` of the bending (MID2; the
+    membrane's if ``None``), ``bend`` the ratio ``12 I / t^3`` multiplying the bending
+    stiffness, ``membrane`` / ``bending`` whether the element has each (MID1 / MID2 given),
+    ``rotary`` whether the mass has the rotary inertia of the thickness.
 
     Raises:
         ValueError: bad properties, a degenerate, non-convex or warped element.
@@ -179,17 +186,19 @@ def shell_matrices(X: np.ndarray, E: float, nu: float, t: float, rho: float,
     R, xy = shell_axes(X)
     if _area(xy) <= 0:
         raise ValueError("the corners are not in order around the element")
-    mu, rot = rho * t + nsm, rho * t**3 / 12
-    Kb, Mb = bending_matrices_local(xy, E, nu, t, mu, rot)
-    Km = membrane_matrices(xy, E, nu, t)
+    mu, rot = rho * t + nsm, (rho * t**3 / 12 if rotary else 0.0)
+    Eb, nub = bending_material if bending_material is not None else (E, nu)
+    Kb, Mb = bending_matrices_local(xy, Eb, nub, t, mu, rot)
+    Kb = Kb * bend if bending else 0.0 * Kb
+    Km = membrane_matrices(xy, E, nu, t) if membrane else np.zeros((3 * n, 3 * n))
     memb = np.concatenate([[6 * k, 6 * k + 1, 6 * k + 5] for k in range(n)])
-    bend = np.concatenate([[6 * k + 2, 6 * k + 3, 6 * k + 4] for k in range(n)])
+    bent = np.concatenate([[6 * k + 2, 6 * k + 3, 6 * k + 4] for k in range(n)])
     K, M = np.zeros((6 * n, 6 * n)), np.zeros((6 * n, 6 * n))
     K[np.ix_(memb, memb)] = Km
-    K[np.ix_(bend, bend)] = Kb
+    K[np.ix_(bent, bent)] = Kb
     if mass == "consistent":
         M[np.ix_(memb, memb)] = _membrane_mass(xy, mu, rot)
-        M[np.ix_(bend, bend)] = Mb
+        M[np.ix_(bent, bent)] = Mb
     else:
         A = _area(xy)
         M[np.arange(6 * n), np.arange(6 * n)] = np.tile([mu * A / n] * 3 + [rot * A / n] * 3, n)
