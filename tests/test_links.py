@@ -185,3 +185,33 @@ def test_a_coordinate_dependent_twice_is_refused():
         rigid_link([a, b], NodeRef("a", {"node": 2}), [NodeRef("b", {"node": 3})], ["rq"])
     with pytest.raises(LinkError, match="no node 7"):
         rigid_link([a, b], NodeRef("a", {"node": 2}), [NodeRef("b", {"node": 7})])
+
+
+def test_supported_dependent_coordinates_are_not_dependent_twice():
+    """Two links whose dependent coordinates are supported (empty rows) used to share one
+    empty-pattern key and were refused as 'already dependent'; they are kept, and their rows
+    hold the independent nodes: two clamped stubs rigidly tied to one free node clamp it."""
+    a = member("a", 1, 2, 0.0, 1.0, 1, supports={1: None, 2: None})
+    b = member("b", 3, 4, 1.0, 2.0, 2, supports={4: None})
+    c = member("c", 5, 6, 1.0, 2.0, 2, supports={6: None})
+    one = rigid_link([a, b, c], NodeRef("b", {"node": 3}), [NodeRef("a", {"node": 2})],
+                     name="one")
+    two = rigid_link([a, b, c], NodeRef("c", {"node": 5}), [NodeRef("a", {"node": 2})],
+                     name="two")
+    assert all(key is None for _, key in one.dependent + two.dependent)
+    rows = link_constraints([one, two])
+    assert len(rows) == 12
+    # node 3 of b and node 5 of c are held by the rows: each member is clamped-clamped
+    asm = assemble([a, b, c], (), rows)
+    res = modes(asm.M, None, asm.K, asm.A, 4, checks=CHECKS)
+    alone = member("alone", 3, 4, 1.0, 2.0, 2, supports={3: None, 4: None})
+    ref = modes(alone.M, None, alone.K, None, 2).omega
+    np.testing.assert_allclose(res.omega[:4], np.repeat(ref, 2), rtol=1e-9)
+    # a free dependent coordinate twice is still refused
+    free = member("f", 7, 8, 1.0, 2.0, 1)
+    three = rigid_link([b, free], NodeRef("b", {"node": 3}), [NodeRef("f", {"node": 7})],
+                       name="three")
+    four = rigid_link([c, free], NodeRef("c", {"node": 5}), [NodeRef("f", {"node": 7})],
+                      name="four")
+    with pytest.raises(LinkError, match="already dependent in three"):
+        link_constraints([three, four])

@@ -84,8 +84,8 @@ class Link:
         kind: ``"rigid"``, ``"interpolation"`` or ``"mpc"``.
         constraints: one :class:`LinearConstraint` per row of ``A``.
         dependent: ``(substructure, key)`` of each dependent coordinate, with ``key`` the
-            coordinate's column in its substructure (a node component that is one coordinate)
-            or the row's sparsity pattern otherwise.
+            coordinate's column in its substructure (a node component that is one coordinate),
+            the row's sparsity pattern otherwise, or ``None`` for a supported coordinate.
         labels: a readable name of each dependent coordinate, in the same order.
     """
 
@@ -123,7 +123,13 @@ def _position(subs: Mapping[str, Substructure], node: NodeRef, link: str) -> np.
 
 
 def _key(subs: Mapping[str, Substructure], p: PointRef, link: str) -> Any:
+    """The identity of a dependent coordinate: its column, its row's pattern, or ``None`` for
+    a supported coordinate (an empty row: no coordinate of the model, so it cannot be
+    dependent twice; its rows constrain the other terms only)."""
     r = _row(subs, p, link)
+    r.eliminate_zeros()
+    if r.nnz == 0:
+        return None
     if r.nnz == 1 and r.data[0] == 1.0:
         return int(r.indices[0])
     return (tuple(r.indices.tolist()), tuple(r.data.tolist()))
@@ -287,6 +293,9 @@ def mpc(substructures: Mapping[str, Substructure] | Sequence[Substructure],
 def link_constraints(links: Sequence[Link]) -> list[LinearConstraint]:
     """The rows of all ``links``, in order.
 
+    A supported dependent coordinate (an empty point row) is not a coordinate of the model:
+    its rows only constrain the other terms, so two links may both name it.
+
     Raises:
         LinkError: a coordinate that is dependent in two links (or twice in one).
     """
@@ -294,6 +303,8 @@ def link_constraints(links: Sequence[Link]) -> list[LinearConstraint]:
     out: list[LinearConstraint] = []
     for link in links:
         for dep, label in zip(link.dependent, link.labels):
+            if dep[1] is None:  # a supported coordinate: not a coordinate of the model
+                continue
             if dep in seen:
                 raise LinkError(f"{link.name}: {label} is already dependent in {seen[dep]}")
             seen[dep] = link.name

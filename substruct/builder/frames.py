@@ -10,17 +10,18 @@ import numpy as np
 from substruct.case.frames import FrameSpec
 from substruct.models.beam import Material, Section
 from substruct.models.frame import Beam, frame
+from substruct.models.shell_mesh import Shell
 from substruct.substructure import Substructure
 
 __all__ = ["build_frame", "frame_where"]
 
 
 def build_frame(case: Any, i: int, spec: FrameSpec) -> Substructure:
-    """The frame of ``case.substructures[i]``.
+    """The frame of ``case.substructures[i]``, with its shells.
 
     Raises:
         CaseError: a member that cannot be made (an orientation along its axis, coincident
-            nodes, releases leaving a mechanism) or a node mass that is not a number or a
+            nodes, releases leaving a mechanism), a warped, degenerate or non-convex shell, or a node mass that is not a number or a
             symmetric positive semi-definite 6 x 6 matrix, naming its field.
     """
     sections = {k: Section(A=s.A, Iy=s.Iy, Iz=s.Iz, J=s.J, ky=s.ky, kz=s.kz, Ip=s.Ip)
@@ -32,6 +33,9 @@ def build_frame(case: Any, i: int, spec: FrameSpec) -> Substructure:
                   theory=m.theory, divisions=int(m.divisions), pin_a=m.pin_a, pin_b=m.pin_b,
                   name=str(k))
              for k, m in enumerate(spec.members)]
+    shells = [Shell(tuple(int(n) for n in sh.nodes), float(sh.thickness),
+                    materials[sh.material], sh.counts(), float(sh.nsm), name=str(k))
+              for k, sh in enumerate(spec.shells)]
     masses: dict[int, Any] = {}
     for node, value in spec.node_masses.items():
         try:
@@ -42,14 +46,17 @@ def build_frame(case: Any, i: int, spec: FrameSpec) -> Substructure:
     nodes = {k: tuple(float(v) for v in xyz) for k, xyz in spec.nodes.items()}
     try:
         return frame(spec.name, nodes, beams, supports=dict(spec.supports), mass=spec.mass,
-                     node_masses=masses)
+                     node_masses=masses, shells=shells)
     except ValueError as err:
         text = str(err).split(": ", 1)[-1]  # without the frame's name
         loc: tuple = ("substructures", i)
-        if text.startswith("member ") and text.split(":", 1)[0][7:].isdigit():
-            k = int(text.split(":", 1)[0][7:])
-            raise case.error(loc + ("members", k), text.split(": ", 1)[-1],
-                             spec.members[k].model_dump(exclude_defaults=True)) from None
+        for word, key, items in (("member ", "members", spec.members),
+                                 ("shell ", "shells", spec.shells)):
+            head = text.split(":", 1)[0]
+            if head.startswith(word) and head[len(word):].isdigit():
+                k = int(head[len(word):])
+                raise case.error(loc + (key, k), text.split(": ", 1)[-1],
+                                 items[k].model_dump(exclude_defaults=True)) from None
         raise case.error(loc, text) from None
 
 

@@ -28,7 +28,7 @@ def build_nastran(spec: NastranSpec) -> Substructure:
     Raises:
         BdfError: an element that cannot be made, naming the file, line, card and id.
     """
-    return nastran_substructure(spec.name, nastran_matrices(spec.bulk))
+    return nastran_substructure(spec.name, nastran_matrices(spec.bulk), autospc=False)
 
 
 def bulk_links(name: str, bulk: BulkData, subs: Mapping[str, Substructure]

@@ -38,8 +38,8 @@ from substruct.vocabulary import (
     Solver,
 )
 
-__all__ = ["ConstraintSpec", "Variant", "ModesAnalysis",
-           "Omega", "ModalFrf", "FrfAnalysis", "Analysis", "Output"]
+__all__ = ["ConstraintSpec", "Variant", "ModesBand", "ModesAnalysis", "Omega", "ModalFrf",
+           "FrfAnalysis", "Analysis", "Output"]
 
 
 
@@ -73,12 +73,26 @@ class Variant(StrictModel):
     drop: Annotated[list[Name], Field(min_length=1)]
 
 
+class ModesBand(StrictModel):
+    """A frequency band of the modes kept, ``min`` to ``max`` rad/s (``max`` blank: no upper
+    end)."""
+
+    min: NonNegative = 0.0
+    max: Positive | None = None
+
+    @model_validator(mode="after")
+    def _order(self) -> "ModesBand":
+        if self.max is not None and self.max <= self.min:
+            raise FieldError("max", f"the band ends above its start ({self.min})", self.max)
+        return self
 
 
 class ModesAnalysis(StrictModel):
-    """Coupled modes (eqs 28-34) by ``method``, checked by the ``check`` formulations."""
+    """Coupled modes (eqs 28-34) by ``method``, checked by the ``check`` formulations; with a
+    ``band``, only the modes in it, ``count`` at most (Nastran's EIGRL ``V1``, ``V2``)."""
 
     count: Count = 6
+    band: ModesBand | None = None
     method: Formulation = GENERALIZED_INVERSE
     check: list[Formulation] = Field(default_factory=list)
     variants: list[Variant] = Field(default_factory=list)

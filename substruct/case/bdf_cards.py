@@ -12,14 +12,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from dataclasses import dataclass
+
+import numpy as np
 
 from substruct.case.bdf_fields import RawCard, nastran_int, nastran_real
 
-__all__ = ["components", "Grid", "Coord", "Rod", "Bar", "Mat1", "Conm2", "Spring", "Rbe2",
-           "Rbe3", "Mpc", "Eigrl", "read_grid", "read_cord2r", "read_prod", "read_pbar",
-           "read_pbeam", "read_mat1", "read_rod", "read_bar", "read_conm2", "read_celas",
-           "read_pelas", "read_rbe2", "read_rbe3", "read_mpc", "read_spc", "read_spc1",
-           "read_eigrl"]
+__all__ = ["components", "Grid", "Coord", "Rod", "Bar", "Mat1", "Conm2", "read_grid",
+           "read_cord2r", "read_prod", "read_pbar", "read_pbeam", "read_mat1", "read_rod",
+           "read_bar", "read_conm2"]
 
 
 def components(card: RawCard, i: int, name: str, blank_ok: bool = False) -> str:
@@ -106,61 +107,6 @@ class Conm2:
     m: float
     x: np.ndarray
     inertia: np.ndarray
-    line: int
-
-
-@dataclass(frozen=True)
-class Spring:
-    """CELAS1 / CELAS2: stiffness ``k`` (CELAS1: from PELAS ``pid``) between ``(grid,
-    component)`` ends, the second ``None`` when grounded."""
-
-    id: int
-    k: float | None
-    pid: int | None
-    a: tuple[int, int]
-    b: tuple[int, int] | None
-    line: int
-
-
-@dataclass(frozen=True)
-class Rbe2:
-    """RBE2: independent grid ``gn``, components ``cm`` of the dependent grids ``gm``."""
-
-    id: int
-    gn: int
-    cm: str
-    gm: tuple[int, ...]
-    line: int
-
-
-@dataclass(frozen=True)
-class Rbe3:
-    """RBE3: reference grid and components, and groups ``(weight, components, grids)``."""
-
-    id: int
-    ref: int
-    refc: str
-    groups: tuple[tuple[float, str, tuple[int, ...]], ...]
-    line: int
-
-
-@dataclass(frozen=True)
-class Mpc:
-    """MPC: set ``sid``, terms ``(grid, component, coefficient)``, the first dependent."""
-
-    sid: int
-    terms: tuple[tuple[int, int, float], ...]
-    line: int
-
-
-@dataclass(frozen=True)
-class Eigrl:
-    """EIGRL: set ``sid``, frequency range ``v1``-``v2`` (Hz, ``None`` when blank), ``nd``."""
-
-    sid: int
-    v1: float | None
-    v2: float | None
-    nd: int | None
     line: int
 
 
@@ -293,158 +239,3 @@ def read_conm2(c: RawCard) -> Conm2:
                       "semi-definite", [i11, i21, i22, i31, i32, i33], "I11")
     x = np.array([c.real(4, "X1", 0.0), c.real(5, "X2", 0.0), c.real(6, "X3", 0.0)])
     return Conm2(c.integer(0, "EID"), c.integer(1, "G"), c.integer(2, "CID", 0), m, x, inertia, c.line)
-
-
-def _end(c: RawCard, gi: int, name: str, blank_ok: bool) -> tuple[int, int] | None:
-    g = c.integer(gi, f"G{name}", 0)
-    if g == 0 and blank_ok:
-        if c.text(gi + 1) not in ("", "0"):
-            raise c.error("a grounded end has no component", c.text(gi + 1), f"C{name}")
-        return None
-    comp = components(c, gi + 1, f"C{name}")
-    if len(comp) != 1:
-        raise c.error("a scalar spring joins one component at each end", comp, f"C{name}")
-    return g, int(comp) - 1
-
-
-def read_celas(c: RawCard) -> Spring:
-    """CELAS1 EID PID G1 C1 G2 C2 or CELAS2 EID K G1 C1 G2 C2 GE S (``GE``, ``S`` unused by
-    normal modes)."""
-    eid = c.integer(0, "EID")
-    c.blank_after(8 if c.name == "CELAS2" else 6, f"{c.name} has one line")
-    a = _end(c, 2, "1", blank_ok=False)
-    b = _end(c, 4, "2", blank_ok=True)
-    assert a is not None
-    if c.name == "CELAS1":
-        return Spring(eid, None, c.integer(1, "PID", eid), a, b, c.line)
-    return Spring(eid, c.real(1, "K"), None, a, b, c.line)
-
-
-def read_pelas(c: RawCard) -> list[tuple[int, float]]:
-    """PELAS PID1 K1 GE1 S1 PID2 K2 GE2 S2: ``[(pid, k), ...]`` (``GE``, ``S`` unused)."""
-    c.blank_after(8, "PELAS has one line")
-    out = [(c.integer(0, "PID1"), c.real(1, "K1"))]
-    if c.text(4):
-        out.append((c.integer(4, "PID2"), c.real(5, "K2")))
-    return out
-
-
-def _int_list(c: RawCard, start: int, name: str) -> tuple[list[int], int]:
-    """Integers from ``start`` on (blanks skipped) up to a non-integer: ``(values, index)``."""
-    out, k = [], start
-    while k < len(c.fields):
-        t = c.fields[k]
-        if t and nastran_int(t) is None:
-            break
-        if t:
-            out.append(int(t))
-        k += 1
-    if not out:
-        raise c.error("needs at least one grid", name=name)
-    return out, k
-
-
-def read_rbe2(c: RawCard) -> Rbe2:
-    """RBE2 EID GN CM GM1 GM2 ... (ALPHA: thermal, unused)."""
-    gm, k = _int_list(c, 3, "GM1")
-    if k < len(c.fields):
-        c.real(k, "ALPHA")
-        c.blank_after(k + 1, "RBE2 ends with ALPHA")
-    return Rbe2(c.integer(0, "EID"), c.integer(1, "GN"), components(c, 2, "CM"), tuple(gm), c.line)
-
-
-def read_rbe3(c: RawCard) -> Rbe3:
-    """RBE3 EID blank REFGRID REFC WT1 C1 G1,1 ... WT2 C2 G2,1 ... ; ``UM`` is refused."""
-    if c.text(1):
-        raise c.error("field 3 of RBE3 is blank", c.text(1), "field 3")
-    groups: list[tuple[float, str, tuple[int, ...]]] = []
-    k = 4
-    while k < len(c.fields):
-        t = c.fields[k]
-        if not t:
-            k += 1
-            continue
-        if t in ("UM", "ALPHA"):
-            if t == "UM":
-                raise c.error("user-chosen dependent components (UM) are not supported", t,
-                              "UM")
-            c.real(k + 1, "ALPHA")
-            c.blank_after(k + 2, "RBE3 ends with ALPHA")
-            break
-        w = c.real(k, f"WT{len(groups) + 1}")
-        comp = components(c, k + 1, f"C{len(groups) + 1}")
-        grids, k = _int_list(c, k + 2, f"G{len(groups) + 1},1")
-        groups.append((w, comp, tuple(grids)))
-    if not groups:
-        raise c.error("needs at least one weight, component and grid", name="WT1")
-    return Rbe3(c.integer(0, "EID"), c.integer(2, "REFGRID"), components(c, 3, "REFC"),
-                tuple(groups), c.line)
-
-
-def read_mpc(c: RawCard) -> Mpc:
-    """MPC SID G1 C1 A1 G2 C2 A2 / blank G3 C3 A3 G4 C4 A4 / ..."""
-    terms: list[tuple[int, int, float]] = []
-    for line in range((len(c.fields) + 7) // 8):
-        if line and c.text(8 * line):
-            raise c.error("field 2 of an MPC continuation is blank", c.text(8 * line),
-                          f"line {line + 1} field 2")
-        for s in (8 * line + 1, 8 * line + 4):
-            if not any(c.text(s + j) for j in range(3)):
-                continue
-            n = len(terms) + 1
-            comp = components(c, s + 1, f"C{n}")
-            if len(comp) != 1:
-                raise c.error("one component per term", comp, f"C{n}")
-            terms.append((c.integer(s, f"G{n}"), int(comp) - 1, c.real(s + 2, f"A{n}")))
-        if c.text(8 * line + 7):
-            raise c.error("field 9 of an MPC line is blank", c.text(8 * line + 7),
-                          f"line {line + 1} field 9")
-    if not terms:
-        raise c.error("needs at least one term", name="G1")
-    return Mpc(c.integer(0, "SID"), tuple(terms), c.line)
-
-
-def read_spc(c: RawCard) -> tuple[int, list[tuple[int, str]]]:
-    """SPC SID G1 C1 D1 G2 C2 D2: ``(sid, [(grid, components)])``; enforced motion refused."""
-    c.blank_after(7, "SPC has one line")
-    out = []
-    for s in (1, 4):
-        if not c.text(s):
-            continue
-        n = 1 if s == 1 else 2
-        if c.real(s + 2, f"D{n}", 0.0) != 0.0:
-            raise c.error("enforced displacements are not supported", c.text(s + 2), f"D{n}")
-        out.append((c.integer(s, f"G{n}"), components(c, s + 1, f"C{n}")))
-    return c.integer(0, "SID"), out
-
-
-def read_spc1(c: RawCard) -> tuple[int, str, list[int] | range]:
-    """SPC1 SID C G1 G2 ... or SID C G1 THRU G2 (a ``range``: the grids of the model in it)."""
-    sid, comp = c.integer(0, "SID"), components(c, 1, "C")
-    if c.text(3) == "THRU":
-        c.blank_after(5, "SPC1 with THRU has one range")
-        a, b = c.integer(2, "G1"), c.integer(4, "G2")
-        if b < a:
-            raise c.error("a THRU range goes up", f"{a} THRU {b}", "G2")
-        return sid, comp, range(a, b + 1)
-    grids, k = _int_list(c, 2, "G1")
-    c.blank_after(k, "SPC1 grids are integers")
-    return sid, comp, grids
-
-
-def read_eigrl(c: RawCard) -> Eigrl:
-    """EIGRL SID V1 V2 ND MSGLVL MAXSET SHFSCL NORM (V1, V2 in Hz; NORM MASS only)."""
-    c.blank_after(8, "EIGRL option lines are not supported")
-    norm = c.text(7) or "MASS"
-    if norm != "MASS":
-        raise c.error("modes are normalised to unit modal mass (NORM MASS)", norm, "NORM")
-    v1 = c.real(1, "V1") if c.text(1) else None
-    v2 = c.real(2, "V2") if c.text(2) else None
-    nd = c.integer(3, "ND") if c.text(3) else None
-    if nd is not None and nd <= 0:
-        raise c.error("must be positive", nd, "ND")
-    if nd is None and v2 is None:
-        raise c.error("EIGRL needs ND or V2 (the modes wanted)", name="ND")
-    if v1 is not None and v2 is not None and v2 <= v1:
-        raise c.error("V2 must be above V1", v2, "V2")
-    return Eigrl(c.integer(0, "SID"), v1, v2, nd, c.line)

@@ -210,24 +210,29 @@ def _line_fields(text: str, source: str, n: int) -> tuple[str, list[str], bool]:
     return head, [text[8 + 8 * k: 16 + 8 * k].strip().upper() for k in range(8)], False
 
 
-def split_bdf(text: str, source: str) -> BdfText:
-    """Split bulk data text into control lines and cards (module docstring).
+def split_bdf(text: str | list[tuple[str, int, str]], source: str) -> BdfText:
+    """Split bulk data text, or lines ``(file name, line number, text)`` (a file and its
+    includes, :mod:`substruct.case.bdf_include`), into control lines and cards (module
+    docstring).
 
     Raises:
-        BdfError: ``CEND`` without ``BEGIN BULK``, ``INCLUDE``, a continuation with no card
-            above it, a free-field line with too many fields.
+        BdfError: ``CEND`` without ``BEGIN BULK``, ``INCLUDE`` in text not read from a file,
+            a continuation with no card above it, a free-field line with too many fields.
     """
     out = BdfText(source)
-    lines = text.replace("\r\n", "\n").replace("\r", "\n").split("\n")
+    if isinstance(text, str):
+        text = [(source, k + 1, ln) for k, ln in
+                enumerate(text.replace("\r\n", "\n").replace("\r", "\n").split("\n"))]
+    lines = [ln for _, _, ln in text]
     upper = [ln.split("$", 1)[0].upper() for ln in lines]
     begin = next((k for k, u in enumerate(upper) if re.match(r"^\s*BEGIN\s+BULK\b", u)), None)
     start = 0
     if begin is not None:
         cend = next((k for k, u in enumerate(upper[:begin]) if u.strip() == "CEND"), None)
         head = 0 if cend is None else cend + 1
-        out.executive = [(k + 1, upper[k].strip()) for k in range(0, cend or 0)
+        out.executive = [(text[k][1], upper[k].strip()) for k in range(0, cend or 0)
                          if upper[k].strip()]
-        out.case_control = [(k + 1, upper[k].strip()) for k in range(head, begin)
+        out.case_control = [(text[k][1], upper[k].strip()) for k in range(head, begin)
                             if upper[k].strip()]
         start = begin + 1
     elif any(u.strip() == "CEND" for u in upper):
@@ -237,22 +242,23 @@ def split_bdf(text: str, source: str) -> BdfText:
         raw = lines[k].split("$", 1)[0].expandtabs(8).rstrip()
         if not raw.strip():
             continue
-        n = k + 1
+        src, n = text[k][0], text[k][1]
         if raw.strip().upper() == "ENDDATA":
             break
         if raw.upper().startswith("INCLUDE"):
-            raise BdfError(source, "INCLUDE is not supported: put the included bulk data in "
-                           "the file", raw.strip(), line=n)
-        first, data, large = _line_fields(raw[:80], source, n)
+            raise BdfError(src, "INCLUDE is read from a file (substruct run MODEL.bdf, or "
+                           "type: nastran): the included file is named relative to it",
+                           raw.strip(), line=n)
+        first, data, large = _line_fields(raw[:80], src, n)
         if raw[0] in " +*,":
             if current is None:
-                raise BdfError(source, "a continuation line with no card above it",
+                raise BdfError(src, "a continuation line with no card above it",
                                raw.strip(), line=n)
             if not large:
                 current.fields += [""] * (-len(current.fields) % 8)
             current.fields += data
             continue
-        current = RawCard(first.rstrip("*"), list(data), n, source)
+        current = RawCard(first.rstrip("*"), list(data), n, src)
         out.cards.append(current)
     for card in out.cards:
         while card.fields and not card.fields[-1]:

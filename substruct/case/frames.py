@@ -1,5 +1,5 @@
-"""Case-file frames: ``type: frame``, 3D beams between numbered nodes with six coordinates
-each (:mod:`substruct.models.frame`).
+"""Case-file frames: ``type: frame``, 3D beams and flat shells between numbered nodes with six
+coordinates each (:mod:`substruct.models.frame`).
 
 .. code-block:: yaml
 
@@ -10,6 +10,8 @@ each (:mod:`substruct.models.frame`).
       sections: {ipe: {A: 2.85e-3, Iy: 1.94e-5, Iz: 1.42e-6, J: 7.0e-8}}
       members:
         - {nodes: [1, 2], section: ipe, material: steel, orientation: [1, 0, 0], divisions: 8}
+      shells:
+        - {nodes: [1, 2, 3, 4], thickness: 0.01, material: steel, divisions: [8, 4]}
       supports: {1: "123456", 4: "123456"}
       mass: consistent            # or lumped
       node_masses: {2: 50.0}      # a mass on the translations, or a 6 x 6 matrix
@@ -26,9 +28,12 @@ from typing import Annotated, Any, Literal
 from pydantic import Field, model_validator
 
 from substruct.case.errors import FieldError
-from substruct.case.fields import MAX_ELEMENTS, Count, Name, Number, Positive, StrictModel
+from substruct.case.fields import (
+    MAX_ELEMENTS, Count, Name, NonNegative, Number, Positive, StrictModel,
+)
 
-__all__ = ["FrameMaterial", "FrameSection", "FrameMember", "FrameSpec", "MAX_FRAME_NODES"]
+__all__ = ["FrameMaterial", "FrameSection", "FrameMember", "FrameShell", "FrameSpec",
+           "MAX_FRAME_NODES"]
 
 #: Most nodes (given and made by ``divisions``) a case frame may have: six coordinates each,
 #: the same order as the largest rods.
@@ -101,28 +106,77 @@ class FrameMember(StrictModel):
         return self
 
 
+class FrameShell(StrictModel):
+    """A flat plate: 3 or 4 corner ``nodes`` in order around it, ``thickness``, ``material``
+    (``nu = E / 2G - 1``), ``divisions`` (``[nx, ny]`` along sides 1-2 and 2-3, or one number
+    for both; a triangle's are equal) and a non-structural mass per area ``nsm``."""
+
+    nodes: Annotated[list[int], Field(min_length=3, max_length=4)]
+    thickness: Positive
+    material: Name
+    divisions: Count | tuple[Count, Count] = 1
+    nsm: NonNegative = 0.0
+
+    def counts(self) -> tuple[int, int]:
+        """``(nx, ny)``."""
+        d = self.divisions
+        return (int(d), int(d)) if isinstance(d, int) else (int(d[0]), int(d[1]))
+
+    def n_made(self) -> tuple[int, int]:
+        """At most how many nodes and elements it makes."""
+        nx, ny = self.counts()
+        if len(self.nodes) == 4:
+            return (nx + 1) * (ny + 1), nx * ny
+        return (nx + 1) * (nx + 2) // 2, nx * nx
+
+
 class FrameSpec(StrictModel):
-    """A frame of 3D beams (:func:`substruct.models.frame.frame`)."""
+    """A frame of 3D beams and shells (:func:`substruct.models.frame.frame`)."""
 
     name: Name
     type: Literal["frame"]
     nodes: Annotated[dict[int, tuple[Number, Number, Number]], Field(min_length=1)]
     materials: Annotated[dict[Name, FrameMaterial], Field(min_length=1)]
-    sections: Annotated[dict[Name, FrameSection], Field(min_length=1)]
-    members: Annotated[list[FrameMember], Field(min_length=1)]
+    sections: dict[Name, FrameSection] = {}
+    members: list[FrameMember] = []
+    shells: list[FrameShell] = []
     supports: dict[int, Any] = {}
     mass: Literal["consistent", "lumped"] = "consistent"
     node_masses: dict[int, Any] = {}
 
     @model_validator(mode="after")
     def _references(self) -> "FrameSpec":
-        made = sum(m.divisions - 1 for m in self.members)
-        if len(self.nodes) + made > MAX_FRAME_NODES or \
-                sum(m.divisions for m in self.members) > MAX_ELEMENTS:
-            raise FieldError("members", f"{len(self.nodes) + made} nodes in "
-                             f"{sum(m.divisions for m in self.members)} elements; at most "
-                             f"{MAX_FRAME_NODES} nodes and {MAX_ELEMENTS} elements are "
-                             f"accepted", len(self.members))
+        if not self.members and not self.shells:
+            raise FieldError("members", "a frame needs members or shells", [])
+        made = sum(m.divisions - 1 for m in self.members) + \
+            sum(s.n_made()[0] for s in self.shells)
+        elements = sum(m.divisions for m in self.members) + \
+            sum(s.n_made()[1] for s in self.shells)
+        if len(self.nodes) + made > MAX_FRAME_NODES or elements > MAX_ELEMENTS:
+            raise FieldError("members" if not self.shells else "shells",
+                             f"up to {len(self.nodes) + made} nodes in {elements} elements; "
+                             f"at most {MAX_FRAME_NODES} nodes and {MAX_ELEMENTS} elements "
+                             f"are accepted", len(self.members) + len(self.shells))
+        for k, sh in enumerate(self.shells):
+            if sh.material not in self.materials:
+                raise FieldError(("shells", k, "material"), f"no material of that name "
+                                 f"(known: {', '.join(self.materials)})", sh.material)
+            for node in sh.nodes:
+                if node not in self.nodes:
+                    raise FieldError(("shells", k, "nodes"), f"no node {node}", sh.nodes)
+            if len(set(sh.nodes)) != len(sh.nodes):
+                raise FieldError(("shells", k, "nodes"), "corners are different nodes",
+                                 sh.nodes)
+            nx, ny = sh.counts()
+            if len(sh.nodes) == 3 and nx != ny:
+                raise FieldError(("shells", k, "divisions"), "a triangle is divided equally "
+                                 "along its sides (one number)", [nx, ny])
+            mat = self.materials[sh.material]
+            nu = mat.E / (2 * mat.G) - 1
+            if not -1 < nu < 0.5:
+                raise FieldError(("materials", sh.material), f"a shell's material needs "
+                                 f"-1 < nu = E / 2G - 1 < 0.5, got nu = {nu:.4g}",
+                                 mat.model_dump())
         for k, m in enumerate(self.members):
             for key, table in (("section", self.sections), ("material", self.materials)):
                 if getattr(m, key) not in table:

@@ -185,7 +185,8 @@ class Case(StrictModel):
                                          f"{known})", name)
             sizes = [s.n_dof() for s in self.substructures]
             counted = [n for n in sizes if n is not None]
-            if len(counted) == len(sizes) and modes.count > sum(counted):
+            if len(counted) == len(sizes) and modes.band is None and \
+                    modes.count > sum(counted):
                 raise FieldError(("analysis", "modes", "count"), f"more modes than the "
                                  f"{sum(counted)} coordinates of the model", modes.count)
         if self.analysis.transient is not None:

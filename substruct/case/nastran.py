@@ -16,6 +16,7 @@ case's ``analysis`` says what to compute).
 
 from __future__ import annotations
 
+import math
 import re
 from pathlib import Path
 from typing import Annotated, Any, Literal
@@ -64,13 +65,15 @@ class NastranSpec(StrictModel):
 
 def bdf_case(path: Path, source: str) -> str:
     """The case text of ``substruct run MODEL.bdf``: the model as its only substructure (named
-    after the file) and the normal modes its EIGRL asks for, ``ND`` of them.
+    after the file) and the normal modes its EIGRL asks for: the lowest ``ND``, or (with
+    ``V1``, ``V2`` in Hz) those in the band, ``ND`` at most (all of them when ``ND`` is
+    blank), as ``analysis.modes.band`` in rad/s.
 
     Raises:
-        BdfError: the file cannot be read, has no EIGRL, or asks for modes by frequency range
-            only (``ND`` blank).
+        BdfError: the file cannot be read or has no EIGRL.
     """
     from substruct.case.bdf_fields import BdfError
+    from substruct.case.fields import MAX_COUNT
 
     bulk = read_bulk(path, path.name)
     eig = bulk.eigrl
@@ -78,14 +81,12 @@ def bdf_case(path: Path, source: str) -> str:
         raise BdfError(source, "no EIGRL: substruct run of a bulk data file computes the "
                        "normal modes its EIGRL asks for")
     name = re.sub(r"[^A-Za-z0-9_.-]", "_", path.stem)[:100] or "model"
-    modes: dict[str, Any] = {"count": eig.nd}
-    if eig.nd is None:
-        raise BdfError(source, "modes by frequency range alone (ND blank) are not run: give "
-                       "ND", line=eig.line, card="EIGRL", ident=eig.sid, name="ND")
+    modes: dict[str, Any] = {"count": eig.nd if eig.nd is not None else MAX_COUNT}
     if eig.v1 is not None or eig.v2 is not None:
-        raise BdfError(source, "a frequency range V1, V2 with ND is not run: leave V1, V2 "
-                       "blank", eig.v2 if eig.v2 is not None else eig.v1, line=eig.line,
-                       card="EIGRL", ident=eig.sid, name="V1")
+        band: dict[str, float] = {"min": 2 * math.pi * max(eig.v1 or 0.0, 0.0)}
+        if eig.v2 is not None:
+            band["max"] = 2 * math.pi * eig.v2
+        modes["band"] = band
     data = {"name": name, "description": f"normal modes of {path.name} (EIGRL {eig.sid})",
             "substructures": [{"name": name, "type": "nastran", "file": path.name}],
             "analysis": {"modes": modes}}

@@ -1,9 +1,11 @@
-r"""Frame substructures: 3D beams joining nodes with six coordinates each.
+r"""Frame substructures: 3D beams and flat shells joining nodes with six coordinates each.
 
 Every node carries the translations and rotations ``(ux, uy, uz, rx, ry, rz)`` in global axes;
 its coordinates are labelled ``"<node>:<component>"`` (``"12:uy"``, ``"12:rz"``).  The stiffness
 and mass are sums of the element matrices of :mod:`substruct.models.beam` (each member may be
-divided into several elements along its length) and of concentrated node masses (a 6 x 6 mass
+divided into several elements along its length), of the shell elements of
+:mod:`substruct.models.shell` (plates between nodes, divided by
+:mod:`substruct.models.shell_mesh`) and of concentrated node masses (a 6 x 6 mass
 matrix about the node, or a mass on the translations):
 
 .. math::  K = \sum_e L_e^T K_e L_e, \qquad M = \sum_e L_e^T M_e L_e + \sum_n L_n^T M_n L_n
@@ -31,6 +33,7 @@ from scipy.spatial import cKDTree
 
 from substruct.models.beam import MASSES, THEORIES, Material, Section, beam_matrices
 from substruct.models.selection import node_tolerance
+from substruct.models.shell_mesh import Shell, shell_mesh
 from substruct.substructure import Geometry, PointError, Substructure, as_csr
 
 __all__ = ["FRAME_COMPONENTS", "Beam", "frame", "frame_component", "frame_components"]
@@ -151,8 +154,9 @@ def _node_mass(name: str, node: int, value: Any) -> np.ndarray:
 
 def frame(name: str, nodes: Mapping[int, Sequence[float]], beams: Sequence[Beam],
           supports: Mapping[int, Any] | None = None, mass: str = "consistent",
-          node_masses: Mapping[int, Any] | None = None) -> Substructure:
-    r"""A frame of beams (module docstring), as a :class:`Substructure`.
+          node_masses: Mapping[int, Any] | None = None, shells: Sequence[Shell] = ()
+          ) -> Substructure:
+    r"""A frame of beams and shells (module docstring), as a :class:`Substructure`.
 
     Args:
         name: substructure name.
@@ -162,12 +166,14 @@ def frame(name: str, nodes: Mapping[int, Sequence[float]], beams: Sequence[Beam]
         mass: ``"consistent"`` or ``"lumped"`` (:mod:`substruct.models.beam`).
         node_masses: node id -> a mass (on the three translations) or a symmetric positive
             semi-definite 6 x 6 mass matrix about the node, in global axes.
+        shells: flat plates between nodes (:mod:`substruct.models.shell_mesh`), with the
+            frame's ``mass``; their nodes are made after the members'.
 
     Returns:
         A substructure with coordinates ``"<node>:<component>"`` of the unsupported
         coordinates, node by node (the nodes as given, then those made by ``divisions``);
         ``meta`` holds ``node_ids``, ``node_xyz``, ``n_elements``, ``elements`` (pairs of node
-        indices), ``h_max`` and ``dim = 3``.
+        indices), ``faces`` (shell elements by kind), ``h_max`` and ``dim = 3``.
 
     Raises:
         ValueError: unknown nodes, a bad property, a degenerate element or orientation.
@@ -220,6 +226,9 @@ def frame(name: str, nodes: Mapping[int, Sequence[float]], beams: Sequence[Beam]
             mv.append(Me.ravel())
             pairs.append((i, j))
             lengths.append(float(np.linalg.norm(points[j] - points[i])))
+    mesh = shell_mesh(list(shells), points, ids, index, node_tolerance(xyz), mass,
+                      lambda k: f"{name}: shell {shells[k].name or k}")
+    rows, cols, kv, mv = rows + mesh.rows, cols + mesh.cols, kv + mesh.kv, mv + mesh.mv
     for node, value in (node_masses or {}).items():
         if node not in index:
             raise ValueError(f"{name}: mass at unknown node {node!r}")
@@ -303,12 +312,15 @@ def frame(name: str, nodes: Mapping[int, Sequence[float]], beams: Sequence[Beam]
     keep = col[translation] >= 0
     interp = sp.csr_array((np.ones(int(keep.sum())), (drawn[keep], col[translation][keep])),
                           shape=(3 * len(all_xyz), n))
-    cells = [("line", np.asarray(pairs, dtype=np.int64).reshape(-1, 2))] if pairs else \
-        [("vertex", np.arange(len(all_xyz)).reshape(-1, 1))]
+    cells = [("line", np.asarray(pairs, dtype=np.int64).reshape(-1, 2))] if pairs else []
+    cells += [(kind, np.asarray(f, dtype=np.int64)) for kind, f in mesh.faces.items()]
+    if not cells:
+        cells = [("vertex", np.arange(len(all_xyz)).reshape(-1, 1))]
     geometry = Geometry(points=all_xyz, cells=cells, interp=interp)
+    n_faces = sum(len(f) for f in mesh.faces.values())
     meta = {"dim": 3, "node_ids": list(ids), "node_xyz": all_xyz, "elements": pairs,
-            "n_nodes": len(ids), "n_elements": len(pairs), "mass": mass,
-            "h_max": max(lengths) if lengths else 0.0, "n_fixed": int(fixed.sum())}
+            "faces": mesh.faces, "n_nodes": len(ids), "n_elements": len(pairs) + n_faces,
+            "mass": mass, "h_max": max(lengths + [mesh.h_max]), "n_fixed": int(fixed.sum())}
     return Substructure(
         name=name, M=as_csr(M_all[free][:, free]), K=as_csr(K_all[free][:, free]),
         C=as_csr(None, n), dof_labels=tuple(labels[d] for d in free), locate=locate,

@@ -33,7 +33,7 @@ combination of stiff terms (a rod's transverse direction at an angle) is not rem
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Collection, Mapping
 
 import numpy as np
@@ -44,6 +44,7 @@ from substruct.case.bdf_cards import Bar
 from substruct.case.bdf_fields import BdfError
 from substruct.models.beam import bending_matrices, release, rotation
 from substruct.models.frame import frame_component
+from substruct.models.nastran_shells import bush_matrices, plate_matrices
 from substruct.models.selection import node_tolerance
 from substruct.substructure import Geometry, PointError, Substructure, as_csr
 
@@ -130,7 +131,8 @@ class NastranMatrices:
     """The full matrices of a bulk data model (every grid, six coordinates each, basic axes),
     before supports: ``K``, ``M`` (WTMASS applied), grid ``ids`` in order, positions ``xyz``,
     ``held`` (coordinates of the SPC set and GRID PS), ``unstiffened`` (empty columns of
-    ``K``), the line ``elements`` (pairs of grid indices) and the ``bulk`` data."""
+    ``K``), the line ``elements`` (pairs of grid indices), the ``bulk`` data and the shell
+    ``faces`` by kind (grid indices)."""
 
     K: sp.csr_array
     M: sp.csr_array
@@ -140,6 +142,7 @@ class NastranMatrices:
     unstiffened: np.ndarray
     elements: list[tuple[int, int]]
     bulk: BulkData
+    faces: dict[str, list[tuple[int, ...]]] = field(default_factory=dict)
 
 
 def nastran_matrices(bulk: BulkData) -> NastranMatrices:
@@ -179,6 +182,14 @@ def nastran_matrices(bulk: BulkData) -> NastranMatrices:
     for bar, s in bulk.bars:
         add(dofs2(*bar.nodes), *_bar(bulk, bar, s))
         pairs.append((index[bar.nodes[0]], index[bar.nodes[1]]))
+    faces: dict[str, list[tuple[int, ...]]] = {}
+    for kind, nodes, Ke, Me in plate_matrices(bulk, index):
+        add((6 * np.asarray(nodes)[:, None] + np.arange(6)).ravel(), Ke, Me)
+        faces.setdefault(kind, []).append(nodes)
+    for bush in bulk.bushes:
+        grids, Kb = bush_matrices(bulk, bush)
+        dofs = (6 * np.array([index[g] for g in grids])[:, None] + np.arange(6)).ravel()
+        add(dofs, Kb, np.zeros_like(Kb))
     for m in bulk.masses:
         add(6 * index[m.g] + np.arange(6), np.zeros((6, 6)), conm2_matrix(m.m, m.x, m.inertia))
     for _, k, ea, eb in bulk.springs:
@@ -202,7 +213,7 @@ def nastran_matrices(bulk: BulkData) -> NastranMatrices:
         held[6 * index[g] + np.asarray(sorted(comps), dtype=int)] = True
     unstiffened = np.diff(sp.csc_array(K).indptr) == 0
     return NastranMatrices(sp.csr_array(K), sp.csr_array(M), ids, xyz, held, unstiffened,
-                           pairs, bulk)
+                           pairs, bulk, faces)
 
 
 def _bar(bulk: BulkData, bar: Bar, s: Section) -> tuple[np.ndarray, np.ndarray]:
@@ -284,10 +295,14 @@ def nastran_substructure(name: str, mats: NastranMatrices,
     interp = sp.csr_array((np.ones(int(ok.sum())), (drawn[ok], col[trans][ok])),
                           shape=(drawn.size, n))
     cells = [("line", np.asarray(mats.elements, dtype=np.int64).reshape(-1, 2))] \
-        if mats.elements else [("vertex", np.arange(len(mats.ids)).reshape(-1, 1))]
+        if mats.elements else []
+    cells += [(kind, np.asarray(f, dtype=np.int64)) for kind, f in mats.faces.items()]
+    if not cells:
+        cells = [("vertex", np.arange(len(mats.ids)).reshape(-1, 1))]
     meta = {"dim": 3, "node_ids": list(mats.ids), "node_xyz": mats.xyz,
             "elements": mats.elements, "n_nodes": len(mats.ids),
-            "n_elements": len(mats.elements), "n_fixed": int(fixed.sum()),
+            "n_elements": len(mats.elements) + sum(len(f) for f in mats.faces.values()),
+            "n_fixed": int(fixed.sum()),
             "mass": "coupled" if mats.bulk.coupled else "lumped", "source": mats.bulk.source}
     return Substructure(
         name=name, M=as_csr(mats.M[free][:, free]), K=as_csr(mats.K[free][:, free]),

@@ -22,6 +22,8 @@ as bad input.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import scipy.sparse as sp
 
@@ -59,13 +61,42 @@ def modes_result(case: Case, asm: Assembly, A: sp.csr_array, loc: tuple,
     if spec is None:
         raise TypeError(f"case {case.name!r} asks for no modes")
     try:
-        return modes(asm.M, asm.C, asm.K, A, spec.count, method=spec.method,
-                     checks=spec.check, solver=spec.solver, tolerance=spec.tolerance,
-                     what=what, events=events)
+        if spec.band is None:
+            return modes(asm.M, asm.C, asm.K, A, spec.count, method=spec.method,
+                         checks=spec.check, solver=spec.solver, tolerance=spec.tolerance,
+                         what=what, events=events)
+        return _in_band(case, asm, A, what, events)
     except INPUT_ERRORS as err:
         raise case.error(loc, " ".join(str(err).split())) from None
     except CheckError as err:
         raise CheckError(f"{err}; to accept it, raise analysis.modes.tolerance") from None
+
+
+def _in_band(case: Case, asm: Assembly, A: sp.csr_array, what: str,
+             events: Phase | None) -> Modes:
+    """The modes in ``analysis.modes.band``, ``count`` at most: the lowest ``k`` modes are
+    computed with ``k`` doubling (from ``min(count, 16)``) until ``count`` of them are in the
+    band, one is above it, or every coordinate has its mode; then those in the band are kept
+    (a relative margin of 1e-12 at its ends)."""
+    spec = case.analysis.modes
+    assert spec is not None and spec.band is not None
+    lo, hi = spec.band.min, spec.band.max
+    top = asm.n_dof
+    k = min(spec.count, 16, top)
+    while True:
+        res = modes(asm.M, asm.C, asm.K, A, k, method=spec.method, checks=spec.check,
+                    solver=spec.solver, tolerance=spec.tolerance, what=what, events=events)
+        keep = res.omega >= lo * (1 - 1e-12)
+        if hi is not None:
+            keep &= res.omega <= hi * (1 + 1e-12)
+        above = hi is not None and bool(np.any(res.omega > hi * (1 + 1e-12)))
+        if keep.sum() >= spec.count or above or len(res) < k or k >= top:
+            break
+        k = min(2 * k, top)
+    idx = np.flatnonzero(keep)[:spec.count]
+    return dataclasses.replace(res, eigenvalues=res.eigenvalues[idx], omega=res.omega[idx],
+                               damping_ratio=res.damping_ratio[idx], shapes=res.shapes[:, idx],
+                               residual=res.residual[idx])
 
 
 def min_size(case: Case) -> int:

@@ -58,7 +58,7 @@ def build_model(case: Case, events: Phase | None = None,
     model = assemble_frf_case(case, prebuilt) if has_frf_parts(case) else \
         assemble_case(case, prebuilt)
     spec = case.analysis.modes
-    if spec is not None and spec.count > model.assembly.n_dof:
+    if spec is not None and spec.band is None and spec.count > model.assembly.n_dof:
         raise case.error(("analysis", "modes", "count"), f"more modes than the "
                          f"{model.assembly.n_dof} coordinates of the model", spec.count)
     return model

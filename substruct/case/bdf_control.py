@@ -1,0 +1,119 @@
+"""What a Nastran file asks for: its executive and case control (``SOL 103``; ``METHOD``,
+``SPC`` and ``MPC`` choosing sets), its ``PARAM`` values and its EIGRL (the modes wanted).
+
+**Sets.** The case control's ``METHOD``, ``SPC`` and ``MPC`` choose the EIGRL, SPC/SPC1 and
+MPC sets, as in Nastran.  A set in the file that the case control does not choose is refused
+(it would be silently unused); a file of bulk data only uses all its SPC and MPC cards and its
+one EIGRL.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from typing import Any
+
+from substruct.case.bdf_fields import BdfError, BdfText, RawCard
+
+__all__ = ["PARAMS", "CASE_CONTROL", "Eigrl", "read_eigrl", "read_control", "param",
+           "select_sets"]
+
+#: PARAM names read.
+PARAMS = ("WTMASS", "COUPMASS", "AUTOSPC")
+#: Case control commands read (titles and the displacement request have no effect: the mode
+#: shapes are always written).
+CASE_CONTROL = ("METHOD", "SPC", "MPC", "SUBCASE", "TITLE", "SUBTITLE", "LABEL", "ECHO",
+                "DISPLACEMENT", "DISP", "VECTOR")
+_EXECUTIVE = ("SOL", "ID", "TIME", "DIAG")
+
+
+@dataclass(frozen=True)
+class Eigrl:
+    """EIGRL: set ``sid``, frequency range ``v1``-``v2`` (Hz, ``None`` when blank), ``nd``."""
+
+    sid: int
+    v1: float | None
+    v2: float | None
+    nd: int | None
+    line: int
+
+
+def read_eigrl(c: RawCard) -> Eigrl:
+    """EIGRL SID V1 V2 ND MSGLVL MAXSET SHFSCL NORM (V1, V2 in Hz; NORM MASS only)."""
+    c.blank_after(8, "EIGRL option lines are not supported")
+    norm = c.text(7) or "MASS"
+    if norm != "MASS":
+        raise c.error("modes are normalised to unit modal mass (NORM MASS)", norm, "NORM")
+    v1 = c.real(1, "V1") if c.text(1) else None
+    v2 = c.real(2, "V2") if c.text(2) else None
+    nd = c.integer(3, "ND") if c.text(3) else None
+    if nd is not None and nd <= 0:
+        raise c.error("must be positive", nd, "ND")
+    if nd is None and v2 is None:
+        raise c.error("EIGRL needs ND or V2 (the modes wanted)", name="ND")
+    if v1 is not None and v2 is not None and v2 <= v1:
+        raise c.error("V2 must be above V1", v2, "V2")
+    return Eigrl(c.integer(0, "SID"), v1, v2, nd, c.line)
+
+
+def read_control(text: BdfText) -> dict[str, Any]:
+    """The choices of the executive and case control (``METHOD``, ``SPC``, ``MPC``)."""
+    src = text.source
+    for line, t in text.executive:
+        word = t.split()[0].split(",")[0]
+        if word not in _EXECUTIVE:
+            raise BdfError(src, f"executive control {word} is not supported (read: "
+                           f"{', '.join(_EXECUTIVE)}, CEND)", t, line=line)
+        if word == "SOL" and t.split()[1:2] not in (["103"], ["SEMODES"]):
+            raise BdfError(src, "only normal modes, SOL 103, are run", t, line=line)
+    chosen: dict[str, Any] = {}
+    subcases = 0
+    for line, t in text.case_control:
+        m = re.match(r"^([A-Z]+)\s*(\([^)]*\))?\s*(?:=\s*(.*))?$", t)
+        word = m.group(1) if m else t.split()[0]
+        if not m or word not in CASE_CONTROL:
+            raise BdfError(src, f"case control {word} is not supported (read: "
+                           f"{', '.join(CASE_CONTROL)})", t, line=line)
+        if word == "SUBCASE":
+            subcases += 1
+            if subcases > 1:
+                raise BdfError(src, "one subcase is run", t, line=line)
+        if word in ("METHOD", "SPC", "MPC"):
+            value = (m.group(3) or "").strip()
+            if not value.isdigit():
+                raise BdfError(src, f"{word} names a set id", value, line=line, card=word)
+            chosen[word] = int(value)
+    chosen["case_control"] = bool(text.case_control or text.executive)
+    return chosen
+
+
+def param(params: dict[str, tuple[RawCard, str]], key: str, kind: str, default: Any) -> Any:
+    if key not in params:
+        return default
+    card, text = params[key]
+    if kind == "real":
+        return card.real(1, "V1")
+    if kind == "int":
+        return card.integer(1, "V1")
+    if text not in ("YES", "NO"):
+        raise card.error("must be YES or NO", text, "V1")
+    return text == "YES"
+
+
+def select_sets(source: str, control: dict[str, Any], word: str, sets: set[int]) -> set[int]:
+    """The set ids used: the one the case control chooses, or all of a bulk-only file."""
+    if word in control:
+        if control[word] not in sets:
+            raise BdfError(source, f"the case control chooses {word} set {control[word]}, "
+                           f"which the bulk data does not have", control[word], card=word)
+        rest = sorted(sets - {control[word]})
+        if rest:
+            raise BdfError(source, f"{word} set {rest[0]} is not chosen by the case control "
+                           f"({word} = {control[word]}) and would be unused", rest[0],
+                           card=word)
+        return {control[word]}
+    if sets and control["case_control"]:
+        raise BdfError(source, f"{word} sets {sorted(sets)} are not chosen by the case "
+                       f"control (no {word} = ...) and would be unused", sorted(sets)[0],
+                       card=word)
+    return sets

@@ -1,0 +1,251 @@
+"""A Nastran file's cards cross-referenced into a :class:`~substruct.case.bdf.BulkData`:
+grids placed in basic coordinates (CORD2R chains resolved), elements joined to their
+properties and materials, masses and springs to their grids, the chosen SPC, MPC and EIGRL
+sets and the PARAM values applied.  A reference to something missing is an error naming the
+card, its id and the field.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from substruct.case.bdf_cards import Conm2, Grid, Mat1
+from substruct.case.bdf_control import param, select_sets
+from substruct.case.bdf_fields import BdfError, RawCard
+from substruct.case.bdf_model import BulkData, BushSpring, Section, ShellSection
+from substruct.case.bdf_shells import Pshell
+from substruct.case.fields import MAX_ELEMENTS, MAX_MATRIX_SIZE
+
+__all__ = ["ELEMENTS", "Cards", "coordinate_systems", "cross_reference"]
+
+#: Cards that are elements (their ids share one space).
+ELEMENTS = ("CROD", "CBAR", "CBEAM", "CONM2", "CELAS1", "CELAS2", "CBUSH", "CQUAD4", "CTRIA3",
+            "RBE2", "RBE3")
+
+
+@dataclass
+class Cards:
+    """The cards of a file as read, before cross-referencing: element-like cards ``by`` name
+    (``(card, record)`` pairs), grids, coordinate systems, line properties, PSHELL, PBUSH,
+    materials, PELAS, PARAM, SPC and SPC1 sets, and the ``control`` choices."""
+
+    source: str
+    control: dict[str, Any]
+    by: dict[str, list[Any]] = field(default_factory=dict)
+    grids: dict[int, Grid] = field(default_factory=dict)
+    coords: dict[int, Any] = field(default_factory=dict)
+    props: dict[int, tuple[RawCard, tuple[Any, ...]]] = field(default_factory=dict)
+    pshell: dict[int, tuple[RawCard, Pshell]] = field(default_factory=dict)
+    pbush: dict[int, tuple[RawCard, tuple[float, ...]]] = field(default_factory=dict)
+    mats: dict[int, Mat1] = field(default_factory=dict)
+    pelas: dict[int, float] = field(default_factory=dict)
+    params: dict[str, tuple[RawCard, str]] = field(default_factory=dict)
+    spc_sets: dict[int, list[tuple[RawCard, int, str]]] = field(default_factory=dict)
+    spc1: list[tuple[RawCard, int, str, Any]] = field(default_factory=list)
+
+
+
+def coordinate_systems(coords: dict[int, Any], src: str
+                       ) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+    """Coordinate system id -> ``(origin, R)`` in basic, ``R`` rows the axes (CORD2R)."""
+    done: dict[int, tuple[np.ndarray, np.ndarray]] = {0: (np.zeros(3), np.eye(3))}
+
+    def resolve(cid: int, chain: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
+        if cid in done:
+            return done[cid]
+        if cid not in coords:
+            raise BdfError(src, "no such coordinate system", cid, coords[chain[-1]].line,
+                           "CORD2R", chain[-1], "RID")
+        if cid in chain:
+            raise BdfError(src, "coordinate systems refer to each other in a loop",
+                           list(chain), coords[cid].line, "CORD2R", cid, "RID")
+        c = coords[cid]
+        o, R = resolve(c.rid, chain + (cid,))
+        a, b, p = (o + R.T @ v for v in (c.a, c.b, c.c))
+        ez = b - a
+        ey = np.cross(ez, p - a)
+        if float(np.linalg.norm(ez)) == 0 or float(np.linalg.norm(ey)) <= \
+                1e-12 * float(np.linalg.norm(ez)) * max(float(np.linalg.norm(p - a)), 1e-300):
+            raise BdfError(src, "A, B and C do not define axes (coincident or collinear)",
+                           line=c.line, card="CORD2R", ident=cid)
+        ez, ey = ez / np.linalg.norm(ez), ey / np.linalg.norm(ey)
+        done[cid] = (a, np.vstack([np.cross(ey, ez), ey, ez]))
+        return done[cid]
+
+    for cid in coords:
+        resolve(cid, ())
+    return done
+
+
+def cross_reference(cards: Cards) -> BulkData:
+    """The :class:`BulkData` of ``cards`` (module docstring).
+
+    Raises:
+        BdfError: a missing grid, property, material or coordinate system, a set the case
+            control does not choose, the size limits.
+    """
+    source, control, by, grids = cards.source, cards.control, cards.by, cards.grids
+    props, mats, pelas, params = cards.props, cards.mats, cards.pelas, cards.params
+    spc_sets, spc1 = cards.spc_sets, cards.spc1
+    if not grids:
+        raise BdfError(source, "the bulk data has no GRID")
+    if 6 * len(grids) > MAX_MATRIX_SIZE:
+        raise BdfError(source, f"{len(grids)} grids, {6 * len(grids)} coordinates; at most "
+                       f"{MAX_MATRIX_SIZE} are accepted", len(grids), card="GRID")
+    n_el = sum(len(v) for k, v in by.items() if k in ELEMENTS)
+    if n_el > MAX_ELEMENTS:
+        raise BdfError(source, f"{n_el} elements; at most {MAX_ELEMENTS} are accepted", n_el)
+    systems = coordinate_systems(cards.coords, source)
+    out = BulkData(source)
+    for gr in grids.values():
+        if gr.cp not in systems:
+            raise BdfError(source, "no such coordinate system", gr.cp, gr.line, "GRID", gr.id,
+                           "CP")
+        o, R = systems[gr.cp]
+        out.grids[gr.id] = o + R.T @ np.asarray(gr.x)
+        if gr.ps:
+            out.spc.setdefault(gr.id, set()).update(int(c) - 1 for c in gr.ps)
+
+    def grid(card: RawCard, gid: int, name: str) -> int:
+        if gid not in grids:
+            raise card.error("no such GRID", gid, name)
+        return gid
+
+    def section(card: RawCard, pid: int, kinds: tuple[str, ...]) -> Section:
+        if pid not in props or props[pid][0].name not in kinds:
+            raise card.error(f"no {' or '.join(kinds)} of that id", pid, "PID")
+        pcard, v = props[pid]
+        if v[1] not in mats:
+            raise pcard.error("no MAT1 of that id", v[1], "MID")
+        if pcard.name == "PROD":
+            return Section(v[2], 0.0, 0.0, v[3], v[4], mats[v[1]], False)
+        sec = Section(v[2], v[3], v[4], v[5], v[6], mats[v[1]], pcard.name == "PBEAM")
+        if sec.shear and sec.mat.G == 0 and sec.A > 0:
+            raise pcard.error("CBEAM shear flexibility (K1 = K2 = 1) needs G > 0 in the "
+                              "material", v[1], "MID")
+        return sec
+
+    for card, rod in by.get("CROD", []):
+        for k, name in enumerate(("G1", "G2")):
+            grid(card, rod.nodes[k], name)
+        out.rods.append((rod, section(card, rod.pid, ("PROD",))))
+    for kind in ("CBAR", "CBEAM"):
+        for card, bar in by.get(kind, []):
+            for k, name in enumerate(("GA", "GB")):
+                grid(card, bar.nodes[k], name)
+            if bar.g0 is not None:
+                grid(card, bar.g0, "G0")
+            prop = ("PBAR",) if kind == "CBAR" else ("PBEAM",)
+            out.bars.append((bar, section(card, bar.pid, prop)))
+    for card, m in by.get("CONM2", []):
+        grid(card, m.g, "G")
+        if m.cid not in systems and m.cid != -1:
+            raise card.error("no such coordinate system", m.cid, "CID")
+        if m.cid == -1:
+            x, inertia = m.x - out.grids[m.g], m.inertia
+        else:
+            _, R = systems[m.cid]
+            x, inertia = R.T @ m.x, R.T @ m.inertia @ R
+        out.masses.append(Conm2(m.id, m.g, 0, m.m, x, inertia, m.line))
+    for card, s in by.get("CELAS1", []) + by.get("CELAS2", []):
+        grid(card, s.a[0], "G1")
+        if s.b is not None:
+            grid(card, s.b[0], "G2")
+        if s.pid is not None and s.pid not in pelas:
+            raise card.error("no PELAS of that id", s.pid, "PID")
+        stiff = pelas[s.pid] if s.pid is not None else s.k
+        assert stiff is not None
+        out.springs.append((s.id, stiff, s.a, s.b))
+    for kind in ("CQUAD4", "CTRIA3"):
+        for card, plate in by.get(kind, []):
+            for k, g in enumerate(plate.nodes):
+                grid(card, g, f"G{k + 1}")
+            out.plates.append((plate, _shell_section(card, plate.pid, cards)))
+    for card, b in by.get("CBUSH", []):
+        grid(card, b.ga, "GA")
+        if b.gb is not None:
+            grid(card, b.gb, "GB")
+        if b.pid not in cards.pbush:
+            raise card.error("no PBUSH of that id", b.pid, "PID")
+        axes = v = None
+        if b.cid is not None:
+            if b.cid not in systems:
+                raise card.error("no such coordinate system", b.cid, "CID")
+            axes = systems[b.cid][1]
+        else:
+            assert b.gb is not None
+            v = np.asarray(b.v) if b.g0 is None else \
+                out.grids[grid(card, b.g0, "GO")] - out.grids[b.ga]
+            if np.linalg.norm(out.grids[b.gb] - out.grids[b.ga]) == 0:
+                raise card.error("GA and GB are at the same place: give CID for the axes",
+                                 b.gb, "GB")
+        out.bushes.append(BushSpring(b, cards.pbush[b.pid][1], axes, v))
+    for card, r in by.get("RBE2", []):
+        grid(card, r.gn, "GN")
+        for g in r.gm:
+            grid(card, g, "GM")
+        out.rbe2.append(r)
+    for card, r3 in by.get("RBE3", []):
+        grid(card, r3.ref, "REFGRID")
+        for _, _, gl in r3.groups:
+            for g in gl:
+                grid(card, g, "G")
+        out.rbe3.append(r3)
+    mpc_sets = {m.sid for _, m in by.get("MPC", [])}
+    use = select_sets(source, control, "MPC", mpc_sets)
+    for card, m in by.get("MPC", []):
+        if m.sid in use:
+            for k, (g, _, _) in enumerate(m.terms):
+                grid(card, g, f"G{k + 1}")
+            out.mpcs.append(m)
+    sets = set(spc_sets) | {sid for _, sid, _, _ in spc1}
+    use = select_sets(source, control, "SPC", sets)
+    for sid in use:
+        for card, gid, comp in spc_sets.get(sid, []):
+            out.spc.setdefault(grid(card, gid, "G1"), set()).update(int(c) - 1 for c in comp)
+    for card, sid, comp, gl in spc1:
+        if sid not in use:
+            continue
+        if isinstance(gl, range):
+            ids = [gid for gid in grids if gid in gl]
+        else:
+            ids = [grid(card, gid, "G") for gid in gl]
+        for gid in ids:
+            out.spc.setdefault(gid, set()).update(int(c) - 1 for c in comp)
+    eigs = [e for _, e in by.get("EIGRL", [])]
+    if "METHOD" in control:
+        found = [e for e in eigs if e.sid == control["METHOD"]]
+        if not found:
+            raise BdfError(source, "the case control's METHOD names no EIGRL of the bulk data",
+                           control["METHOD"], card="METHOD")
+        out.eigrl = found[0]
+    elif len(eigs) > 1:
+        raise BdfError(source, "several EIGRL and no case control METHOD choosing one",
+                       [e.sid for e in eigs], card="EIGRL")
+    elif eigs:
+        out.eigrl = eigs[0]
+    out.wtmass = float(param(params, "WTMASS", "real", 1.0))
+    if not out.wtmass > 0:
+        raise params["WTMASS"][0].error("must be positive", out.wtmass, "V1")
+    out.coupled = param(params, "COUPMASS", "int", -1) > 0
+    out.autospc = param(params, "AUTOSPC", "yes", True)
+    return out
+
+
+def _shell_section(card: RawCard, pid: int, cards: Cards) -> ShellSection:
+    if pid not in cards.pshell:
+        raise card.error("no PSHELL of that id", pid, "PID")
+    pcard, p = cards.pshell[pid]
+    found = []
+    for mid, name in ((p.mid1, "MID1"), (p.mid2, "MID2")):
+        if mid is not None and mid not in cards.mats:
+            raise pcard.error("no MAT1 of that id", mid, name)
+        mat = cards.mats[mid] if mid is not None else None
+        if mat is not None and not (mat.E > 0 and mat.G > 0 and
+                                    -1 < mat.E / (2 * mat.G) - 1 < 0.5):
+            raise pcard.error("a shell's MAT1 needs E > 0, G > 0 and -1 < NU < 0.5", mid, name)
+        found.append(mat)
+    return ShellSection(p.t, found[0], found[1], p.bend, p.nsm)

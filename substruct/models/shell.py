@@ -1,0 +1,206 @@
+r"""Flat-facet shell elements with six coordinates per node: triangles and quadrilaterals.
+
+An element is flat: a membrane (plane stress, in-plane ``u, v`` and the drilling rotation
+:math:`\theta_z`) and a plate in bending (``w``, :math:`\theta_x`, :math:`\theta_y`,
+:mod:`substruct.models.plate_bending`), uncoupled in the element's own axes, turned to global
+axes node by node.
+
+**Axes from the nodes.** The normal is :math:`e_z = (x_2 - x_1) \times (x_3 - x_1)` for a
+triangle and the cross product of the diagonals :math:`(x_3 - x_1) \times (x_4 - x_2)` for a
+quadrilateral (normalised); :math:`e_x` is side ``1-2`` projected on the plane and
+:math:`e_y = e_z \times e_x`.  A quadrilateral's corners are projected on the plane through
+their centroid; a warp (largest distance from that plane over the shorter diagonal) above
+:data:`MAX_WARP` is refused.  The element's matrices are :math:`T^T K T` with
+``T = diag(R, ..., R)``, the rows of ``R`` being :math:`e_x, e_y, e_z`.
+
+**Membrane.** Triangles: the constant-strain triangle (CST).  Quadrilaterals: the bilinear
+element with Wilson's incompatible modes :math:`1 - \xi^2, 1 - \eta^2` in the form of Taylor,
+Beresford and Wilson (QM6: their derivatives are taken with the Jacobian at the centre and
+scaled by :math:`\det J_0 / \det J`, so the constant-strain patch test is passed on any
+mesh), condensed statically; 2 x 2 Gauss points.  :math:`K_m = t \int B^T C B\,dA` with ``C``
+the plane-stress matrix.
+
+**Drilling rotation.** A penalty ties :math:`\theta_z` to the membrane's own rotation
+:math:`\omega = \tfrac12 (v_{,x} - u_{,y})` (Hughes and Brezzi 1989),
+
+.. math::  K_d = \gamma\, t \int_A (N\theta_z - \omega)^T (N\theta_z - \omega)\, dA, \qquad
+           \gamma = \alpha\, G, \quad \alpha = 10^{-2}
+
+(:data:`DRILL_PENALTY`; linear/bilinear ``N`` and the compatible membrane field, 3 mid-side
+points or 2 x 2 Gauss points).  A rigid rotation about the normal costs nothing
+(:math:`\theta_z = \omega`), a linear displacement field with :math:`\theta_z = \omega` neither
+(the patch test is unchanged), and every other drilling motion has stiffness, so a shell
+whose drilling rotations are free is not singular (no fictitious supports needed) and a beam
+can be joined to a shell node about any axis.
+
+**Mass.** ``consistent``: :math:`\rho t \int N^T N` on ``u, v`` (linear/bilinear), the
+bending element's mass (:mod:`substruct.models.plate_bending`) and the rotary inertia
+:math:`\rho t^3/12 \int N^T N` on :math:`\theta_z`.  ``lumped``: :math:`\rho t A / n` on each
+translation of each of the ``n`` corners and :math:`\rho t^3 A / (12 n)` on each rotation.
+A non-structural mass per area adds to :math:`\rho t` on the translations.
+
+The element matrices are written by hand: scikit-fem (12.0) has scalar Kirchhoff plate
+elements (Morley, Argyris, the 15-parameter triangle) for a 2D mesh, with normal derivatives
+on edges as degrees of freedom, but no shell element with three rotations per node.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from substruct.models.plate_bending import (
+    bending_matrices_local, corner_shapes, plane_stress, tabulated,
+)
+
+__all__ = ["MAX_WARP", "DRILL_PENALTY", "SHELL_MASSES", "shell_axes", "membrane_matrices",
+           "shell_matrices"]
+
+#: Largest warp of a quadrilateral (distance of a corner from the mean plane over the shorter
+#: diagonal) accepted for a flat facet.
+MAX_WARP = 0.05
+#: Drilling penalty ``gamma / G``.
+DRILL_PENALTY = 1e-2
+#: Mass matrices of the shell elements.
+SHELL_MASSES = ("consistent", "lumped")
+
+
+def shell_axes(X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``(R, xy)``: the rows of ``R`` are the element's axes (module docstring) and ``xy``
+    ``(n, 2)`` its corners in its plane, from the corner positions ``X`` ``(n, 3)``.
+
+    Raises:
+        ValueError: coincident or collinear corners, or a warp above :data:`MAX_WARP`.
+    """
+    n = len(X)
+    if n == 3:
+        ez = np.cross(X[1] - X[0], X[2] - X[0])
+    else:
+        ez = np.cross(X[2] - X[0], X[3] - X[1])
+    size = max(float(np.linalg.norm(X[k] - X[0])) for k in range(1, n))
+    if not np.linalg.norm(ez) > 1e-12 * size**2:
+        raise ValueError("the corners are coincident or collinear")
+    ez = ez / np.linalg.norm(ez)
+    c = X.mean(axis=0)
+    if n == 4:
+        diag = min(float(np.linalg.norm(X[2] - X[0])), float(np.linalg.norm(X[3] - X[1])))
+        warp = float(np.abs((X - c) @ ez).max()) / diag
+        if warp > MAX_WARP:
+            raise ValueError(f"the quadrilateral is warped by {warp:.3g} of its diagonal "
+                             f"(at most {MAX_WARP} for a flat facet)")
+    ex = (X[1] - X[0]) - ((X[1] - X[0]) @ ez) * ez
+    ex = ex / np.linalg.norm(ex)
+    R = np.vstack([ex, np.cross(ez, ex), ez])
+    xy = (X - c) @ R[:2].T
+    return R, xy
+
+
+def _strain_matrix(dx: np.ndarray) -> np.ndarray:
+    """``(3, 2k)`` membrane strains of ``(u, v)`` node by node from shape derivatives
+    ``(2, k)`` in ``x, y``."""
+    B = np.zeros((3, 2 * dx.shape[1]))
+    B[0, 0::2] = dx[0]
+    B[1, 1::2] = dx[1]
+    B[2, 0::2] = dx[1]
+    B[2, 1::2] = dx[0]
+    return B
+
+
+def membrane_matrices(xy: np.ndarray, E: float, nu: float, t: float) -> np.ndarray:
+    r"""Membrane and drilling stiffness ``(3n, 3n)`` of ``(u, v, theta_z)`` corner by corner
+    (module docstring: CST or QM6, plus the drilling penalty)."""
+    n = len(xy)
+    C = plane_stress(E, nu) * t
+    gamma = DRILL_PENALTY * E / (2 * (1 + nu)) * t
+    uv = np.concatenate([[3 * k, 3 * k + 1] for k in range(n)])
+    rz = 3 * np.arange(n) + 2
+    K = np.zeros((3 * n, 3 * n))
+    J0 = corner_shapes(n, np.zeros(2) if n == 4 else np.full(2, 1 / 3))[1] @ xy
+    det0 = float(np.linalg.det(J0))
+    Kcc, Kci, Kii = np.zeros((2 * n, 2 * n)), np.zeros((2 * n, 4)), np.zeros((4, 4))
+    for p, wq, N, dN, _, _ in tabulated(n, "stiffness"):
+        J = dN @ xy
+        det = float(np.linalg.det(J))
+        if not det > 0:
+            raise ValueError("the element is degenerate or not convex (det J <= 0)")
+        dx = np.linalg.solve(J, dN)
+        B = _strain_matrix(dx)
+        Kcc += (wq * det) * B.T @ C @ B
+        if n == 4:
+            dP = np.array([[-2 * p[0], 0.0], [0.0, -2 * p[1]]])  # d(1-xi^2), d(1-eta^2)
+            Bi = _strain_matrix(det0 / det * np.linalg.solve(J0, dP))
+            Kci += (wq * det) * B.T @ C @ Bi
+            Kii += (wq * det) * Bi.T @ C @ Bi
+        g = np.zeros(3 * n)  # N theta_z - omega
+        g[rz] = N
+        g[uv[0::2]] += 0.5 * dx[1]
+        g[uv[1::2]] -= 0.5 * dx[0]
+        K += (wq * det * gamma) * np.outer(g, g)
+    if n == 4:
+        Kcc = Kcc - Kci @ np.linalg.solve(Kii, Kci.T)
+    K[np.ix_(uv, uv)] += Kcc
+    return (K + K.T) / 2
+
+
+def _membrane_mass(xy: np.ndarray, mu: float, rot: float) -> np.ndarray:
+    n = len(xy)
+    M = np.zeros((3 * n, 3 * n))
+    for _, wq, N, dN, _, _ in tabulated(n, "mass"):
+        m = wq * float(np.linalg.det(dN @ xy)) * np.outer(N, N)
+        for c, scale in ((0, mu), (1, mu), (2, rot)):
+            M[c::3, c::3] += scale * m
+    return M
+
+
+def _area(xy: np.ndarray) -> float:
+    x, y = xy[:, 0], xy[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+
+
+def shell_matrices(X: np.ndarray, E: float, nu: float, t: float, rho: float,
+                   mass: str = "consistent", nsm: float = 0.0, *,
+                   bending_material: tuple[float, float] | None = None, bend: float = 1.0,
+                   membrane: bool = True, bending: bool = True, rotary: bool = True
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    r"""Stiffness and mass ``(6n, 6n)``, global axes, of a flat shell element with corners
+    ``X`` ``(n, 3)``, ``n`` = 3 or 4, six coordinates ``(ux, uy, uz, rx, ry, rz)`` per corner
+    (module docstring).  ``nsm`` is a non-structural mass per area, added to :math:`\rho t`
+    on the translations.
+
+    For Nastran's PSHELL: ``bending_material`` ``(E, nu)`` of the bending (MID2; the
+    membrane's if ``None``), ``bend`` the ratio ``12 I / t^3`` multiplying the bending
+    stiffness, ``membrane`` / ``bending`` whether the element has each (MID1 / MID2 given),
+    ``rotary`` whether the mass has the rotary inertia of the thickness.
+
+    Raises:
+        ValueError: bad properties, a degenerate, non-convex or warped element.
+    """
+    X = np.asarray(X, dtype=float)
+    n = len(X)
+    if n not in (3, 4) or X.shape != (n, 3):
+        raise ValueError(f"a shell element has 3 or 4 corners, got {X.shape}")
+    if mass not in SHELL_MASSES:
+        raise ValueError(f"mass must be one of {list(SHELL_MASSES)}, got {mass!r}")
+    if not (E > 0 and t > 0 and rho >= 0 and nsm >= 0 and -1 < nu < 0.5):
+        raise ValueError(f"a shell needs E > 0, t > 0, rho >= 0, nsm >= 0 and -1 < nu < 0.5, "
+                         f"got E={E!r}, t={t!r}, rho={rho!r}, nsm={nsm!r}, nu={nu!r}")
+    R, xy = shell_axes(X)
+    if _area(xy) <= 0:
+        raise ValueError("the corners are not in order around the element")
+    mu, rot = rho * t + nsm, (rho * t**3 / 12 if rotary else 0.0)
+    Eb, nub = bending_material if bending_material is not None else (E, nu)
+    Kb, Mb = bending_matrices_local(xy, Eb, nub, t, mu, rot)
+    Kb = Kb * bend if bending else 0.0 * Kb
+    Km = membrane_matrices(xy, E, nu, t) if membrane else np.zeros((3 * n, 3 * n))
+    memb = np.concatenate([[6 * k, 6 * k + 1, 6 * k + 5] for k in range(n)])
+    bent = np.concatenate([[6 * k + 2, 6 * k + 3, 6 * k + 4] for k in range(n)])
+    K, M = np.zeros((6 * n, 6 * n)), np.zeros((6 * n, 6 * n))
+    K[np.ix_(memb, memb)] = Km
+    K[np.ix_(bent, bent)] = Kb
+    if mass == "consistent":
+        M[np.ix_(memb, memb)] = _membrane_mass(xy, mu, rot)
+        M[np.ix_(bent, bent)] = Mb
+    else:
+        A = _area(xy)
+        M[np.arange(6 * n), np.arange(6 * n)] = np.tile([mu * A / n] * 3 + [rot * A / n] * 3, n)
+    T = np.kron(np.eye(2 * n), R)
+    return T.T @ K @ T, T.T @ M @ T

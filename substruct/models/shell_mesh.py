@@ -1,0 +1,167 @@
+r"""Shells of a frame: flat plates between frame nodes, divided into elements of
+:mod:`substruct.models.shell` that share nodes with the beams.
+
+A :class:`Shell` is a triangle or a quadrilateral of frame nodes with a thickness and a
+material.  ``divisions`` cuts it into equal elements: a quadrilateral into ``nx x ny``
+quadrilaterals on its bilinear map (``x(s, r) = sum N_k(s, r) x_k``), a triangle into ``d^2``
+triangles on its barycentric grid.  A node made this way that falls on an existing node (a
+given one, one made along a beam by its ``divisions``, or one of an earlier shell) within
+the frame's node tolerance *is* that node, so shells and beams meeting along a line share
+their nodes when their divisions agree there.  New nodes are numbered after the largest id.
+
+The material's Poisson ratio is :math:`\nu = E / (2G) - 1` (isotropic).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from substruct.models.beam import Material
+from substruct.models.shell import shell_matrices
+
+__all__ = ["Shell", "ShellMesh", "shell_mesh", "shell_divisions"]
+
+
+@dataclass(frozen=True)
+class Shell:
+    """A flat plate between three or four frame nodes (in order around it).
+
+    Attributes:
+        nodes: the corner node ids.
+        thickness: its thickness.
+        material: ``E``, ``G`` (so ``nu = E / 2G - 1``) and ``rho``.
+        divisions: elements along sides 1-2 and 2-3 (a quadrilateral), or along each side (a
+            triangle: ``d`` gives ``d^2`` elements; both numbers must then be equal).
+        nsm: non-structural mass per area.
+        name: for messages.
+    """
+
+    nodes: tuple[int, ...]
+    thickness: float
+    material: Material
+    divisions: tuple[int, int] = (1, 1)
+    nsm: float = 0.0
+    name: str = ""
+
+
+@dataclass
+class ShellMesh:
+    """Element triplets and faces made from the shells: ``rows``, ``cols``, ``kv``, ``mv``
+    (one array each per element, 6 coordinates per node), faces by kind (``"triangle"``,
+    ``"quad"``: node indices) and the largest element size."""
+
+    rows: list[np.ndarray] = field(default_factory=list)
+    cols: list[np.ndarray] = field(default_factory=list)
+    kv: list[np.ndarray] = field(default_factory=list)
+    mv: list[np.ndarray] = field(default_factory=list)
+    faces: dict[str, list[tuple[int, ...]]] = field(default_factory=dict)
+    h_max: float = 0.0
+
+
+def shell_divisions(shell: Shell) -> int:
+    """The number of elements ``shell`` makes."""
+    nx, ny = shell.divisions
+    return nx * ny if len(shell.nodes) == 4 else nx * nx
+
+
+def _grid(shell: Shell, X: np.ndarray) -> tuple[np.ndarray, list[tuple[int, ...]]]:
+    """Local node positions of the divided shell and its elements (local node indices)."""
+    nx, ny = shell.divisions
+    if len(X) == 4:
+        S, Rr = np.meshgrid(np.linspace(0, 1, nx + 1), np.linspace(0, 1, ny + 1), indexing="ij")
+        s, r = S.ravel(), Rr.ravel()
+        W = np.column_stack([(1 - s) * (1 - r), s * (1 - r), s * r, (1 - s) * r])
+
+        def at(i: int, j: int) -> int:
+            return i * (ny + 1) + j
+
+        quads: list[tuple[int, ...]] = [(at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1))
+                                        for i in range(nx) for j in range(ny)]
+        return W @ X, quads
+    d = nx
+    pts: list[tuple[float, float, float]] = []
+    index: dict[tuple[int, int], int] = {}
+    for i in range(d + 1):
+        for j in range(d + 1 - i):
+            index[i, j] = len(pts)
+            pts.append(((d - i - j) / d, i / d, j / d))
+    tris: list[tuple[int, ...]] = []
+    for i in range(d):
+        for j in range(d - i):
+            tris.append((index[i, j], index[i + 1, j], index[i, j + 1]))
+            if i + j < d - 1:
+                tris.append((index[i + 1, j], index[i + 1, j + 1], index[i, j + 1]))
+    return np.asarray(pts) @ X, tris
+
+
+def shell_mesh(shells: list[Shell], points: list[np.ndarray], ids: list[int],
+               index: dict[int, int], tol: float, mass: str,
+               label: Callable[[int], str]) -> ShellMesh:
+    """Divide ``shells`` and make their element matrices (module docstring).
+
+    ``points``, ``ids`` and ``index`` (node id -> position in ``points``) are the frame's
+    nodes so far; new nodes are appended to them.
+
+    Raises:
+        ValueError: unknown or repeated corner nodes, bad divisions or properties, a degenerate,
+            non-convex or warped element (the message starts with ``label(k)``).
+    """
+    out = ShellMesh()
+    for k, shell in enumerate(shells):
+        where = label(k)
+        n = len(shell.nodes)
+        if n not in (3, 4) or len(set(shell.nodes)) != n or \
+                any(c not in index for c in shell.nodes):
+            raise ValueError(f"{where}: corners {list(shell.nodes)} must be 3 or 4 different "
+                             f"nodes of the frame")
+        nx, ny = shell.divisions
+        if min(nx, ny) < 1 or (n == 3 and nx != ny):
+            raise ValueError(f"{where}: divisions are positive, and equal for a triangle, "
+                             f"got {list(shell.divisions)}")
+        mat = shell.material
+        nu = mat.E / (2 * mat.G) - 1
+        X = np.array([points[index[c]] for c in shell.nodes])
+        local, elements = _grid(shell, X)
+        node_of = np.empty(len(local), dtype=np.int64)
+        known = set()
+        for c, corner in enumerate(shell.nodes):
+            j = int(np.argmin(np.linalg.norm(local - X[c], axis=1)))
+            node_of[j] = index[corner]
+            known.add(j)
+        tree = cKDTree(np.asarray(points)) if len(local) > n else None
+        next_id = max(ids) + 1
+        for j, x in enumerate(local):
+            if j in known:
+                continue
+            assert tree is not None
+            dist, near = tree.query(x)
+            if dist <= tol:
+                node_of[j] = int(near)
+            else:
+                points.append(x)
+                ids.append(next_id)
+                index[next_id] = len(points) - 1
+                node_of[j] = len(points) - 1
+                next_id += 1
+        kind = "quad" if n == 4 else "triangle"
+        for el in elements:
+            nodes = tuple(int(node_of[e]) for e in el)
+            Xe = np.array([points[i] for i in nodes])
+            try:
+                Ke, Me = shell_matrices(Xe, mat.E, nu, shell.thickness, mat.rho, mass,
+                                        shell.nsm)
+            except ValueError as err:
+                raise ValueError(f"{where}: {err}") from None
+            dofs = (6 * np.asarray(nodes)[:, None] + np.arange(6)).ravel()
+            out.rows.append(np.repeat(dofs, dofs.size))
+            out.cols.append(np.tile(dofs, dofs.size))
+            out.kv.append(Ke.ravel())
+            out.mv.append(Me.ravel())
+            out.faces.setdefault(kind, []).append(nodes)
+            out.h_max = max(out.h_max, float(np.linalg.norm(Xe - np.roll(Xe, 1, axis=0),
+                                                            axis=1).max()))
+    return out
