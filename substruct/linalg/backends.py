@@ -28,9 +28,10 @@ through PARDISO's KKT solves were off by 4e-4, through SuperLU's by 3e-10 (after
 
 :func:`auto_factorizer` tries them in the order of :data:`AUTO_ORDER`: a backend that is not
 installed is skipped; one that is installed but cannot be loaded, or that fails to factorize
-(PARDISO's or CHOLMOD's error on a matrix they should take, out of memory), is skipped with a
-:class:`FactorizationFallback` warning naming it, the matrix and the next backend.  The last
-backend's error is raised unchanged (SuperLU's ``RuntimeError`` for a singular matrix).
+(PARDISO's or CHOLMOD's error on a matrix they should take, out of memory), is skipped, and
+named in a :class:`FactorizationFallback` warning (it, the matrix and the backend used) once a
+later one succeeds.  The last backend's error is raised unchanged and without warnings
+(SuperLU's ``RuntimeError`` for a singular matrix: singular for every backend).
 """
 
 from __future__ import annotations
@@ -229,24 +230,30 @@ def auto_factorizer(kind: str, superlu: Factorize | None = None) -> Factorize:
 
     def factorize(A: sp.sparray) -> Solve:
         what = f"the {A.shape[0]}-coordinate {_DESCRIBED[kind]} matrix"
-        skipped = ""
+        skipped: list[str] = []
+
+        def used(backend: Backend, solve: Solve) -> Solve:
+            """Name the backends skipped before ``backend`` (only once one has succeeded: a
+            matrix that no backend factorizes raises the last error, with no warning)."""
+            for reason in skipped:
+                warnings.warn(f"{reason}; falling back to {backend.label}",
+                              FactorizationFallback, stacklevel=3)
+            return solve
+
         for i, name in enumerate(order):
             backend = BACKENDS[name]
             status = backend_status(name)
             if status == "not installed":
                 continue
-            if skipped:
-                warnings.warn(f"{skipped}; falling back to {backend.label}",
-                              FactorizationFallback, stacklevel=2)
             if status is not None:
-                skipped = f"{backend.label} cannot be loaded ({status})"
+                skipped.append(f"{backend.label} cannot be loaded ({status})")
                 continue
             if i == len(order) - 1:
-                return own(A) if own is not None else backend.factorize(A, kind)
+                return used(backend, own(A) if own is not None else backend.factorize(A, kind))
             try:
-                return backend.factorize(A, kind)
+                return used(backend, backend.factorize(A, kind))
             except backend.failures() as exc:
-                skipped = f"{backend.label} failed on {what} ({exc})"
+                skipped.append(f"{backend.label} failed on {what} ({exc})")
         raise RuntimeError(f"no factorization backend could factorize {what}")
 
     return factorize
