@@ -21,10 +21,18 @@ if TYPE_CHECKING:
         rod_fe,
         uniform_rod_frequencies,
     )
-    from substruct.models.solid import solid_box, solid_from_mesh, solid_rectangle
+    from substruct.models.solid import (
+        BoxGrid,
+        RectangleGrid,
+        solid_box,
+        solid_from_mesh,
+        solid_rectangle,
+    )
 
 #: Public name -> the module that defines it.
 _LAZY = {
+    "BoxGrid": "solid",
+    "RectangleGrid": "solid",
     "SUPPORTS": "rod",
     "fixed_free": "discrete",
     "free_free": "discrete",
