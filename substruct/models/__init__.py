@@ -15,6 +15,7 @@ if TYPE_CHECKING:
     from substruct.models.enrichment import rod_assumed_modes_enriched, static_shapes
     from substruct.models.mesh_io import read_mesh
     from substruct.models.rod import (
+        AssumedModesOptions,
         SUPPORTS,
         paper_taper,
         rod_assumed_modes,
@@ -31,6 +32,7 @@ if TYPE_CHECKING:
 
 #: Public name -> the module that defines it.
 _LAZY = {
+    "AssumedModesOptions": "rod",
     "BoxGrid": "solid",
     "RectangleGrid": "solid",
     "SUPPORTS": "rod",
