@@ -80,12 +80,12 @@ def substruct_model(target: int):
     from substruct.assembly.interfaces import tie_nodes
     from substruct.assembly.stack import Connection, LinearConstraint, PointRef
     from substruct.models.discrete import free_free
-    from substruct.models.solid import solid_box
+    from substruct.models.solid import BoxGrid, solid_box
     nxh, m = divisions(target)
-    left = solid_box("left", (LX / 2, LY, LZ), (nxh, m, m), E, NU, RHO,
+    left = solid_box("left", BoxGrid((LX / 2, LY, LZ), (nxh, m, m)), E, NU, RHO,
                      fixed=[{"box": [[0, 0, 0], [0, LY, LZ]]}])
-    right = solid_box("right", (LX / 2, LY, LZ), (nxh, m, m), E, NU, RHO,
-                      origin=(LX / 2, 0, 0))
+    right = solid_box("right", BoxGrid((LX / 2, LY, LZ), (nxh, m, m), origin=(LX / 2, 0, 0)), E,
+                      NU, RHO)
     subs = [left, right]
     cons = tie_nodes(left, right, {"box": [[LX / 2, 0, 0], [LX / 2, LY, LZ]]})
     for name, mass, k, xyz, comp in absorber_params():
@@ -103,9 +103,9 @@ def substruct_model(target: int):
 def monolithic_system(target: int) -> dict:
     """The same constrained model over the monolithic mesh and the two absorber masses, with
     the constraint eliminated by hand, ``q = T x``: ``{"box", "n", "K", "M", "T"}``."""
-    from substruct.models.solid import solid_box
+    from substruct.models.solid import BoxGrid, solid_box
     nxh, m = divisions(target)
-    box = solid_box("box", (LX, LY, LZ), (2 * nxh, m, m), E, NU, RHO,
+    box = solid_box("box", BoxGrid((LX, LY, LZ), (2 * nxh, m, m)), E, NU, RHO,
                     fixed=[{"box": [[0, 0, 0], [0, LY, LZ]]}])
     n = box.n_dof
     # each absorber's massless boundary DOF is the structure's displacement r q there (a

@@ -92,14 +92,16 @@ def baseline_run(mono: dict, steps: int, factorization: str) -> np.ndarray:
 
 def substruct_run(asm, method: str, steps: int, factorization: str) -> tuple[np.ndarray, float]:
     """substruct's transient on the assembled model; the output histories and the drift."""
-    from substruct.analysis.transient.response import TransientOptions, transient
+    from substruct.analysis.transient import (LoadHistory, TransientOptions, TransientOutputs,
+                                               transient)
     from substruct.assembly.stack import PointRef
     tip = asm.rows([PointRef("right", {"at": list(TIP), "component": "z"})])
     O = sp.csr_array(sp.vstack([tip, asm.rows([PointRef("t1", "mass")])]))
     f = np.full((steps + 1, 1), FORCE)
-    r = transient(asm.M, None, asm.K, asm.A, asm.b, sp.csc_array(tip.T), f, DT, steps, O,
-                  method=method, options=TransientOptions(forces=False,
-                                                          factorization=factorization))
+    r = transient(asm.M, None, asm.K, asm.A, asm.b,
+                  LoadHistory(sp.csc_array(tip.T), f, DT, steps), TransientOutputs(O),
+                  options=TransientOptions(method=method, forces=False,
+                                           factorization=factorization))
     return r.displacement, r.drift
 
 

@@ -10,7 +10,7 @@ from substruct.models.craig_bampton import craig_bampton
 from substruct.assembly.interfaces import node_dofs, tie_nodes
 from substruct.models.discrete import free_free
 from substruct.models.rod import rod_fe
-from substruct.models.solid import solid_box
+from substruct.models.solid import BoxGrid, solid_box
 from substruct.analysis.modes.dense import coupled_modes
 from substruct.analysis.modes.sparse import null_space_modes
 
@@ -21,9 +21,9 @@ FACE = {"box": [[L / 2, 0, 0], [L / 2, B, H]]}
 
 @pytest.fixture(scope="module")
 def halves():
-    a = solid_box("a", (L / 2, B, H), (10, 2, 2), E, NU, RHO,
+    a = solid_box("a", BoxGrid((L / 2, B, H), (10, 2, 2)), E, NU, RHO,
                   fixed=[{"box": [[0, 0, 0], [0, B, H]]}])
-    b = solid_box("b", (L / 2, B, H), (10, 2, 2), E, NU, RHO, origin=(L / 2, 0, 0))
+    b = solid_box("b", BoxGrid((L / 2, B, H), (10, 2, 2), origin=(L / 2, 0, 0)), E, NU, RHO)
     return a, b
 
 
@@ -124,7 +124,7 @@ def test_errors(halves):
         craig_bampton(a, [], 3)
     with pytest.raises(ValueError, match="n_modes"):
         craig_bampton(a, bnd, a.n_dof)
-    free = solid_box("f", (1, 1, 1), (2, 2, 2), E, NU, RHO)
+    free = solid_box("f", BoxGrid((1, 1, 1), (2, 2, 2)), E, NU, RHO)
     one_node = node_dofs(free, {"box": [[0, 0, 0], [0, 0, 0]]})
     with pytest.raises(ValueError, match="do not hold the interior"):
         craig_bampton(free, one_node, 3)

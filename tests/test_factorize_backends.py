@@ -18,7 +18,7 @@ import scipy.sparse.linalg as spla
 from substruct.linalg import backends as bk
 from substruct.linalg import factorize as fz
 from substruct.linalg.pardiso import PardisoError
-from substruct.models.solid import solid_box
+from substruct.models.solid import BoxGrid, solid_box
 
 EPS = np.finfo(float).eps
 E, NU, RHO = 2.1e11, 0.3, 7850.0
@@ -28,7 +28,7 @@ MODULES = {"pardiso": ["pypardiso"], "cholmod": ["sksparse", "sksparse.cholmod"]
 
 
 def _box():
-    return solid_box("b", (2.0, 0.5, 0.5), (14, 4, 4), E, NU, RHO,
+    return solid_box("b", BoxGrid((2.0, 0.5, 0.5), (14, 4, 4)), E, NU, RHO,
                      fixed=[{"box": [[0, 0, 0], [0, 0.5, 0.5]]}])
 
 

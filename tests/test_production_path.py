@@ -21,7 +21,7 @@ from substruct.assembly.interfaces import tie_nodes
 from substruct.assembly.stack import Connection, LinearConstraint, PointRef, assemble
 from substruct.linalg.memory import factor_entries, require_memory
 from substruct.models.discrete import free_free
-from substruct.models.solid import solid_box
+from substruct.models.solid import BoxGrid, solid_box
 
 E, NU, RHO, L, B, H = 2.1e11, 0.3, 7850.0, 1.0, 0.2, 0.2
 FACE = {"box": [[L / 2, 0, 0], [L / 2, B, H]]}
@@ -31,9 +31,9 @@ FACE = {"box": [[L / 2, 0, 0], [L / 2, B, H]]}
 def coupled():
     """Two tied halves of a clamped box, an absorber on a massless boundary coordinate and an
     interpolated multi-point constraint: consistent mass, 60-odd independent rows."""
-    a = solid_box("a", (L / 2, B, H), (5, 3, 3), E, NU, RHO,
+    a = solid_box("a", BoxGrid((L / 2, B, H), (5, 3, 3)), E, NU, RHO,
                   fixed=[{"box": [[0, 0, 0], [0, B, H]]}])
-    b = solid_box("b", (L / 2, B, H), (5, 3, 3), E, NU, RHO, origin=(L / 2, 0, 0))
+    b = solid_box("b", BoxGrid((L / 2, B, H), (5, 3, 3), origin=(L / 2, 0, 0)), E, NU, RHO)
     t1 = free_free("t1", 5.0, 5.0 * (2 * np.pi * 150) ** 2)
     cons = tie_nodes(a, b, FACE) + [
         Connection(PointRef("b", {"at": [L, B, H], "component": "y"}), PointRef("t1", "boundary"))]
@@ -109,7 +109,7 @@ def test_memory_is_refused_only_past_what_the_machine_has(coupled, monkeypatch):
 def test_the_fill_models_bound_the_measured_fill():
     """The SuperLU model of linalg.memory against SuperLU's own factor of a 3D box (within a
     factor 2 above and never below half of it), CHOLMOD's likewise when it is installed."""
-    box = solid_box("b", (2.0, 0.5, 0.5), (16, 5, 5), E, NU, RHO,
+    box = solid_box("b", BoxGrid((2.0, 0.5, 0.5), (16, 5, 5)), E, NU, RHO,
                     fixed=[{"box": [[0, 0, 0], [0, 0.5, 0.5]]}])
     K = sp.csc_array(box.K + 1e-3 * box.M)
     lu = spla.splu(sp.csc_matrix(K), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,

@@ -5,6 +5,7 @@ import pytest
 import scipy.linalg as sla
 
 from substruct.models.rod import (
+    AssumedModesOptions,
     SUPPORTS,
     paper_taper,
     rod_assumed_modes,
@@ -54,7 +55,8 @@ def test_assumed_modes_quadrature_converged():
     """Doubling the quadrature mesh changes M and K of the tapered rod by < 1e-13 relative."""
     EA, m = paper_taper(EA_PAPER, M_PAPER, L_PAPER)
     a = rod_assumed_modes("rod", L_PAPER, EA, m, 30)
-    b = rod_assumed_modes("rod", L_PAPER, EA, m, 30, n_quad_elements=2 * a.meta["n_quad_elements"])
+    b = rod_assumed_modes("rod", L_PAPER, EA, m, 30, options=AssumedModesOptions(
+        n_quad_elements=2 * a.meta["n_quad_elements"]))
     for x, y in ((a.M, b.M), (a.K, b.K)):
         assert abs(x - y).max() / abs(y).max() < 1e-13
 
@@ -141,12 +143,14 @@ def test_paper_literal_mapping_rows_are_eigenvector_entries():
 
 
 def test_paper_literal_stations_parameter():
-    rod = rod_assumed_modes("rod", 1.0, 1.0, 1.0, 8, mapping="paper-literal", literal_stations=4)
+    rod = rod_assumed_modes("rod", 1.0, 1.0, 1.0, 8, mapping="paper-literal",
+                            options=AssumedModesOptions(literal_stations=4))
     assert np.array_equal(rod.row(0.5).toarray(), np.eye(8)[[1]])
     with pytest.raises(PointError):
         rod.row(1 / 8)
     with pytest.raises(ValueError, match="literal_stations"):
-        rod_assumed_modes("rod", 1.0, 1.0, 1.0, 8, mapping="paper-literal", literal_stations=9)
+        rod_assumed_modes("rod", 1.0, 1.0, 1.0, 8, mapping="paper-literal",
+                          options=AssumedModesOptions(literal_stations=9))
 
 
 def test_assumed_modes_locator_is_sine_row():

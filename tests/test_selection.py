@@ -14,7 +14,7 @@ from substruct.models.selection import (
     nodes_in_box,
     parse_box,
 )
-from substruct.models.solid import solid_box, solid_rectangle
+from substruct.models.solid import BoxGrid, RectangleGrid, solid_box, solid_rectangle
 from substruct.substructure import PointError
 
 E, NU, RHO = 2.1e11, 0.3, 7850.0
@@ -22,7 +22,7 @@ L = 2.0  # the box is 2 x 0.5 x 0.5: its size is 2, the tolerance 2e-8
 
 
 def box(**kwargs):
-    return solid_box("b", [L, 0.5, 0.5], [4, 1, 1], E, NU, RHO, **kwargs)
+    return solid_box("b", BoxGrid([L, 0.5, 0.5], [4, 1, 1]), E, NU, RHO, **kwargs)
 
 
 @pytest.mark.parametrize("name, dim, index", [
@@ -97,14 +97,14 @@ def test_a_point_is_a_node_within_the_same_tolerance(offset, unit):
 def test_ties_match_nodes_within_the_same_tolerance():
     a = box()
     shift = 0.4 * NODE_TOL * L
-    b = solid_box("c", [L, 0.5, 0.5], [4, 1, 1], E, NU, RHO, origin=[L + shift, 0, 0])
+    b = solid_box("c", BoxGrid([L, 0.5, 0.5], [4, 1, 1], origin=[L + shift, 0, 0]), E, NU, RHO)
     ties = tie_nodes(a, b, {"box": [[L, 0, 0], [L, 0.5, 0.5]]})
     assert len(ties) == 4 * 3  # four corner nodes of the face, three components each
     assert {t.name.rsplit(" ", 1)[1] for t in ties} == {"ux", "uy", "uz"}
 
 
 def test_components_of_a_2d_solid():
-    plate = solid_rectangle("p", [1.0, 0.2], [4, 2], E, NU, RHO)
+    plate = solid_rectangle("p", RectangleGrid([1.0, 0.2], [4, 2]), E, NU, RHO)
     assert plate.row({"at": [1.0, 0.2], "component": "uy"}).nnz == 1
     with pytest.raises(PointError, match="no displacement component 'z' in a 2D solid"):
         plate.row({"at": [1.0, 0.2], "component": "z"})

@@ -25,7 +25,8 @@ from skfem.models.elasticity import linear_elasticity
 
 from substruct.models.elasticity import elasticity_matrices
 from substruct.models.mesh_io import read_mesh
-from substruct.models.solid import solid_box, solid_from_mesh, solid_rectangle
+from substruct.models.solid import (BoxGrid, RectangleGrid, solid_box, solid_from_mesh,
+                                    solid_rectangle)
 from substruct.analysis.modes.sparse import null_space_modes
 from substruct.substructure import PointError
 
@@ -73,7 +74,7 @@ def test_matrices_equal_skfem_linear_elasticity(mesh, elem, order):
 
 def test_mass_and_rigid_modes_of_a_free_box():
     """Total mass ``rho V`` in each direction; six zero-energy rigid motions."""
-    s = solid_box("free", (1.0, 0.4, 0.2), (4, 2, 2), E, NU, RHO, order=2)
+    s = solid_box("free", BoxGrid((1.0, 0.4, 0.2), (4, 2, 2)), E, NU, RHO, order=2)
     ones_x = np.zeros(s.n_dof)
     ones_x[0::3] = 1.0
     assert ones_x @ (s.M @ ones_x) == pytest.approx(RHO * 0.08, rel=1e-12)
@@ -82,23 +83,24 @@ def test_mass_and_rigid_modes_of_a_free_box():
 
 
 def test_supports_box_components_and_errors():
-    s = solid_box("b", (1.0, 0.2, 0.2), (4, 1, 1), E, NU, RHO,
+    s = solid_box("b", BoxGrid((1.0, 0.2, 0.2), (4, 1, 1)), E, NU, RHO,
                   fixed=[{"box": [[0, 0, 0], [0, 0.2, 0.2]], "components": ["y", "z"]}])
     assert s.meta["n_fixed"] == 8 and s.n_dof == 3 * 20 - 8
     assert "n0.ux" in s.dof_labels and "n0.uy" not in s.dof_labels
     with pytest.raises(ValueError, match="selects no node"):
-        solid_box("b", (1, 1, 1), (1, 1, 1), E, NU, RHO, fixed=[{"box": [[2, 2, 2], [3, 3, 3]]}])
+        solid_box("b", BoxGrid((1, 1, 1), (1, 1, 1)), E, NU, RHO,
+                  fixed=[{"box": [[2, 2, 2], [3, 3, 3]]}])
     with pytest.raises(ValueError, match="no named set 'clamp'"):
-        solid_box("b", (1, 1, 1), (1, 1, 1), E, NU, RHO, fixed=["clamp"])
+        solid_box("b", BoxGrid((1, 1, 1), (1, 1, 1)), E, NU, RHO, fixed=["clamp"])
     with pytest.raises(ValueError, match="Poisson"):
-        solid_box("b", (1, 1, 1), (1, 1, 1), E, 0.5, RHO)
+        solid_box("b", BoxGrid((1, 1, 1), (1, 1, 1)), E, 0.5, RHO)
     with pytest.raises(ValueError, match="plane"):
-        solid_rectangle("p", (1, 1), (1, 1), E, NU, RHO, plane="membrane")
+        solid_rectangle("p", RectangleGrid((1, 1), (1, 1)), E, NU, RHO, plane="membrane")
 
 
 def test_rayleigh_damping():
-    s = solid_box("b", (1, 1, 1), (1, 1, 1), E, NU, RHO, damping={"rayleigh": [2.0, 1e-5]},
-                  fixed=[{"box": [[0, 0, 0], [0, 1, 1]]}])
+    s = solid_box("b", BoxGrid((1, 1, 1), (1, 1, 1)), E, NU, RHO,
+                  damping={"rayleigh": [2.0, 1e-5]}, fixed=[{"box": [[0, 0, 0], [0, 1, 1]]}])
     assert abs(s.C - (2.0 * s.M + 1e-5 * s.K)).max() <= 1e-12 * abs(s.C).max()
 
 
@@ -106,7 +108,7 @@ def test_rayleigh_damping():
 
 
 def test_locator_nodes_interpolation_and_outside():
-    s = solid_box("b", (1.0, 0.2, 0.2), (5, 2, 2), E, NU, RHO,
+    s = solid_box("b", BoxGrid((1.0, 0.2, 0.2), (5, 2, 2)), E, NU, RHO,
                   fixed=[{"box": [[0, 0, 0], [0, 0.2, 0.2]]}])
     node = s.row(((0.4, 0.1, 0.2), "y"))
     assert node.nnz == 1 and node.data[0] == 1.0
@@ -130,7 +132,7 @@ def test_locator_nodes_interpolation_and_outside():
 
 
 def test_2d_solid_points_geometry():
-    p = solid_rectangle("p", (1.0, 0.1), (10, 2), E, NU, RHO, thickness=0.01,
+    p = solid_rectangle("p", RectangleGrid((1.0, 0.1), (10, 2)), E, NU, RHO, thickness=0.01,
                         fixed=[{"box": [[0, 0], [0, 0.1]]}])
     assert p.row(((0.5, 0.05, 0.0), "y")).nnz == 1
     with pytest.raises(PointError, match="off the plane"):
@@ -183,7 +185,7 @@ L_BEAM = 1.0
 
 def ss_beam(order: int, k: int, base: tuple[int, int, int], b: float = 0.05) -> float:
     """First frequency of a simply supported square beam, half modelled (symmetry at L/2)."""
-    s = solid_box("beam", (L_BEAM / 2, b, b), tuple(k * np.array(base)), E, NU, RHO,
+    s = solid_box("beam", BoxGrid((L_BEAM / 2, b, b), tuple(k * np.array(base))), E, NU, RHO,
                   order=order, fixed=[
                       {"box": [[0, 0, 0], [0, b, b]], "components": ["y", "z"]},
                       {"box": [[L_BEAM / 2, 0, 0], [L_BEAM / 2, b, b]], "components": ["x"]}])
@@ -219,7 +221,7 @@ def test_clamped_hex_beam_converges_to_euler_bernoulli():
     f_eb = eb_frequency(BETA1, E, b**4 / 12, RHO, b * b, L_BEAM)
     f = []
     for k in (1, 2, 4):
-        s = solid_box("cantilever", (L_BEAM, b, b), (5 * k, k, k), E, NU, RHO, order=2,
+        s = solid_box("cantilever", BoxGrid((L_BEAM, b, b), (5 * k, k, k)), E, NU, RHO, order=2,
                       fixed=[{"box": [[0, 0, 0], [0, b, b]]}])
         f.append(first_frequency(s))
     assert f[0] > f[1] > f[2] > f_eb * 0.99
@@ -240,8 +242,10 @@ def test_plane_stress_beam_converges_at_element_rate(order, cell, base, ks, rate
     f_eb = eb_frequency(np.pi, E, t * h**3 / 12, RHO, t * h, L)
     f = []
     for k in ks:
-        s = solid_rectangle("plate", (L / 2, h), (base[0] * k, base[1] * k), E, NU, RHO,
-                            order=order, cell=cell, plane="stress", thickness=t, fixed=[
+        s = solid_rectangle("plate",
+                            RectangleGrid((L / 2, h), (base[0] * k, base[1] * k), cell=cell), E,
+                            NU, RHO, order=order, plane="stress", thickness=t,
+                            fixed=[
                                 {"box": [[0, 0], [0, h]], "components": ["y"]},
                                 {"box": [[L / 2, 0], [L / 2, h]], "components": ["x"]}])
         f.append(first_frequency(s))
@@ -254,8 +258,8 @@ def test_clamped_plane_stress_cantilever():
     """The 2D cantilever converges to Euler-Bernoulli's 1.875^2 value within 1%."""
     L, h, t = L_BEAM, 0.05, 0.01
     f_eb = eb_frequency(BETA1, E, t * h**3 / 12, RHO, t * h, L)
-    f = [first_frequency(solid_rectangle("c", (L, h), (10 * k, k), E, NU, RHO, order=1,
-                                         thickness=t, fixed=[{"box": [[0, 0], [0, h]]}]))
+    f = [first_frequency(solid_rectangle("c", RectangleGrid((L, h), (10 * k, k)), E, NU, RHO,
+                                         order=1, thickness=t, fixed=[{"box": [[0, 0], [0, h]]}]))
          for k in (4, 8, 16)]
     p, lim = richardson(f)
     assert f[0] > f[1] > f[2]

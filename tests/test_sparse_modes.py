@@ -17,7 +17,8 @@ import substruct.linalg.lanczos as lanczos
 from substruct.assembly.stack import Connection, LinearConstraint, PointRef, assemble
 from substruct.assembly.interfaces import InterfaceError, node_dofs, tie_nodes, tie_nonmatching
 from substruct.models.discrete import free_free
-from substruct.models.solid import solid_box, solid_from_mesh, solid_rectangle
+from substruct.models.solid import (BoxGrid, RectangleGrid, solid_box, solid_from_mesh,
+                                    solid_rectangle)
 from substruct.analysis.checks import modes_agreement
 from substruct.analysis.modes.dense import coupled_modes
 from substruct.analysis.modes.sparse import (generalized_inverse_modes, null_space_modes,
@@ -32,9 +33,9 @@ CLAMP = [{"box": [[0, 0, 0], [0, B, H]]}]
 
 
 def halves(div=(4, 2, 2), order=1, clamp=True):
-    a = solid_box("a", (L / 2, B, H), div, E, NU, RHO, order=order,
+    a = solid_box("a", BoxGrid((L / 2, B, H), div), E, NU, RHO, order=order,
                   fixed=CLAMP if clamp else ())
-    b = solid_box("b", (L / 2, B, H), div, E, NU, RHO, order=order, origin=(L / 2, 0, 0))
+    b = solid_box("b", BoxGrid((L / 2, B, H), div, origin=(L / 2, 0, 0)), E, NU, RHO, order=order)
     return a, b
 
 
@@ -114,7 +115,7 @@ def test_redundant_rows_and_rigid_body_modes():
     ties = tie_nodes(a, b, FACE)
     once = assemble([a, b], ties)
     twice = assemble([a, b], ties + ties[:5])
-    mono = solid_box("m", (L, B, H), (4, 1, 1), E, NU, RHO)
+    mono = solid_box("m", BoxGrid((L, B, H), (4, 1, 1)), E, NU, RHO)
     ref = null_space_modes(mono.M, mono.K, None, 10)
     for asm in (once, twice):
         for method in ("null-space", "generalized-inverse"):
@@ -168,7 +169,7 @@ def test_factorizations_and_eigsh_never_factorizes(coupled, monkeypatch):
 def test_tied_halves_equal_the_monolithic_mesh(order):
     a, b = halves(div=(3, 2, 2), order=order)
     asm = assemble([a, b], tie_nodes(a, b, FACE))
-    mono = solid_box("m", (L, B, H), (6, 2, 2), E, NU, RHO, order=order, fixed=CLAMP)
+    mono = solid_box("m", BoxGrid((L, B, H), (6, 2, 2)), E, NU, RHO, order=order, fixed=CLAMP)
     ref = null_space_modes(mono.M, mono.K, None, 10)
     tied = null_space_modes(asm.M, asm.K, asm.A, 10)
     np.testing.assert_allclose(tied.omega, ref.omega, rtol=1e-8)
@@ -209,7 +210,8 @@ def test_nonmatching_equals_matching_when_nodes_coincide():
 
 def test_interface_errors_and_2d():
     a, b = halves(div=(2, 1, 1))
-    shifted = solid_box("s", (L / 2, B, H), (2, 1, 1), E, NU, RHO, origin=(L / 2, 0.01, 0))
+    shifted = solid_box("s", BoxGrid((L / 2, B, H), (2, 1, 1), origin=(L / 2, 0.01, 0)), E, NU,
+                        RHO)
     plane = {"box": [[L / 2, -1, -1], [L / 2, 1, 1]]}
     with pytest.raises(InterfaceError, match="4 of 4 nodes of a and 4 of 4 nodes of s are "
                                              "unmatched; worst distance 0.01 "):
@@ -219,8 +221,9 @@ def test_interface_errors_and_2d():
     with pytest.raises(ValueError, match="node set"):
         tie_nodes(a, b, "interface")
     # supported on both sides: nothing to tie; one side supported: the other is held
-    p = solid_rectangle("p", (0.5, 0.1), (4, 2), E, NU, RHO, fixed=[{"box": [[0, 0], [0, .1]]}])
-    q = solid_rectangle("q", (0.5, 0.1), (4, 2), E, NU, RHO, origin=(0.5, 0.0))
+    p = solid_rectangle("p", RectangleGrid((0.5, 0.1), (4, 2)), E, NU, RHO,
+                        fixed=[{"box": [[0, 0], [0, .1]]}])
+    q = solid_rectangle("q", RectangleGrid((0.5, 0.1), (4, 2), origin=(0.5, 0.0)), E, NU, RHO)
     ties = tie_nodes(p, q, {"box": [[0.5, 0], [0.5, 0.1]]})
     assert len(ties) == 2 * 3 and ties[0].a.where["component"] in ("x", "y")
     assert node_dofs(q, {"box": [[0.5, 0], [0.5, 0.1]]}).size == 6

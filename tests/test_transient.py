@@ -13,7 +13,13 @@ import scipy.sparse as sp
 from substruct.analysis.formulations.coupling import receptance
 from substruct.analysis.errors import CheckError
 from substruct.analysis.transient.integrators import scheme
-from substruct.analysis.transient.response import TransientOptions, transient
+from substruct.analysis.transient import (
+    InitialConditions,
+    LoadHistory,
+    TransientOptions,
+    TransientOutputs,
+    transient,
+)
 from substruct.case.loader import load_case
 from substruct.run.runner import build_model
 
@@ -29,7 +35,9 @@ def _sdof(h, t_end, integrator, load=0.0, d0=1.0, c=0.0):
     n = int(round(t_end / h))
     f = np.full((n + 1, 1), load)
     return transient(np.array([[m]]), None if c == 0 else np.array([[c]]), np.array([[k]]),
-                     None, None, np.ones((1, 1)), f, h, n, np.eye(1), d0=np.array([d0]),
+                     None, None, LoadHistory(np.ones((1, 1)), f, h, n),
+                     TransientOutputs(np.eye(1)),
+                     initial=InitialConditions(d0=np.array([d0])),
                      options=TransientOptions(integrator=integrator, rho_inf=0.7))
 
 
@@ -67,9 +75,10 @@ def test_two_dof_free_vibration_against_its_modes():
     errs = []
     for h in hs:
         n = int(round(0.4 / h))
-        r = transient(M, None, K, None, None, np.zeros((2, 1)), np.zeros((n + 1, 1)), h, n,
-                      np.eye(2), d0=q0, options=TransientOptions(integrator="generalized-alpha",
-                                                                 rho_inf=0.9))
+        r = transient(M, None, K, None, None,
+                      LoadHistory(np.zeros((2, 1)), np.zeros((n + 1, 1)), h, n),
+                      TransientOutputs(np.eye(2)), initial=InitialConditions(d0=q0),
+                      options=TransientOptions(integrator="generalized-alpha", rho_inf=0.9))
         exact = (V * np.cos(np.sqrt(w2)[None, :] * r.t[:, None])[:, None, :]
                  * (V.T @ M @ q0)[None, None, :]).sum(axis=2)
         errs.append(float(np.abs(r.displacement - exact).max()))
@@ -96,9 +105,11 @@ def test_harmonic_steady_state_is_the_receptance():
     h = 5e-5
     n = int(round(2 * np.pi / w / h))
     t = h * np.arange(n + 1)
-    r = transient(M, C, K, A, None, e, np.cos(w * t)[:, None], h, n, sp.identity(4),
-                  d0=H.real, v0=(1j * w * H).real, method="generalized-inverse",
-                  checks=["null-space", "modal"])
+    r = transient(M, C, K, A, None, LoadHistory(e, np.cos(w * t)[:, None], h, n),
+                  TransientOutputs(sp.identity(4)),
+                  initial=InitialConditions(d0=H.real, v0=(1j * w * H).real),
+                  options=TransientOptions(method="generalized-inverse",
+                                           checks=["null-space", "modal"]))
     exact = (H[None, :] * np.exp(1j * w * r.t)[:, None]).real
     assert np.abs(r.displacement - exact).max() / np.abs(H).max() < 1e-6
     assert max(r.agreement.values()) < 1e-10
@@ -107,8 +118,9 @@ def test_harmonic_steady_state_is_the_receptance():
 def test_constraint_force_of_a_rigid_tie():
     m1, m2, F = 1.0, 3.0, 2.0
     M, K = np.diag([m1, m2]), np.diag([1e-9, 1e-9])
-    r = transient(M, None, K, np.array([[1.0, -1.0]]), None, np.array([[1.0], [0.0]]),
-                  np.full((11, 1), F), 1e-3, 10, np.eye(2), constraint_labels=["tie"])
+    r = transient(M, None, K, np.array([[1.0, -1.0]]), None,
+                  LoadHistory(np.array([[1.0], [0.0]]), np.full((11, 1), F), 1e-3, 10),
+                  TransientOutputs(np.eye(2)), constraint_labels=["tie"])
     # Q^c = A^T lambda; mass 2 is pulled by -lambda = m2 F / (m1 + m2)
     assert np.allclose(r.constraint_forces[:, 0], -m2 * F / (m1 + m2), rtol=1e-9)
     assert np.allclose(r.acceleration, F / (m1 + m2), rtol=1e-9)
@@ -118,8 +130,10 @@ def test_energy_and_constraints_hold_over_1e5_steps():
     M, K, A = _tied()
     d0 = np.array([0.01, 0.01, 0.01, 0.03])
     n = 100_000
-    r = transient(M, None, K, A, None, np.zeros((4, 1)), np.zeros((n + 1, 1)), 1e-3, n,
-                  sp.identity(4), d0=d0, options=TransientOptions(every=10, forces=False))
+    r = transient(M, None, K, A, None,
+                  LoadHistory(np.zeros((4, 1)), np.zeros((n + 1, 1)), 1e-3, n),
+                  TransientOutputs(sp.identity(4)), initial=InitialConditions(d0=d0),
+                  options=TransientOptions(every=10, forces=False))
     E = r.energy_balance()
     assert np.abs(E - E[0]).max() / E[0] < 1e-10
     assert r.drift <= 1e-12
@@ -131,12 +145,14 @@ def test_generalized_alpha_damps_the_highest_frequency():
     assert s.alpha_m == -1.0 and s.alpha_f == 0.0
     # a stiff mode at omega h = 1e3 loses its amplitude within a few steps for rho_inf = 0
     M, K = np.diag([1.0]), np.diag([1e12])
-    r = transient(M, None, K, None, None, np.zeros((1, 1)), np.zeros((6, 1)), 1e-3, 5,
-                  np.eye(1), d0=np.array([1.0]),
+    r = transient(M, None, K, None, None,
+                  LoadHistory(np.zeros((1, 1)), np.zeros((6, 1)), 1e-3, 5),
+                  TransientOutputs(np.eye(1)), initial=InitialConditions(d0=np.array([1.0])),
                   options=TransientOptions(integrator="generalized-alpha", rho_inf=0.0))
     assert abs(r.displacement[-1, 0]) < 1e-3
-    newmark = transient(M, None, K, None, None, np.zeros((1, 1)), np.zeros((6, 1)), 1e-3, 5,
-                        np.eye(1), d0=np.array([1.0]))
+    newmark = transient(M, None, K, None, None,
+                        LoadHistory(np.zeros((1, 1)), np.zeros((6, 1)), 1e-3, 5),
+                        TransientOutputs(np.eye(1)), initial=InitialConditions(d0=np.array([1.0])))
     assert abs(abs(newmark.displacement[-1, 0]) - 1.0) < 1e-3
 
 
@@ -149,8 +165,10 @@ def test_tapered_rod_direct_and_modal_agree():
     h = 2e-5
     t = h * np.arange(n + 1)
     pulse = np.where(t < 2e-3, np.sin(np.pi * t / 2e-3), 0.0) * 100.0
-    r = transient(asm.M, asm.C, asm.K, asm.A, asm.b, sp.csc_array(tip.T), pulse[:, None], h, n,
-                  tip, method="generalized-inverse", checks=["null-space", "modal"])
+    r = transient(asm.M, asm.C, asm.K, asm.A, asm.b,
+                  LoadHistory(sp.csc_array(tip.T), pulse[:, None], h, n), TransientOutputs(tip),
+                  options=TransientOptions(method="generalized-inverse",
+                                           checks=["null-space", "modal"]))
     assert r.agreement["modal"] < 1e-6 and r.agreement["null-space"] < 1e-10
     assert r.drift < 1e-13
     assert np.abs(r.displacement).max() > 0
@@ -160,16 +178,20 @@ def test_a_check_beyond_the_tolerance_fails():
     M, K, A = _tied()
     d0 = np.array([0.01, 0.01, 0.01, 0.03])
     with pytest.raises(CheckError, match="modal disagrees"):
-        transient(M, None, K, A, None, np.zeros((4, 1)), np.zeros((101, 1)), 1e-3, 100,
-                  sp.identity(4), d0=d0, checks=["modal"], tolerance=1e-6,
-                  options=TransientOptions(modal_count=1, modal_solver="dense"))
+        transient(M, None, K, A, None,
+                  LoadHistory(np.zeros((4, 1)), np.zeros((101, 1)), 1e-3, 100),
+                  TransientOutputs(sp.identity(4)), initial=InitialConditions(d0=d0),
+                  options=TransientOptions(checks=["modal"], tolerance=1e-6, modal_count=1,
+                                           modal_solver="dense"))
 
 
 def test_inconsistent_initial_displacement_is_refused():
     M, K, A = _tied()
     with pytest.raises(ValueError, match="initial displacement violates"):
-        transient(M, None, K, A, None, np.zeros((4, 1)), np.zeros((11, 1)), 1e-3, 10,
-                  sp.identity(4), d0=np.array([0.01, 0.0, 0.0, 0.0]))
+        transient(M, None, K, A, None,
+                  LoadHistory(np.zeros((4, 1)), np.zeros((11, 1)), 1e-3, 10),
+                  TransientOutputs(sp.identity(4)),
+                  initial=InitialConditions(d0=np.array([0.01, 0.0, 0.0, 0.0])))
 
 
 def test_shipped_impact_case_writes_the_transient_group(tmp_path):

@@ -10,7 +10,7 @@ import pytest
 
 from cli_helpers import run
 from substruct.analysis.transient.integrators import scheme
-from substruct.analysis.transient.response import TransientOptions, transient
+from substruct.analysis.transient import LoadHistory, TransientOptions, TransientOutputs, transient
 from substruct.analysis.transient.base import BaseMotion, ground_history
 from substruct.io import hdf5 as results
 
@@ -31,10 +31,12 @@ def _step_error(method: str, dt: float, integrator: str = "newmark", a0: float =
     M, C, K, A = _oscillator()
     n = int(round(t_end / dt))
     t = dt * np.arange(n + 1)
-    tr = transient(M, C, K, A, None, np.zeros((2, 0)), np.zeros((n + 1, 0)), dt, n, np.eye(2),
-                   method=method, options=TransientOptions(integrator=integrator, rho_inf=0.8),
-                   base=BaseMotion(np.array([1.0]), "acceleration",
-                                                  np.full(n + 1, a0)))
+    tr = transient(M, C, K, A, None,
+                   LoadHistory(np.zeros((2, 0)), np.zeros((n + 1, 0)), dt, n,
+                               base=BaseMotion(np.array([1.0]), "acceleration",
+                                               np.full(n + 1, a0))),
+                   TransientOutputs(np.eye(2)),
+                   options=TransientOptions(method=method, integrator=integrator, rho_inf=0.8))
     # z'' + 2 zeta w z' + w^2 z = -a0 from rest
     wd = W1 * np.sqrt(1 - ZETA ** 2)
     z = -(a0 / W1 ** 2) * (1 - np.exp(-ZETA * W1 * t) * (np.cos(wd * t) + ZETA
@@ -154,12 +156,15 @@ def test_coupled_model_base_motion_equals_relative_form_with_effective_load():
     t = dt * np.arange(n + 1)
     ag = 5.0 * np.sin(30 * t) * np.exp(-t)
     O = np.eye(5)[[1, 2, 4]]
-    moving = transient(M, C, K, A, None, np.zeros((5, 0)), np.zeros((n + 1, 0)), dt, n, O,
-                       base=BaseMotion(np.array([2.0, 0.0]), "acceleration", ag),
-                       checks=["null-space", "modal"], tolerance=1e-9)
+    moving = transient(M, C, K, A, None,
+                       LoadHistory(np.zeros((5, 0)), np.zeros((n + 1, 0)), dt, n,
+                                   base=BaseMotion(np.array([2.0, 0.0]), "acceleration", ag)),
+                       TransientOutputs(O),
+                       options=TransientOptions(checks=["null-space", "modal"], tolerance=1e-9))
     r = np.ones(5)
-    fixed = transient(M, C, K, A, None, (-M @ r)[:, None], moving.base_motion[:, 2:3], dt, n, O,
-                      method="null-space")
+    fixed = transient(M, C, K, A, None,
+                      LoadHistory((-M @ r)[:, None], moving.base_motion[:, 2:3], dt, n),
+                      TransientOutputs(O), options=TransientOptions(method="null-space"))
     peak = np.abs(fixed.displacement).max()
     for name in ("displacement", "velocity", "acceleration"):
         ref = getattr(fixed, name)
@@ -175,13 +180,15 @@ def test_initial_acceleration_by_sparse_kkt_when_the_dense_gain_is_refused(monke
     n = 200
     g = np.cos(20 * 1e-3 * np.arange(n + 1))
     base = BaseMotion(np.array([1.0]), "acceleration", g)
-    args = (M, C, K, A, None, np.zeros((2, 0)), np.zeros((n + 1, 0)), 1e-3, n, np.eye(2))
-    ref = transient(*args, base=base)
+    args = (M, C, K, A, None,
+            LoadHistory(np.zeros((2, 0)), np.zeros((n + 1, 0)), 1e-3, n, base=base),
+            TransientOutputs(np.eye(2)))
+    ref = transient(*args)
     def refuse(*args):
         raise MemoryError("refusing a dense copy")
 
     monkeypatch.setattr(transient_module, "constrained_acceleration", refuse)
-    low = transient(*args, base=base)
+    low = transient(*args)
     np.testing.assert_allclose(low.acceleration, ref.acceleration, rtol=0,
                                atol=1e-12 * np.abs(ref.acceleration).max())
     # at rest with g''(0) = 1: the ground accelerates, the mass (its spring relaxed) does not

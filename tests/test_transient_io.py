@@ -12,7 +12,7 @@ import pytest
 import scipy.sparse as sp
 
 from cli_helpers import run
-from substruct.analysis.transient.response import TransientOptions, transient
+from substruct.analysis.transient import LoadHistory, TransientOptions, TransientOutputs, transient
 from substruct.io import hdf5 as results
 from test_export import make_result
 
@@ -31,10 +31,11 @@ def _tied_transient(n_dof):
     n = 40
     t = 1e-3 * np.arange(n + 1)
     O = sp.csr_array(np.eye(n_dof)[[0, 3]])
-    return transient(M, 0.01 * K, K, A, None, B, np.sin(40 * t)[:, None], 1e-3, n, O,
-                     output_names=["m1", "absorber"], constraint_labels=["tie 1-2", "tie 2-3"],
-                     checks=["null-space"],
-                     options=TransientOptions(integrator="generalized-alpha", rho_inf=0.8,
+    return transient(M, 0.01 * K, K, A, None, LoadHistory(B, np.sin(40 * t)[:, None], 1e-3, n),
+                     TransientOutputs(O, ["m1", "absorber"]),
+                     constraint_labels=["tie 1-2", "tie 2-3"],
+                     options=TransientOptions(checks=["null-space"],
+                                              integrator="generalized-alpha", rho_inf=0.8,
                                               field_every=5))
 
 

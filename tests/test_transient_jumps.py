@@ -10,7 +10,7 @@ import pytest
 import scipy.linalg as sla
 
 from substruct.analysis.transient.integrators import scheme
-from substruct.analysis.transient.response import TransientOptions, transient
+from substruct.analysis.transient import LoadHistory, TransientOptions, TransientOutputs, transient
 from substruct.analysis.transient.loads import for_scheme, merge_pairs, step_pairs
 from substruct.case.loader import parse_case
 from substruct.case.transient_signals import Step, TableShape, waveform
@@ -42,8 +42,9 @@ def _run_sdof(h, sig, integrator, method, jumps=True, t_end=0.5):
     f = wave.values(h * np.arange(n + 1))[:, None]
     pairs = merge_pairs([step_pairs(wave.values, wave.breaks, h, n)], f) if jumps else None
     return transient(np.array([[M1]]), np.array([[C1]]), np.array([[K1]]), None, None,
-                     np.ones((1, 1)), f, h, n, np.eye(1), method=method, pairs=pairs,
-                     options=TransientOptions(integrator=integrator, rho_inf=0.7))
+                     LoadHistory(np.ones((1, 1)), f, h, n, pairs=pairs),
+                     TransientOutputs(np.eye(1)),
+                     options=TransientOptions(method=method, integrator=integrator, rho_inf=0.7))
 
 
 @pytest.mark.parametrize("integrator", ["newmark", "generalized-alpha"])
@@ -95,7 +96,8 @@ def test_table_jumps_at_its_ends(tmp_path):
         f = wave.values(h * np.arange(n + 1))[:, None]
         pairs = merge_pairs([step_pairs(wave.values, wave.breaks, h, n)], f)
         r = transient(np.array([[M1]]), np.array([[C1]]), np.array([[K1]]), None, None,
-                      np.ones((1, 1)), f, h, n, np.eye(1), pairs=pairs)
+                      LoadHistory(np.ones((1, 1)), f, h, n, pairs=pairs),
+                      TransientOutputs(np.eye(1)))
         errs.append(float(np.abs(r.displacement[:, 0] - _sdof_step(r.t, t0)).max()))
     assert 1.95 < _rate(HS[:3], errs) < 2.05, errs
 
@@ -156,9 +158,11 @@ def test_constrained_chain_step_between_instants_is_second_order(integrator):
         wave = waveform(Step(start=t0), Path("."), {})
         f = wave.values(h * np.arange(n + 1))[:, None]
         pairs = merge_pairs([step_pairs(wave.values, wave.breaks, h, n)], f)
-        r = transient(M, C, K, A, None, np.array([[0.0], [1.0], [0.0]]), f, h, n, np.eye(3),
-                      pairs=pairs, checks=["null-space", "modal"], tolerance=1e-9,
-                      options=TransientOptions(integrator=integrator, rho_inf=0.6))
+        r = transient(M, C, K, A, None,
+                      LoadHistory(np.array([[0.0], [1.0], [0.0]]), f, h, n, pairs=pairs),
+                      TransientOutputs(np.eye(3)),
+                      options=TransientOptions(checks=["null-space", "modal"], tolerance=1e-9,
+                                               integrator=integrator, rho_inf=0.6))
         errs.append(float(np.abs(r.displacement - _chain_exact(r.t, t0)).max()))
         assert r.drift < 1e-12
     assert 1.95 < _rate(HS[:3], errs) < 2.05, errs

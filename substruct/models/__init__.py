@@ -15,16 +15,26 @@ if TYPE_CHECKING:
     from substruct.models.enrichment import rod_assumed_modes_enriched, static_shapes
     from substruct.models.mesh_io import read_mesh
     from substruct.models.rod import (
+        AssumedModesOptions,
         SUPPORTS,
         paper_taper,
         rod_assumed_modes,
         rod_fe,
         uniform_rod_frequencies,
     )
-    from substruct.models.solid import solid_box, solid_from_mesh, solid_rectangle
+    from substruct.models.solid import (
+        BoxGrid,
+        RectangleGrid,
+        solid_box,
+        solid_from_mesh,
+        solid_rectangle,
+    )
 
 #: Public name -> the module that defines it.
 _LAZY = {
+    "AssumedModesOptions": "rod",
+    "BoxGrid": "solid",
+    "RectangleGrid": "solid",
     "SUPPORTS": "rod",
     "fixed_free": "discrete",
     "free_free": "discrete",

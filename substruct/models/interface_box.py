@@ -23,7 +23,7 @@ import numpy as np
 from substruct.linalg.factorize import Factorize
 from substruct.models.interface_basis import InterfaceBasis, interface_basis
 from substruct.models.interface_reduction import ReducedPart, reduce_part
-from substruct.models.solid import solid_box
+from substruct.models.solid import BoxGrid, solid_box
 from substruct.substructure import Substructure
 
 __all__ = ["BoxCut", "box_part", "part_interfaces", "reduce_box_part"]
@@ -71,8 +71,8 @@ class BoxCut:
 
     def whole(self) -> Substructure:
         """The monolithic box of the same mesh (the reference of the reduced assembly)."""
-        return solid_box("box", self.lengths, self.divisions, self.E, self.nu, self.rho,
-                         cell=self.cell, fixed=self._fixed())
+        return solid_box("box", BoxGrid(self.lengths, self.divisions, cell=self.cell), self.E,
+                         self.nu, self.rho, fixed=self._fixed())
 
     def _fixed(self) -> list[dict[str, list[list[float]]]]:
         _, ly, lz = self.lengths
@@ -88,8 +88,9 @@ def box_part(cut: BoxCut, k: int) -> Substructure:
     _, ly, lz = cut.lengths
     _, ny, nz = cut.divisions
     fixed = cut._fixed() if k == 0 else []
-    return solid_box(f"part{k}", (x1 - x0, ly, lz), (int(e[k + 1] - e[k]), ny, nz), cut.E,
-                     cut.nu, cut.rho, cell=cut.cell, origin=(x0, 0.0, 0.0), fixed=fixed)
+    grid = BoxGrid((x1 - x0, ly, lz), (int(e[k + 1] - e[k]), ny, nz), cell=cut.cell,
+                   origin=(x0, 0.0, 0.0))
+    return solid_box(f"part{k}", grid, cut.E, cut.nu, cut.rho, fixed=fixed)
 
 
 def part_interfaces(cut: BoxCut, k: int, sub: Substructure, degree: int | None

@@ -16,6 +16,7 @@ The rod is drawn along the global ``x`` axis and displaces along it.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any, Sequence
 
 import numpy as np
@@ -38,6 +39,7 @@ from substruct.models.rod_parts import (
 from substruct.substructure import PointError, Substructure, as_csr
 
 __all__ = [
+    "AssumedModesOptions",
     "SUPPORTS",
     "paper_taper",
     "rod_assumed_modes",
@@ -93,11 +95,38 @@ def uniform_rod_frequencies(EA: float, m: float, L: float, k: int,
 # -------------------------------------------------------------------------- assumed modes
 
 
+@dataclass(frozen=True)
+class AssumedModesOptions:
+    """How :func:`rod_assumed_modes` integrates and maps its assumed modes.
+
+    Attributes:
+        n_quad_elements: equal elements of the quadrature mesh (``None``: ``max(64, 4 n)``).
+        intorder: Gauss integration order on each quadrature element.
+        literal_stations: the number ``s`` of stations of the paper-literal mapping (``None``:
+            ``n``; at most ``n``, checked by :func:`rod_assumed_modes`).
+
+    Raises:
+        ValueError: a count that is not an integer >= 1.
+    """
+
+    n_quad_elements: int | None = None
+    intorder: int = 24
+    literal_stations: int | None = None
+
+    def __post_init__(self) -> None:
+        for field, value in (("n_quad_elements", self.n_quad_elements),
+                             ("intorder", self.intorder),
+                             ("literal_stations", self.literal_stations)):
+            if value is None and field != "intorder":
+                continue
+            if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
+                raise ValueError(f"{field} must be an integer >= 1, got {value!r}")
+
+
 def rod_assumed_modes(name: str, length: float, EA: Profile | float, m: Profile | float,
                       n_modes: int, support: str = "fixed-free", mapping: str = "physical",
-                      n_quad_elements: int | None = None, intorder: int = 24,
-                      literal_stations: int | None = None,
-                      nodes_at: Sequence[float] = ()) -> Substructure:
+                      nodes_at: Sequence[float] = (),
+                      options: AssumedModesOptions | None = None) -> Substructure:
     """Rod discretized by assumed modes (Rayleigh-Ritz, eqs 45-49).
 
     .. math::
@@ -135,16 +164,18 @@ def rod_assumed_modes(name: str, length: float, EA: Profile | float, m: Profile 
         n_modes: number ``n`` of assumed modes.
         support: one of :data:`SUPPORTS`.
         mapping: ``"physical"`` or ``"paper-literal"``.
-        n_quad_elements: elements of the quadrature mesh.
-        intorder: Gauss integration order on each quadrature element.
-        literal_stations: number ``s`` of stations of the paper-literal mapping.
         nodes_at: positions to add to the 201 drawing points and mark as glyphs (the Ritz basis
             does not depend on them).
+        options: :class:`AssumedModesOptions`: the quadrature (``n_quad_elements``,
+            ``intorder``) and the stations of the paper-literal mapping.
 
     Returns:
         A :class:`Substructure` with coordinates ``q1 .. qn`` and ``meta`` holding the
         discretization data.
     """
+    opts = options or AssumedModesOptions()
+    n_quad_elements, intorder = opts.n_quad_elements, opts.intorder
+    literal_stations = opts.literal_stations
     L = check_length(name, length)
     check_support(support, name)
     n = int(n_modes)
@@ -153,8 +184,6 @@ def rod_assumed_modes(name: str, length: float, EA: Profile | float, m: Profile 
     if mapping not in ("physical", "paper-literal"):
         raise ValueError(f"{name}: mapping must be 'physical' or 'paper-literal', got {mapping!r}")
     ne = int(n_quad_elements) if n_quad_elements is not None else max(64, 4 * n)
-    if ne < 1:
-        raise ValueError(f"{name}: n_quad_elements must be positive, got {n_quad_elements!r}")
     EAf, mf = as_profile(name, "EA", EA), as_profile(name, "m", m)
 
     basis = Basis(MeshLine(np.linspace(0.0, L, ne + 1)), ElementLineP1(), intorder=intorder)

@@ -25,7 +25,8 @@ row; elsewhere it is the interpolation row :math:`u_c(x) = \sum_j \phi_j(x) q_j`
 from __future__ import annotations
 
 import os
-from typing import Any, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any, ClassVar, Mapping, Sequence
 
 import meshio
 import numpy as np
@@ -40,7 +41,7 @@ from substruct.models.selection import COMPONENTS, node_tolerance
 from substruct.models.solid_nodes import Nodes, basis_nodes, fixed_dofs, parse_point, set_nodes
 from substruct.substructure import Geometry, PointError, Substructure, as_csr
 
-__all__ = ["solid_from_mesh", "solid_box", "solid_rectangle"]
+__all__ = ["BoxGrid", "RectangleGrid", "solid_from_mesh", "solid_box", "solid_rectangle"]
 
 
 def _build(name: str, mesh: Mesh, sets: Mapping[str, np.ndarray], E: float, nu: float,
@@ -172,49 +173,106 @@ def solid_from_mesh(name: str, mesh: str | os.PathLike | meshio.Mesh | Mesh, E: 
                   mesh_label(mesh))
 
 
-def _grid(name: str, lengths: Sequence[float], divisions: Sequence[int], origin: Any,
-          dim: int) -> list[np.ndarray]:
-    L = np.asarray(lengths, dtype=float).ravel()
-    d = np.asarray(divisions).ravel()
-    o = np.zeros(dim) if origin is None else np.asarray(origin, dtype=float).ravel()
-    if L.size != dim or d.size != dim or o.size != dim:
-        raise ValueError(f"{name}: lengths, divisions and origin need {dim} entries each")
-    if np.any(~np.isfinite(L)) or np.any(L <= 0) or np.any(d < 1) or \
-            np.any(d != np.round(d)):
-        raise ValueError(f"{name}: lengths must be positive and divisions integers >= 1, "
-                         f"got {L.tolist()}, {d.tolist()}")
-    return [np.linspace(o[i], o[i] + L[i], int(d[i]) + 1) for i in range(dim)]
+@dataclass(frozen=True)
+class _TensorGrid:
+    """A tensor grid of ``len(lengths)`` axes: :math:`[o, o + L]` cut into ``divisions``
+    equal elements per axis, cells of kind ``cell``."""
+
+    lengths: Sequence[float]
+    divisions: Sequence[int]
+    cell: str
+    origin: Sequence[float] | None = None
+    #: the dimension and the cell kinds of the grid (set by the subclasses)
+    DIM: ClassVar[int] = 0
+    CELLS: ClassVar[dict[str, type[Mesh]]] = {}
+    WHAT: ClassVar[str] = ""
+
+    def __post_init__(self) -> None:
+        dim = self.DIM
+        L = np.asarray(self.lengths, dtype=float).ravel()
+        d = np.asarray(self.divisions).ravel()
+        o = np.zeros(dim) if self.origin is None else np.asarray(self.origin,
+                                                                 dtype=float).ravel()
+        if L.size != dim or d.size != dim or o.size != dim:
+            raise ValueError(f"{self.WHAT}: lengths, divisions and origin need {dim} entries "
+                             f"each")
+        if np.any(~np.isfinite(L)) or np.any(L <= 0) or np.any(d < 1) or \
+                np.any(d != np.round(d)):
+            raise ValueError(f"{self.WHAT}: lengths must be positive and divisions integers "
+                             f">= 1, got {L.tolist()}, {d.tolist()}")
+        if self.cell not in self.CELLS:
+            raise ValueError(f"{self.WHAT}: cell must be "
+                             f"{' or '.join(repr(c) for c in self.CELLS)}, got {self.cell!r}")
+
+    def mesh(self) -> Mesh:
+        """The scikit-fem mesh of the grid."""
+        L = np.asarray(self.lengths, dtype=float).ravel()
+        d = np.asarray(self.divisions).ravel()
+        o = np.zeros(self.DIM) if self.origin is None else np.asarray(self.origin,
+                                                                      dtype=float).ravel()
+        axes = [np.linspace(o[i], o[i] + L[i], int(d[i]) + 1) for i in range(self.DIM)]
+        return self.CELLS[self.cell].init_tensor(*axes)
+
+    def label(self) -> str:
+        """How ``meta["mesh"]`` names the grid."""
+        return f"{self.WHAT} {list(self.lengths)} / {list(self.divisions)} {self.cell}"
 
 
-def solid_box(name: str, lengths: Sequence[float], divisions: Sequence[int], E: float,
-              nu: float, rho: float, order: int = 1, cell: str = "hex",
-              origin: Sequence[float] | None = None, fixed: Sequence[Any] = (),
-              damping: Any = None) -> Substructure:
-    r"""A 3D box :math:`[o, o + L]` meshed by a tensor grid of hexahedra (or tetrahedra).
+@dataclass(frozen=True)
+class BoxGrid(_TensorGrid):
+    """A 3D box :math:`[o, o + L]` cut into ``divisions = (n_x, n_y, n_z)`` hexahedra per
+    side (``cell="tet"``: each hexahedron split into tetrahedra); ``origin`` the corner
+    :math:`o` (``None``: 0).
 
-    ``divisions = (n_x, n_y, n_z)`` elements per side (``cell="tet"`` splits each hexahedron
-    into tetrahedra).  Other arguments as :func:`solid_from_mesh`.
+    Raises:
+        ValueError: not three lengths, divisions and origin entries, a length not positive, a
+            division not an integer >= 1, an unknown cell.
     """
-    axes = _grid(name, lengths, divisions, origin, 3)
-    if cell not in ("hex", "tet"):
-        raise ValueError(f"{name}: cell must be 'hex' or 'tet', got {cell!r}")
-    mesh = (MeshHex if cell == "hex" else MeshTet).init_tensor(*axes)
-    return _build(name, mesh, {}, E, nu, rho, order, None, 1.0, fixed, damping,
-                  f"box {list(lengths)} / {list(divisions)} {cell}")
+
+    cell: str = "hex"
+    DIM: ClassVar[int] = 3
+    CELLS: ClassVar[dict[str, type[Mesh]]] = {"hex": MeshHex, "tet": MeshTet}
+    WHAT: ClassVar[str] = "box"
 
 
-def solid_rectangle(name: str, lengths: Sequence[float], divisions: Sequence[int], E: float,
-                    nu: float, rho: float, order: int = 1, cell: str = "quad",
-                    plane: str = "stress", thickness: float = 1.0,
-                    origin: Sequence[float] | None = None, fixed: Sequence[Any] = (),
-                    damping: Any = None) -> Substructure:
-    r"""A 2D rectangle :math:`[o, o + L]` of quadrilaterals (or triangles), plane stress/strain.
+@dataclass(frozen=True)
+class RectangleGrid(_TensorGrid):
+    """A 2D rectangle :math:`[o, o + L]` cut into ``divisions = (n_x, n_y)`` quadrilaterals
+    (``cell="tri"``: triangles); ``origin`` the corner :math:`o` (``None``: 0).
 
-    ``divisions = (n_x, n_y)``.  Other arguments as :func:`solid_from_mesh`.
+    Raises:
+        ValueError: not two lengths, divisions and origin entries, a length not positive, a
+            division not an integer >= 1, an unknown cell.
     """
-    axes = _grid(name, lengths, divisions, origin, 2)
-    if cell not in ("quad", "tri"):
-        raise ValueError(f"{name}: cell must be 'quad' or 'tri', got {cell!r}")
-    mesh = (MeshQuad if cell == "quad" else MeshTri).init_tensor(*axes)
-    return _build(name, mesh, {}, E, nu, rho, order, plane, thickness, fixed, damping,
-                  f"rectangle {list(lengths)} / {list(divisions)} {cell}")
+
+    cell: str = "quad"
+    DIM: ClassVar[int] = 2
+    CELLS: ClassVar[dict[str, type[Mesh]]] = {"quad": MeshQuad, "tri": MeshTri}
+    WHAT: ClassVar[str] = "rectangle"
+
+
+def solid_box(name: str, grid: BoxGrid, E: float, nu: float, rho: float, order: int = 1,
+              fixed: Sequence[Any] = (), damping: Any = None) -> Substructure:
+    r"""A 3D box :math:`[o, o + L]` meshed by the tensor grid ``grid`` of hexahedra (or
+    tetrahedra, :class:`BoxGrid`).  Other arguments as :func:`solid_from_mesh`.
+
+    Examples:
+        A free unit cube of one trilinear element: 8 nodes, 24 coordinates.
+
+        >>> cube = solid_box("cube", BoxGrid((1, 1, 1), (1, 1, 1)), 2.1e11, 0.3, 7850)
+        >>> cube.n_dof
+        24
+    """
+    return _build(name, grid.mesh(), {}, E, nu, rho, order, None, 1.0, fixed, damping,
+                  grid.label())
+
+
+def solid_rectangle(name: str, grid: RectangleGrid, E: float, nu: float, rho: float,
+                    order: int = 1, plane: str = "stress", thickness: float = 1.0,
+                    fixed: Sequence[Any] = (), damping: Any = None) -> Substructure:
+    r"""A 2D rectangle :math:`[o, o + L]` meshed by the tensor grid ``grid`` of quadrilaterals
+    (or triangles, :class:`RectangleGrid`), plane stress/strain.  Other arguments as
+    :func:`solid_from_mesh`.
+    """
+    return _build(name, grid.mesh(), {}, E, nu, rho, order, plane, thickness, fixed, damping,
+                  grid.label())

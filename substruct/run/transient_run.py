@@ -23,7 +23,13 @@ import scipy.sparse as sp
 
 from substruct.analysis.api import modes
 from substruct.analysis.errors import INPUT_ERRORS, CheckError
-from substruct.analysis.transient import TransientOptions, transient
+from substruct.analysis.transient import (
+    InitialConditions,
+    LoadHistory,
+    TransientOptions,
+    TransientOutputs,
+    transient,
+)
 from substruct.analysis.transient.base import BaseMotion
 from substruct.analysis.transient.initial import InitialStateError
 from substruct.analysis.transient.results import Transient
@@ -223,16 +229,17 @@ def transient_result(case: Case, model: Model) -> Transient:
     O = (asm.rows([model.points[p] for p in spec.outputs]) if spec.outputs
          else sp.csr_array((0, n)))
     d0, v0 = _initial(case, model)
-    opts = TransientOptions(integrator=spec.integrator, rho_inf=spec.spectral_radius,
-                            every=spec.every, field_every=spec.field_every,
-                            forces=spec.constraint_forces, modal_count=spec.modal_count)
     ground = _base(case, model, t)
     try:
-        return transient(asm.M, asm.C, asm.K, asm.A, asm.b, B, f, spec.dt, steps, O,
-                         output_names=spec.outputs, constraint_labels=asm.constraint_labels,
-                         d0=d0, v0=v0, method=spec.method, checks=spec.check,
-                         tolerance=spec.tolerance, options=opts, base=ground, pairs=pairs,
-                         static=spec.initial.static)
+        opts = TransientOptions(method=spec.method, checks=spec.check, tolerance=spec.tolerance,
+                                integrator=spec.integrator, rho_inf=spec.spectral_radius,
+                                every=spec.every, field_every=spec.field_every,
+                                forces=spec.constraint_forces, modal_count=spec.modal_count)
+        initial = InitialConditions(d0=d0, v0=v0, static=spec.initial.static)
+        return transient(asm.M, asm.C, asm.K, asm.A, asm.b,
+                         LoadHistory(B, f, spec.dt, steps, pairs=pairs, base=ground),
+                         TransientOutputs(O, spec.outputs),
+                         constraint_labels=asm.constraint_labels, initial=initial, options=opts)
     except InitialStateError as err:
         raise case.error(("analysis", "transient", "initial"), " ".join(str(err).split())
                          ) from None

@@ -7,11 +7,20 @@ null-space or modal form, each checked by the others.
 * :mod:`~substruct.analysis.transient.initial`: initial states and the constrained static start;
 * :mod:`~substruct.analysis.transient.base`: ground motion;
 * :mod:`~substruct.analysis.transient.modal`: the modal form;
+* :mod:`~substruct.analysis.transient.options`: what a run is given (loads, initial conditions,
+  outputs, options), each checked once when made;
 * :mod:`~substruct.analysis.transient.record`, :mod:`~substruct.analysis.transient.results`:
   what is recorded and returned.
 """
 
+from substruct.analysis.transient.options import (
+    InitialConditions,
+    LoadHistory,
+    TransientOptions,
+    TransientOutputs,
+)
 from substruct.analysis.transient.response import TRANSIENT_FORMS, transient
-from substruct.analysis.transient.results import Transient, TransientOptions
+from substruct.analysis.transient.results import Transient
 
-__all__ = ["TRANSIENT_FORMS", "Transient", "TransientOptions", "transient"]
+__all__ = ["TRANSIENT_FORMS", "InitialConditions", "LoadHistory", "Transient",
+           "TransientOptions", "TransientOutputs", "transient"]

@@ -50,8 +50,8 @@ import scipy.sparse as sp
 from substruct.linalg.factorize import Solve
 from substruct.vocabulary import INTEGRATORS
 
-__all__ = ["INTEGRATORS", "Scheme", "Correction", "Sink", "LoadSteps", "Restart", "scheme",
-           "integrate", "effective_matrix"]
+__all__ = ["INTEGRATORS", "Scheme", "Correction", "Sink", "LoadSteps", "Restart", "StepState",
+           "StepControl", "scheme", "integrate", "effective_matrix"]
 
 
 Matrix: TypeAlias = sp.sparray | np.ndarray
@@ -139,13 +139,6 @@ class Correction:
         return x + step[:, 0], y + step[:, 1]
 
 
-class Sink(Protocol):
-    """``sink(step, d, v, a)``: called with the state after every ``every``-th step (and at
-    step 0)."""
-
-    def __call__(self, step: int, d: np.ndarray, v: np.ndarray, a: np.ndarray, /) -> None: ...
-
-
 @dataclass
 class Work:
     """Energy flows accumulated over the steps (trapezoidal, exact for average acceleration).
@@ -157,6 +150,60 @@ class Work:
 
     external: float = 0.0
     dissipated: float = 0.0
+
+
+class Sink(Protocol):
+    """What a march reports to: ``sink(step, d, v, a)`` with the state after every
+    ``every``-th step (and at step 0), and ``sink.on_work(step, work)`` with the energy flows
+    accumulated up to it (:class:`Work`)."""
+
+    def __call__(self, step: int, d: np.ndarray, v: np.ndarray, a: np.ndarray, /) -> None: ...
+
+    def on_work(self, step: int, work: Work, /) -> None: ...
+
+
+@dataclass(frozen=True)
+class StepState:
+    """The displacement ``d``, velocity ``v`` and acceleration ``a`` at one instant (equal
+    lengths; ``a`` consistent with the equation of motion).
+
+    Raises:
+        ValueError: the three do not have one length.
+    """
+
+    d: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+
+    def __post_init__(self) -> None:
+        shapes = {np.shape(x) for x in (self.d, self.v, self.a)}
+        if len(shapes) != 1 or len(next(iter(shapes))) != 1:
+            raise ValueError(f"a state needs three vectors of one length, got shapes "
+                             f"{sorted(shapes)}")
+
+
+@dataclass(frozen=True)
+class StepControl:
+    r"""How a march is made: the scheme ``scheme``, ``n_steps`` steps of size ``h``, the solve
+    ``solve`` with the effective matrix :math:`S` (:func:`effective_matrix`) factorized once,
+    and the state reported every ``every`` steps.
+
+    Raises:
+        ValueError: ``h`` not positive and finite, ``n_steps < 0``, ``every < 1``.
+    """
+
+    scheme: Scheme
+    h: float
+    n_steps: int
+    solve: Solve
+    every: int = 1
+
+    def __post_init__(self) -> None:
+        if not (0 < self.h < np.inf):
+            raise ValueError(f"the step must be positive and finite, got {self.h!r}")
+        if self.n_steps < 0 or self.every < 1:
+            raise ValueError(f"need n_steps >= 0 and every >= 1, got {self.n_steps}, "
+                             f"{self.every}")
 
 
 @dataclass(frozen=True)
@@ -192,13 +239,10 @@ class LoadSteps:
 Restart: TypeAlias = Callable[[int, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
 
-def integrate(M: Matrix, C: Matrix | None, K: Matrix, s: Scheme, h: float, n_steps: int,
-              B: Matrix, f: np.ndarray | LoadSteps, d0: np.ndarray, v0: np.ndarray,
-              a0: np.ndarray, solve: Solve, sink: Sink, every: int = 1,
-              correction: Correction | None = None, work: Work | None = None,
-              on_work: Callable[[int, Work], None] | None = None,
-              restart: Restart | None = None) -> None:
-    r"""March ``n_steps`` steps of size ``h`` from ``(d0, v0, a0)``.
+def integrate(M: Matrix, C: Matrix | None, K: Matrix, B: Matrix, f: np.ndarray | LoadSteps,
+              start: StepState, sink: Sink, control: StepControl, *,
+              correction: Correction | None = None, restart: Restart | None = None) -> None:
+    r"""March ``control.n_steps`` steps of size ``control.h`` from ``start``.
 
     A load that jumps (or kinks) within or at the end of a step enters that step as the linear
     function with the same integral and first moment over the step (:class:`LoadSteps`);
@@ -209,30 +253,32 @@ def integrate(M: Matrix, C: Matrix | None, K: Matrix, s: Scheme, h: float, n_ste
 
     Args:
         M, C, K: the system matrices (``C`` may be ``None``).
-        s: the scheme; ``solve``: :math:`S^{-1}` (:func:`effective_matrix`), factorized once.
         B, f: the load :math:`F(t_k) = B f_k`; ``f`` is ``(n_steps + 1) x L`` or a
             :class:`LoadSteps`.
-        d0, v0, a0: the initial state (``a0`` consistent with the equation of motion under
-            ``f_0``).
-        sink: called at step 0 and after every ``every``-th step, and after the last, with the
-            acceleration under the nodal load :math:`f_k`.
+        start: the initial state (its acceleration consistent with the equation of motion
+            under ``f_0``).
+        sink: called at step 0 and after every ``control.every``-th step, and after the last,
+            with the acceleration under the nodal load :math:`f_k`, and ``sink.on_work`` with
+            the energy flows accumulated since step 0.
+        control: :class:`StepControl`: the scheme, the step, the number of steps, the solve
+            with :math:`S`, how often the state is reported.
         correction: the constraint correction (the generalized-inverse form), or ``None``.
-        work: accumulated energy flows (updated in place); ``on_work(step, work)`` is called
-            with them where ``sink`` is.
         restart: needed when ``f`` has pairs (:data:`Restart`).
     """
+    s, h, n_steps, solve, every = (control.scheme, control.h, control.n_steps, control.solve,
+                                   control.every)
+    work = Work()
     load = f if isinstance(f, LoadSteps) else LoadSteps(np.asarray(f))
     if load.pairs and restart is None:
         raise ValueError("a load with jumps needs a restart of the acceleration")
-    d, v, a = (np.array(x, dtype=float, copy=True) for x in (d0, v0, a0))
+    d, v, a = (np.array(x, dtype=float, copy=True) for x in (start.d, start.v, start.a))
     beta, gamma, am, af = s.beta, s.gamma, s.alpha_m, s.alpha_f
     c1, c2, c3 = h * h * (0.5 - beta), h * (1 - gamma), beta * h * h
     Bt = B.T
     damped = C is not None
     Cm: Matrix = C if C is not None else M  # used only when damped
     sink(0, d, v, a)
-    if on_work is not None and work is not None:
-        on_work(0, work)
+    sink.on_work(0, work)
     carried = load.f[0]  # the load factors the acceleration a was computed with
     for n in range(n_steps):
         fs, fe = load.start(n), load.end(n)
@@ -254,11 +300,10 @@ def integrate(M: Matrix, C: Matrix | None, K: Matrix, s: Scheme, h: float, n_ste
         v_new = v_star + gamma * h * a_new
         if correction is not None:  # remove the rounding that would drift
             d_new, v_new = correction.apply_both(d_new, target, v_new, correction.rate(n + 1))
-        if work is not None:
-            work.external += float((Bt @ (d_new - d)) @ (0.5 * (fs + fe)))
-            if damped:
-                vm = 0.5 * (v + v_new)
-                work.dissipated += h * float(vm @ (Cm @ vm))
+        work.external += float((Bt @ (d_new - d)) @ (0.5 * (fs + fe)))
+        if damped:
+            vm = 0.5 * (v + v_new)
+            work.dissipated += h * float(vm @ (Cm @ vm))
         d, v, a = d_new, v_new, a_new
         carried = fe
         if (n + 1) % every == 0 or n + 1 == n_steps:
@@ -266,5 +311,4 @@ def integrate(M: Matrix, C: Matrix | None, K: Matrix, s: Scheme, h: float, n_ste
             shown = a if restart is None or np.array_equal(nodal, fe) else \
                 restart(n + 1, d, v, nodal)
             sink(n + 1, d, v, shown)
-            if on_work is not None and work is not None:
-                on_work(n + 1, work)
+            sink.on_work(n + 1, work)

@@ -27,10 +27,16 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from substruct.analysis.modes.eigen import SPARSE_ABOVE, modes
-from substruct.analysis.transient.integrators import Scheme, Work, effective_matrix, integrate
+from substruct.analysis.transient.integrators import (
+    Scheme,
+    StepControl,
+    StepState,
+    effective_matrix,
+    integrate,
+)
 from substruct.analysis.frf.modal import RIGID_ROOT_FRACTION, static_solver
 from substruct.analysis.transient.record import Physical, Recorder
-from substruct.analysis.transient.results import TransientOptions
+from substruct.analysis.transient.options import TransientOptions
 
 __all__ = ["MODAL_DEFAULT_COUNT", "coupled_basis", "modal_run"]
 
@@ -98,6 +104,6 @@ def modal_run(phys: Physical, s: Scheme, h: float, n_steps: int, d0: np.ndarray,
         return np.asarray(Be @ fv - Ke @ eta - (Ce @ etav if Ce is not None else 0.0))
 
     rec = Recorder(mphys, Me, Ke, h, None, opts.field_every, offset=lambda step: R @ f[step])
-    integrate(Me, Ce, Ke, s, h, n_steps, Be, loads, eta0, etav0, r0, lambda r: inv @ r, rec,
-              opts.every, None, Work(), rec.on_work, restart)
+    integrate(Me, Ce, Ke, Be, loads, StepState(eta0, etav0, r0), rec,
+              StepControl(s, h, n_steps, lambda r: inv @ r, opts.every), restart=restart)
     return rec

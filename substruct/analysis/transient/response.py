@@ -41,17 +41,15 @@ from substruct.analysis.checks import (
 )
 from substruct.analysis.transient.integrators import (
     Correction,
-    LoadSteps,
     Restart,
     Scheme,
-    Work,
+    StepControl,
+    StepState,
     effective_matrix,
     integrate,
-    scheme,
 )
 from substruct.analysis.modes.krylov import eliminate
 from substruct.analysis.formulations.projection import constrained_acceleration
-from substruct.analysis.results import DEFAULT_TOLERANCE
 from substruct.analysis.transient.base import BaseMotion, Motion, ground_history, influence
 from substruct.analysis.transient.loads import for_scheme
 from substruct.analysis.transient.initial import InitialStateError, check_initial, static_state
@@ -61,7 +59,13 @@ from substruct.analysis.transient.record import (
     Recorder,
     constraint_force_solver,
 )
-from substruct.analysis.transient.results import Transient, TransientOptions
+from substruct.analysis.transient.options import (
+    InitialConditions,
+    LoadHistory,
+    TransientOptions,
+    TransientOutputs,
+)
+from substruct.analysis.transient.results import Transient
 from substruct.linalg.constraints import independent_rows, particular_solution, pinv_sym
 from substruct.linalg.factorize import Solve, factorizer
 from substruct.linalg.scaling import (
@@ -71,8 +75,8 @@ from substruct.linalg.scaling import (
 )
 from substruct.vocabulary import GENERALIZED_INVERSE, MODAL, NULL_SPACE, TRANSIENT_FORMS
 
-__all__ = ["TRANSIENT_FORMS", "DENSE_STEP", "TransientOptions", "transient", "direct_run",
-           "initial_state"]
+__all__ = ["TRANSIENT_FORMS", "DENSE_STEP", "LoadHistory", "InitialConditions",
+           "TransientOutputs", "TransientOptions", "transient", "direct_run", "initial_state"]
 
 #: Up to this many coordinates the step runs on dense arrays (an explicit inverse of S).
 DENSE_STEP = 200
@@ -214,9 +218,9 @@ def direct_run(phys: Physical, form: str, s: Scheme, h: float, n_steps: int, d0:
         # the generalized-inverse form integrates q itself: no particular solution to add
         rec = Recorder(dataclasses.replace(phys, qp=None), M, K, h, forces, opts.field_every)
         ground = None if mo is None else (lambda k: mo.e * mo.g[k, 2])
-        integrate(M, C, K, s, h, n_steps, B, phys.loads, d0, v0, a0, solve, rec, opts.every,
-                  corr, Work(), rec.on_work, restarter(phys.M, phys.C, phys.K, phys.B, phys.A,
-                                                       ground))
+        integrate(M, C, K, B, phys.loads, StepState(d0, v0, a0), rec,
+                  StepControl(s, h, n_steps, solve, opts.every), correction=corr,
+                  restart=restarter(phys.M, phys.C, phys.K, phys.B, phys.A, ground))
         return rec
     el = eliminate(sp.csr_array(M), phys.A)
     T = sp.csr_array(el.T)
@@ -244,9 +248,9 @@ def direct_run(phys: Physical, form: str, s: Scheme, h: float, n_steps: int, d0:
     nphys = Physical(phys.M, phys.C, phys.K, phys.B, phys.f, phys.A, phys.b, phys.O, T, qp,
                      phys.motion, phys.pairs)
     rec = Recorder(nphys, Mt, Kt, h, forces, opts.field_every)
-    integrate(Mt, Ct, Kt, s, h, n_steps, Bt, loads, p0, pv0, pa0, solve, rec, opts.every,
-              None, Work(), rec.on_work,
-              restarter(Mt, Ct, Kt, Bt, sp.csr_array((0, Mt.shape[0]))))
+    integrate(Mt, Ct, Kt, Bt, loads, StepState(p0, pv0, pa0), rec,
+              StepControl(s, h, n_steps, solve, opts.every),
+              restart=restarter(Mt, Ct, Kt, Bt, sp.csr_array((0, Mt.shape[0]))))
     return rec
 
 
@@ -262,60 +266,53 @@ def _difference(a: Recorder, b: Recorder) -> float:
 
 def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
               K: sp.sparray | np.ndarray, A: sp.sparray | np.ndarray | None,
-              b: np.ndarray | None, B: sp.sparray | np.ndarray, f: np.ndarray, dt: float,
-              n_steps: int, outputs: sp.sparray | np.ndarray, *,
-              output_names: Sequence[str] = (), constraint_labels: Sequence[str] = (),
-              d0: np.ndarray | None = None, v0: np.ndarray | None = None,
-              method: str = GENERALIZED_INVERSE, checks: Sequence[str] = (),
-              tolerance: float = DEFAULT_TOLERANCE, options: TransientOptions | None = None,
-              base: BaseMotion | None = None, what: str = "transient",
-              pairs: Mapping[int, tuple[np.ndarray, np.ndarray]] | None = None,
-              static: bool = False) -> Transient:
+              b: np.ndarray | None, load: LoadHistory, outputs: TransientOutputs, *,
+              constraint_labels: Sequence[str] = (), initial: InitialConditions | None = None,
+              options: TransientOptions | None = None) -> Transient:
     r"""Time histories of :math:`M \ddot q + C \dot q + K q = B f(t) + Q^c`, :math:`A q = b`
-    (eqs 5, 10), by ``method``, checked by ``checks``.
+    (eqs 5, 10), by ``options.method``, checked by ``options.checks``.
 
     Args:
         M, C, K: ``n x n`` (``M`` may be singular on massless coordinates; ``C`` may be
             ``None``).
-        A, b: ``m x n`` constraint rows and their right-hand side (``None``: none, ``0``).
-        B, f: the loads, :math:`P(t_k) = B f_k`; ``f`` is ``(n_steps + 1) x L`` at
-            :math:`t_k = k\, dt`.
-        dt, n_steps: the constant step and the number of steps.
-        outputs: ``n_out x n`` output rows; ``output_names`` their names.
-        d0, v0: the initial displacement and velocity (zero if ``None``); they must satisfy
-            :math:`A q_0 = b`, :math:`A \dot q_0 = 0` (refused otherwise, with the residual).
-        static: start from the constrained static state under :math:`P(0) = B f_0`,
-            :math:`K q + A^T \lambda = P(0)`, :math:`A q = b(0)`
-            (:func:`substruct.analysis.transient.initial.static_state`; ``d0`` must be
-            ``None``).
-        pairs: step -> the load factors at its start and end, for the steps over which a load
-            jumps or kinks (:func:`substruct.analysis.transient.loads.step_pairs`): the
-            integration stays second order at the discontinuity.
-        method, checks: forms of :data:`TRANSIENT_FORMS`.
-        tolerance: the largest agreement a check may have.
-        options: :class:`TransientOptions`.
-        base: a prescribed ground motion at grounding rows of ``A``
-            (:mod:`substruct.analysis.transient.base`): :math:`A q = b + e g(t)`; ``d0`` and
-            ``v0`` are then relative to the pseudo-static position :math:`r g(0)`,
-            :math:`r \dot g(0)`.
+        A, b: ``m x n`` constraint rows and their right-hand side (``None``: none, ``0``);
+            ``constraint_labels`` the names of the rows.
+        load: :class:`~substruct.analysis.transient.options.LoadHistory`, the loads
+            :math:`P(t_k) = B f_k` at :math:`t_k = k\, dt`, ``k = 0 .. n_steps``, their jumps
+            and a moving ground.
+        outputs: :class:`~substruct.analysis.transient.options.TransientOutputs`, the rows
+            recorded and their names.
+        initial: :class:`~substruct.analysis.transient.options.InitialConditions` (``None``:
+            at rest, :math:`q_0 = 0`).
+        options: :class:`~substruct.analysis.transient.options.TransientOptions`: the form,
+            its checks and their tolerance, the integrator, what is recorded.
 
     Returns:
         :class:`~substruct.analysis.transient.results.Transient` of the main form, with the
         checks' ``agreement``.
 
     Raises:
-        ValueError: bad input (an unknown form, inconsistent initial conditions, massless
-            coordinates the constraints leave undetermined).
-        CheckError: a check disagrees by more than ``tolerance``.
+        ValueError: bad input (inconsistent initial conditions, massless coordinates the
+            constraints leave undetermined).
+        CheckError: a check disagrees by more than ``options.tolerance``.
+
+    Examples:
+        A unit mass on a unit spring released from ``q = 1``: :math:`q(t) = \cos t`.
+
+        >>> import numpy as np
+        >>> load = LoadHistory(np.zeros((1, 0)), np.zeros((101, 0)), 0.01, 100)
+        >>> r = transient(np.eye(1), None, np.eye(1), None, None, load,
+        ...               TransientOutputs(np.eye(1), ["q"]),
+        ...               initial=InitialConditions(d0=np.ones(1)))
+        >>> bool(abs(r.displacement[-1, 0] - np.cos(1.0)) < 1e-4)
+        True
     """
     opts = options or TransientOptions()
-    for name in (method, *checks):
-        if name not in TRANSIENT_FORMS:
-            raise ValueError(f"unknown method {name!r}; expected one of "
-                             f"{', '.join(TRANSIENT_FORMS)}")
-    if not dt > 0 or n_steps < 1:
-        raise ValueError(f"need dt > 0 and at least one step, got dt={dt!r}, {n_steps} steps")
-    s = scheme(opts.integrator, opts.rho_inf)
+    init = initial or InitialConditions()
+    B, dt, n_steps, base = load.B, load.dt, load.n_steps, load.base
+    method, tolerance = opts.method, opts.tolerance
+    d0, v0, static = init.d0, init.v0, init.static
+    s = opts.scheme
     Ms, Ks = sp.csr_array(M, dtype=float), sp.csr_array(K, dtype=float)
     Cs = None if C is None or sp.csr_array(C).count_nonzero() == 0 else sp.csr_array(C)
     n = Ms.shape[0]
@@ -324,11 +321,8 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
     eq = equilibrate(A0, b0, labels=list(constraint_labels) or None)
     Ae, be = sp.csr_array(eq.A), np.asarray(eq.b)
     Bs = sp.csr_array(B, dtype=float)
-    f = np.asarray(f, dtype=float).reshape(n_steps + 1, -1)
-    O = sp.csr_array(outputs, dtype=float)
-    if static and d0 is not None:
-        raise InitialStateError("give the initial displacement or start from the static "
-                                "state, not both")
+    f = np.asarray(load.f, dtype=float).reshape(n_steps + 1, -1)
+    O = sp.csr_array(outputs.rows, dtype=float)
     d0 = (static_state(Ks, Ae, be, np.asarray(Bs @ f[0])) if static else np.zeros(n)
           if d0 is None else np.asarray(d0, dtype=float).ravel())
     v0 = np.zeros(n) if v0 is None else np.asarray(v0, dtype=float).ravel()
@@ -355,7 +349,8 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
 
     d0, a0 = initial_state(Ms, Ks, Ae, np.asarray(Bs @ f[0]), d0, force0,
                            None if motion is None else motion.e * motion.g[0, 2])
-    phys = Physical(Ms, Cs, Ks, Bs, f, Ae, be, O, None, qp, motion, for_scheme(pairs or {}, s))
+    phys = Physical(Ms, Cs, Ks, Bs, f, Ae, be, O, None, qp, motion,
+                    for_scheme(load.pairs or {}, s))
 
     def run(form: str) -> Recorder:
         if form == "modal":
@@ -363,12 +358,12 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
         return direct_run(phys, form, s, dt, n_steps, d0, v0, a0, opts)
 
     main = run(method)
-    agreement = {m: _difference(run(m), main) for m in check_methods(method, checks)}
-    require_agreement(what, method, agreement, tolerance)
+    agreement = {m: _difference(run(m), main) for m in check_methods(method, opts.checks)}
+    require_agreement(opts.what, method, agreement, tolerance)
     r = main.arrays()
     lam = np.asarray(eq.scale.apply(r["lam"].T)).T if r["lam"].size else r["lam"]
     return Transient(method=method, integrator=s.name, rho_inf=s.rho_inf, dt=dt,
-                     t=r["t"], outputs=list(output_names), displacement=r["d"],
+                     t=r["t"], outputs=list(outputs.names), displacement=r["d"],
                      velocity=r["v"], acceleration=r["a"],
                      constraint_labels=list(constraint_labels), constraint_forces=lam,
                      constraint_residual=r["residual"],

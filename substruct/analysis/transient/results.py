@@ -21,7 +21,7 @@ import numpy as np
 
 from substruct.analysis.results import DEFAULT_TOLERANCE
 
-__all__ = ["TransientOptions", "ENERGY_LABELS", "Transient"]
+__all__ = ["ENERGY_LABELS", "Transient"]
 
 #: The columns of :attr:`Transient.energy`.
 ENERGY_LABELS = ("kinetic", "strain", "external_work", "dissipated")
@@ -97,27 +97,3 @@ class Transient:
         integrator)."""
         e = self.energy
         return e[:, 0] + e[:, 1] - e[:, 2] + e[:, 3]
-
-
-@dataclass(frozen=True)
-class TransientOptions:
-    """How a transient run is made.
-
-    Attributes:
-        integrator, rho_inf: :func:`substruct.analysis.transient.integrators.scheme`.
-        every: record every this many steps; ``field_every``: keep the full field every this
-            many steps (0: never).
-        forces: compute the constraint forces.
-        factorization: of the effective matrix (:func:`substruct.linalg.factorize.factorizer`).
-        modal_count: the modes of the modal form (``None``: all of a dense model).
-        modal_solver: their eigensolver strategy (:func:`substruct.analysis.api.choose_solver`).
-    """
-
-    integrator: str = "newmark"
-    rho_inf: float = 1.0
-    every: int = 1
-    field_every: int = 0
-    forces: bool = True
-    factorization: str = "auto"
-    modal_count: int | None = None
-    modal_solver: str = "auto"
