@@ -33,7 +33,7 @@ from substruct.analysis.checks import (
     receptance_difference,
     require_agreement,
 )
-from substruct.analysis.formulations.coupling import receptance
+from substruct.analysis.formulations.coupling import receptance_of
 from substruct.analysis.modes.eigen import (
     SOLVERS,
     SPARSE_ABOVE,
@@ -89,16 +89,13 @@ EXACT_ZERO = "exact-zero"
 
 
 
-def _sweep(K: sp.sparray, M: sp.sparray, C: sp.sparray | None, A: sp.sparray,
-           omegas: np.ndarray, R: sp.sparray | None, method: str, inputs: sp.sparray,
-           outputs: sp.sparray, labels: list[str] | None, progress: Progress | None
-           ) -> np.ndarray:
+def _sweep(system: ConstrainedSystem, omegas: np.ndarray, method: str, inputs: sp.sparray,
+           outputs: sp.sparray, progress: Progress | None) -> np.ndarray:
     out = []
     total = len(omegas)
     for start in range(0, total, CHUNK):
         w = omegas[start:start + CHUNK]
-        out.append(receptance(K, M, C, A, w, R, method=method, inputs=inputs, outputs=outputs,
-                              labels=labels))
+        out.append(receptance_of(system, w, method, inputs, outputs))
         if progress is not None:
             progress(min(start + CHUNK, total), total, method)
     if not out:
@@ -216,7 +213,7 @@ def system_receptance_sweep(system: ConstrainedSystem, omegas: Sequence[float] |
     out_rows = sp.csr_array(outputs, dtype=float)
     w = np.atleast_1d(np.asarray(omegas, dtype=float))
     m = system.m
-    labels = list(system.constraint_labels)
+    labels = None if system.constraint_labels is None else list(system.constraint_labels)
     k_out = out_rows.shape[0]
     # no free coordinate: the exact H is zero, every figure is taken against the compliance
     # scale h0 of the problem (analysis/checks.py), the main formulation's rounding included
@@ -229,7 +226,7 @@ def system_receptance_sweep(system: ConstrainedSystem, omegas: Sequence[float] |
         # the residual's rows are the system's, equilibrated with their R: its figure is that
         # of D A
         rows = sp.csr_array(sp.vstack([out_rows, As])) if m else out_rows
-        full = _sweep(Ks, Ms, Cs, As, w, Rs, method, forces, rows, labels, progress)
+        full = _sweep(system, w, method, forces, rows, progress)
         scale = max(_largest(full[:, :k_out]), floor)
         residual = 0.0
         if m and full.size:
@@ -241,7 +238,7 @@ def system_receptance_sweep(system: ConstrainedSystem, omegas: Sequence[float] |
         agreement = sweep_checks(Ks, Ms, Cs, As, w, forces, out_rows, H, method, checks, labels)
         method = PRODUCTION_SWEEP
     for check in [] if production else check_methods(method, checks):
-        Hc = _sweep(Ks, Ms, Cs, As, w, Rs, check, forces, out_rows, labels, progress)
+        Hc = _sweep(system, w, check, forces, out_rows, progress)
         agreement[check] = receptance_difference(Hc, H, floor)
     if held:  # the main formulation against the exact zero
         agreement[EXACT_ZERO] = max((float(np.abs(Hk).max(initial=0.0)) for Hk in H),
