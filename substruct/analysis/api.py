@@ -21,7 +21,7 @@ and with :class:`~substruct.analysis.errors.AnalysisInputError` (or another of
 
 from __future__ import annotations
 
-from typing import Protocol, Sequence
+from typing import Any, Sequence
 
 import numpy as np
 import scipy.sparse as sp
@@ -33,7 +33,7 @@ from substruct.analysis.checks import (
     receptance_difference,
     require_agreement,
 )
-from substruct.analysis.formulations.coupling import receptance
+from substruct.analysis.formulations.coupling import receptance_of
 from substruct.analysis.modes.eigen import (
     SOLVERS,
     SPARSE_ABOVE,
@@ -54,11 +54,20 @@ from substruct.analysis.frf.production import (
     sweep_checks,
 )
 from substruct.analysis.results import DEFAULT_TOLERANCE, Receptance
-from substruct.linalg.scaling import equilibrate
+from substruct.analysis.system import (
+    ConstrainedSystem,
+    ModesOptions,
+    Progress,
+    SweepOptions,
+)
+from substruct.linalg.system import Matrix
 from substruct.vocabulary import GENERALIZED_INVERSE
 
 __all__ = [
+    "ConstrainedSystem",
+    "ModesOptions",
     "Progress",
+    "SweepOptions",
     "SOLVERS",
     "SPARSE_ABOVE",
     "SolverChoice",
@@ -66,14 +75,8 @@ __all__ = [
     "choose_solver",
     "modes",
     "receptance_sweep",
+    "system_receptance_sweep",
 ]
-
-
-class Progress(Protocol):
-    """``progress(done, total, label)``: called as work advances (``done`` of ``total`` steps
-    of what ``label`` names: a formulation during a frequency sweep, a level in a study)."""
-
-    def __call__(self, done: int, total: int, label: str, /) -> None: ...
 
 
 #: Frequencies per receptance call in a sweep (progress is reported between calls).
@@ -86,16 +89,13 @@ EXACT_ZERO = "exact-zero"
 
 
 
-def _sweep(K: sp.sparray, M: sp.sparray, C: sp.sparray | None, A: sp.sparray,
-           omegas: np.ndarray, R: sp.sparray | None, method: str, inputs: sp.sparray,
-           outputs: sp.sparray, labels: list[str] | None, progress: Progress | None
-           ) -> np.ndarray:
+def _sweep(system: ConstrainedSystem, omegas: np.ndarray, method: str, inputs: sp.sparray,
+           outputs: sp.sparray, progress: Progress | None) -> np.ndarray:
     out = []
     total = len(omegas)
     for start in range(0, total, CHUNK):
         w = omegas[start:start + CHUNK]
-        out.append(receptance(K, M, C, A, w, R, method=method, inputs=inputs, outputs=outputs,
-                              labels=labels))
+        out.append(receptance_of(system, w, method, inputs, outputs))
         if progress is not None:
             progress(min(start + CHUNK, total), total, method)
     if not out:
@@ -103,18 +103,66 @@ def _sweep(K: sp.sparray, M: sp.sparray, C: sp.sparray | None, A: sp.sparray,
     return np.concatenate(out, axis=0)
 
 
-def receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
-                     C: sp.sparray | np.ndarray | None, A: sp.sparray | np.ndarray | None,
-                     omegas: Sequence[float] | np.ndarray,
-                     inputs: sp.sparray | np.ndarray, outputs: sp.sparray | np.ndarray, *,
-                     R: sp.sparray | np.ndarray | None = None,
-                     method: str = GENERALIZED_INVERSE, checks: Sequence[str] = (),
-                     tolerance: float = DEFAULT_TOLERANCE,
-                     input_names: Sequence[str] | None = None,
-                     output_names: Sequence[str] | None = None,
-                     constraint_labels: Sequence[str] | None = None,
-                     progress: Progress | None = None, what: str = "frf",
-                     modal: ModalOptions | None = None) -> Receptance:
+def receptance_sweep(system: ConstrainedSystem | Matrix, *args: Any,
+                     options: SweepOptions | None = None, **kwargs: Any) -> Receptance:
+    r"""Receptances of a constrained system at a frequency grid, with their cross-checks and
+    constraint residual (eqs 11-15).
+
+    The call is ``receptance_sweep(system, omegas, inputs, outputs, *, options=None)`` with a
+    :class:`~substruct.linalg.system.ConstrainedSystem` and
+    :class:`~substruct.analysis.system.SweepOptions` (:func:`system_receptance_sweep`, which
+    see).
+
+    The compatibility form ``receptance_sweep(K, M, C, A, omegas, inputs, outputs, *, R=None,
+    method=..., checks=(), tolerance=1e-6, input_names=None, output_names=None,
+    constraint_labels=None, progress=None, what="frf", modal=None)`` takes the matrices (in
+    the order ``K, M``) and the options loose, as before the system type: it builds both and
+    calls :func:`system_receptance_sweep`.
+
+    Examples
+    --------
+    One unit mass on a unit spring, a second coordinate held by ``q_2 = 0``: at
+    ``omega = 1/2`` the receptance is ``1 / (1 - 1/4)``, by eq 15 and checked by KKT.
+
+    >>> import numpy as np
+    >>> from substruct.analysis.api import receptance_sweep
+    >>> from substruct.analysis.system import ConstrainedSystem, SweepOptions
+    >>> s = ConstrainedSystem.of(np.eye(2), None, np.eye(2), [[0.0, 1.0]])
+    >>> E = np.array([[1.0], [0.0]])
+    >>> res = receptance_sweep(s, [0.5], E, E.T, options=SweepOptions(checks=["kkt"]))
+    >>> np.round(res.H.real, 6)
+    array([[[1.333333]]])
+    >>> bool(res.agreement["kkt"] < 1e-9), bool(res.constraint_residual < 1e-9)
+    (True, True)
+    """
+    if isinstance(system, ConstrainedSystem):
+        return system_receptance_sweep(system, *args, options=options, **kwargs)
+    if options is not None:
+        raise TypeError("receptance_sweep(): options= goes with a ConstrainedSystem; the matrix "
+                        "form takes the options as keywords")
+    return _compatible_sweep(system, *args, **kwargs)
+
+
+def _compatible_sweep(K: Matrix, M: Matrix, C: Matrix | None, A: Matrix | None,
+                      omegas: Sequence[float] | np.ndarray, inputs: Matrix, outputs: Matrix, *,
+                      R: Matrix | None = None, method: str = GENERALIZED_INVERSE,
+                      checks: Sequence[str] = (), tolerance: float = DEFAULT_TOLERANCE,
+                      input_names: Sequence[str] | None = None,
+                      output_names: Sequence[str] | None = None,
+                      constraint_labels: Sequence[str] | None = None,
+                      progress: Progress | None = None, what: str = "frf",
+                      modal: ModalOptions | None = None) -> Receptance:
+    """The loose-argument form of :func:`receptance_sweep`: options, system, then the call."""
+    options = SweepOptions(method=method, checks=checks, tolerance=tolerance,
+                           input_names=input_names, output_names=output_names,
+                           progress=progress, what=what, modal=modal)
+    system = ConstrainedSystem.of(M, C, K, A, R=R, constraint_labels=constraint_labels)
+    return system_receptance_sweep(system, omegas, inputs, outputs, options=options)
+
+
+def system_receptance_sweep(system: ConstrainedSystem, omegas: Sequence[float] | np.ndarray,
+                            inputs: Matrix, outputs: Matrix, *,
+                            options: SweepOptions | None = None) -> Receptance:
     r"""Receptances of a system under ``A q = R F`` at a frequency grid, with their
     cross-checks and constraint residual (eqs 11-15).
 
@@ -122,57 +170,50 @@ def receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
                \text{residual} = \frac{\max_k |A \hat H(\omega_k) E - R E|}{\max |H|}
 
     Args:
-        K, M, C: ``n x n`` (``C`` may be ``None``).
-        A: ``m x n`` constraint rows, any rank (``None`` for none).
+        system: ``K``, ``M``, ``C``, the rows ``A`` of any rank and ``R``, which ties the
+            constraint to the force (:class:`~substruct.linalg.system.ConstrainedSystem`; its
+            constraint labels name the rows in error messages).
         omegas: circular frequencies (rad/s).
         inputs: ``n x p`` generalized forces ``e_j`` (columns).
         outputs: ``q x n`` output rows ``o_i``.
-        R: ``m x n``, ties the constraint to the force (``None``: ``A q = 0``).
-        method: the main formulation (``generalized-inverse``, ``null-space``, ``kkt``),
+        options: (:class:`~substruct.analysis.system.SweepOptions`, its defaults if ``None``)
+            ``method``: the main formulation (``generalized-inverse``, ``null-space``, ``kkt``),
             ``"modal"`` (modal superposition with a residual flexibility, checked by the direct
             ``checks`` at a few frequencies:
             :func:`substruct.analysis.frf.modal.modal_receptance_sweep`) or ``"auto"``
             (:func:`substruct.analysis.frf.modal.frf_method`).
-        checks: check formulations (the main one and repeats are skipped).
-        tolerance: the largest ``max |H_check - H| / max |H|`` a check may have (when the
+            ``checks``: check formulations (the main one and repeats are skipped).
+            ``tolerance``: the largest ``max |H_check - H| / max |H|`` a check may have (when the
             constraints hold every coordinate, ``H`` is exactly zero and the figures are
             ``max |H_check - H| / h0``, with ``h0`` the compliance scale
             :func:`substruct.analysis.checks.compliance_scale`; the main formulation is then
             checked against zero too, as ``agreement["exact-zero"]``).
-        input_names, output_names: names of the inputs and outputs (default ``"1"``, ...).
-        constraint_labels: constraint names for error messages.
-        progress: called as ``progress(done, total, method)`` during the sweeps.
-        what: how the analysis is named in error messages.
-        modal: options of the modal sweep (the defaults of
-            :class:`~substruct.analysis.frf.modal.ModalOptions` if ``None``).
+            ``input_names``, ``output_names``: names of the inputs and outputs (default
+            ``"1"``, ...).  ``progress``: called as ``progress(done, total, method)`` during
+            the sweeps.  ``what``: how the analysis is named in error messages.  ``modal``:
+            options of the modal sweep (:class:`~substruct.analysis.frf.modal.ModalOptions`).
 
     Raises:
         CheckError: a check disagrees by more than ``tolerance``.
         ConstraintError: a redundant constraint row with an inconsistent ``R``.
         AnalysisInputError: a singular system (e.g. eq 15 at ``omega = 0``).
-        ValueError: an unknown method (a programming error).
     """
-    method = frf_method(method, K.shape[0], R)
-    As = sp.csr_array((0, K.shape[0])) if A is None or np.size(A) == 0 else \
-        sp.csr_array(A, dtype=float)
-    held = holds_every_coordinate(As, R, K.shape[0])
+    opts = options if options is not None else SweepOptions()
+    K, M, C, A, R = system.K, system.M, system.C, system.A, system.R
+    method = frf_method(opts.method, system.n, R)
+    held = holds_every_coordinate(A, R, system.n)
     if held and method == "modal":  # no mode to sum: the direct form gives the exact zero
         method = GENERALIZED_INVERSE
     if method == "modal":
-        return modal_receptance_sweep(K, M, C, A, omegas, inputs, outputs, R=R,
-                                      options=modal or ModalOptions(), checks=checks,
-                                      tolerance=tolerance, input_names=input_names,
-                                      output_names=output_names, what=what)
-    Ks = sp.csr_array(K, dtype=float)
-    n = Ks.shape[0]
-    Ms = sp.csr_array(M, dtype=float)
-    Cs = None if C is None else sp.csr_array(C, dtype=float)
+        return modal_receptance_sweep(system, omegas, inputs, outputs, options=opts)
+    checks, tolerance, progress, what = opts.checks, opts.tolerance, opts.progress, opts.what
+    Ks, Ms, Cs, As, Rs = K, M, C, A, R
+    n = system.n
     forces = sp.csc_array(inputs, dtype=float)
     out_rows = sp.csr_array(outputs, dtype=float)
     w = np.atleast_1d(np.asarray(omegas, dtype=float))
-    m = As.shape[0]
-    Rs = None if R is None or not sp.csr_array(R).nnz else sp.csr_array(R, dtype=float)
-    labels = None if constraint_labels is None else list(constraint_labels)
+    m = system.m
+    labels = None if system.constraint_labels is None else list(system.constraint_labels)
     k_out = out_rows.shape[0]
     # no free coordinate: the exact H is zero, every figure is taken against the compliance
     # scale h0 of the problem (analysis/checks.py), the main formulation's rounding included
@@ -182,15 +223,14 @@ def receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
         H = production_sweep(Ks, Ms, Cs, As, w, forces, out_rows, progress)
         residual = constraint_residual(Ks, Ms, Cs, As, w, forces, H)
     else:
-        # the residual's rows scaled to unit norm with their R: its figure is that of D A
-        eq = equilibrate(As, R=Rs, labels=labels) if m else None
-        rows = sp.csr_array(sp.vstack([out_rows, eq.A])) if eq is not None else out_rows
-        full = _sweep(Ks, Ms, Cs, As, w, Rs, method, forces, rows, labels, progress)
+        # the residual's rows are the system's, equilibrated with their R: its figure is that
+        # of D A
+        rows = sp.csr_array(sp.vstack([out_rows, As])) if m else out_rows
+        full = _sweep(system, w, method, forces, rows, progress)
         scale = max(_largest(full[:, :k_out]), floor)
         residual = 0.0
-        if eq is not None and full.size:
-            RE = (sp.csr_array(eq.R) @ forces).toarray() if eq.R is not None else \
-                np.zeros((m, forces.shape[1]))
+        if m and full.size:
+            RE = (Rs @ forces).toarray() if Rs is not None else np.zeros((m, forces.shape[1]))
             residual = float(np.abs(full[:, k_out:] - RE[None]).max() / scale)
         H = _leading_rows(full, k_out)
     agreement = {}
@@ -198,7 +238,7 @@ def receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
         agreement = sweep_checks(Ks, Ms, Cs, As, w, forces, out_rows, H, method, checks, labels)
         method = PRODUCTION_SWEEP
     for check in [] if production else check_methods(method, checks):
-        Hc = _sweep(Ks, Ms, Cs, As, w, Rs, check, forces, out_rows, labels, progress)
+        Hc = _sweep(system, w, check, forces, out_rows, progress)
         agreement[check] = receptance_difference(Hc, H, floor)
     if held:  # the main formulation against the exact zero
         agreement[EXACT_ZERO] = max((float(np.abs(Hk).max(initial=0.0)) for Hk in H),
@@ -206,9 +246,9 @@ def receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
     require_agreement(what, method, agreement, tolerance)
     if held:
         H[...] = 0.0
-    names_in = list(input_names) if input_names is not None else \
+    names_in = list(opts.input_names) if opts.input_names is not None else \
         [str(j + 1) for j in range(forces.shape[1])]
-    names_out = list(output_names) if output_names is not None else \
+    names_out = list(opts.output_names) if opts.output_names is not None else \
         [str(i + 1) for i in range(k_out)]
     return Receptance(method=method, omega=w, H=H, inputs=names_in, outputs=names_out,
                       agreement=agreement, constraint_residual=residual,

@@ -21,6 +21,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from substruct.linalg.constraints import ConstraintError
+from substruct.linalg.system import ConstrainedSystem
 from substruct.substructure import PointError, Substructure
 
 __all__ = ["PointRef", "Connection", "LinearConstraint", "Assembly", "assemble"]
@@ -90,6 +91,14 @@ class Assembly:
     R: sp.csr_array
     constraint_labels: list[str]
     dof_labels: list[str] = field(default_factory=list)
+
+    @property
+    def system(self) -> ConstrainedSystem:
+        """The stacked system with all its constraints, as every analysis takes it
+        (:class:`~substruct.linalg.system.ConstrainedSystem`: CSR, rows equilibrated)."""
+        return ConstrainedSystem.of(self.M, self.C, self.K, self.A, self.b, self.R,
+                                    coordinate_labels=self.dof_labels or None,
+                                    constraint_labels=self.constraint_labels)
 
     @property
     def n_dof(self) -> int:

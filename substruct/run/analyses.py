@@ -1,10 +1,12 @@
 r"""The analyses a case asks for, on its model: a thin adapter from ``case.analysis`` to
 :mod:`substruct.analysis.api`.
 
-* ``analysis.modes``: :func:`substruct.analysis.api.modes` (eqs 28-34) with the case's method,
-  checks, solver and tolerance, for the model and for each variant (some constraint rows left
-  out);
-* ``analysis.frf``: :func:`substruct.analysis.api.receptance_sweep` (eqs 11-15) at the case's
+* ``analysis.modes``: :func:`substruct.analysis.api.modes` (eqs 28-34) on the model's
+  :class:`~substruct.analysis.system.ConstrainedSystem` with the case's method, checks, solver
+  and tolerance (:class:`~substruct.analysis.system.ModesOptions`), for the model and for each
+  variant (some constraint rows left out);
+* ``analysis.frf``: :func:`substruct.analysis.api.receptance_sweep` (eqs 11-15) on
+  ``Assembly.system`` with :class:`~substruct.analysis.system.SweepOptions`, at the case's
   points,
 
   .. math::  H[k, i, j] = o_i \, \hat H(\omega_k)\, e_j, \qquad e_j = r(p_j)^T, \; o_i = r(p_i)
@@ -27,7 +29,14 @@ import dataclasses
 import numpy as np
 import scipy.sparse as sp
 
-from substruct.analysis.api import Progress, modes, receptance_sweep
+from substruct.analysis.api import (
+    ConstrainedSystem,
+    ModesOptions,
+    Progress,
+    SweepOptions,
+    modes,
+    receptance_sweep,
+)
 from substruct.analysis.errors import INPUT_ERRORS, CheckError
 from substruct.analysis.events import Phase
 from substruct.analysis.frf.quantity import as_quantity
@@ -61,19 +70,20 @@ def modes_result(case: Case, asm: Assembly, A: sp.csr_array, loc: tuple,
     if spec is None:
         raise TypeError(f"case {case.name!r} asks for no modes")
     try:
+        system = ConstrainedSystem.of(asm.M, asm.C, asm.K, A,
+                                      coordinate_labels=asm.dof_labels or None)
+        options = ModesOptions(method=spec.method, checks=spec.check, solver=spec.solver,
+                               tolerance=spec.tolerance, what=what, events=events)
         if spec.band is None:
-            return modes(asm.M, asm.C, asm.K, A, spec.count, method=spec.method,
-                         checks=spec.check, solver=spec.solver, tolerance=spec.tolerance,
-                         what=what, events=events)
-        return _in_band(case, asm, A, what, events)
+            return modes(system, spec.count, options=options)
+        return _in_band(case, system, options)
     except INPUT_ERRORS as err:
         raise case.error(loc, " ".join(str(err).split())) from None
     except CheckError as err:
         raise CheckError(f"{err}; to accept it, raise analysis.modes.tolerance") from None
 
 
-def _in_band(case: Case, asm: Assembly, A: sp.csr_array, what: str,
-             events: Phase | None) -> Modes:
+def _in_band(case: Case, system: ConstrainedSystem, options: ModesOptions) -> Modes:
     """The modes in ``analysis.modes.band``, ``count`` at most: the lowest ``k`` modes are
     computed with ``k`` doubling (from ``min(count, 16)``) until ``count`` of them are in the
     band, one is above it, or every coordinate has its mode; then those in the band are kept
@@ -81,11 +91,10 @@ def _in_band(case: Case, asm: Assembly, A: sp.csr_array, what: str,
     spec = case.analysis.modes
     assert spec is not None and spec.band is not None
     lo, hi = spec.band.min, spec.band.max
-    top = asm.n_dof
+    top = system.K.shape[0]
     k = min(spec.count, 16, top)
     while True:
-        res = modes(asm.M, asm.C, asm.K, A, k, method=spec.method, checks=spec.check,
-                    solver=spec.solver, tolerance=spec.tolerance, what=what, events=events)
+        res = modes(system, k, options=options)
         keep = res.omega >= lo * (1 - 1e-12)
         if hi is not None:
             keep &= res.omega <= hi * (1 + 1e-12)
@@ -155,12 +164,11 @@ def frf_result(case: Case, model: Model, progress: Progress | None) -> Receptanc
     try:
         modal = ModalOptions(spec.modal.count, spec.modal.cutoff, spec.modal.residual,
                              spec.modal.check_frequencies, spec.modal.solver)
-        return as_quantity(receptance_sweep(
-            asm.K, asm.M, asm.C, asm.A, spec.omegas(), inputs, outputs,
-            R=asm.R, method=spec.method, checks=spec.check, tolerance=spec.tolerance,
-            input_names=spec.inputs, output_names=spec.outputs,
-            constraint_labels=asm.constraint_labels, progress=progress, modal=modal),
-            spec.quantity)
+        options = SweepOptions(method=spec.method, checks=spec.check, tolerance=spec.tolerance,
+                               input_names=spec.inputs, output_names=spec.outputs,
+                               progress=progress, modal=modal)
+        return as_quantity(receptance_sweep(asm.system, spec.omegas(), inputs, outputs,
+                                            options=options), spec.quantity)
     except INPUT_ERRORS as err:
         raise case.error(("analysis", "frf"), " ".join(str(err).split())) from None
     except CheckError as err:

@@ -7,6 +7,10 @@ r"""The three independent formulations of a constrained system ``M q'' + C q' + 
   eqs 6-10;
 * :mod:`~substruct.analysis.formulations.receptance`: one frequency sweep per formulation
   (eq 15 by a bordered solve; null space; KKT);
+* :mod:`~substruct.analysis.formulations.forms`: each formulation as an object
+  (:class:`~substruct.analysis.formulations.forms.Formulation`: ``receptance``,
+  ``dense_modes``, ``residual``) and the registry :func:`formulation` the analyses dispatch
+  through;
 * :mod:`~substruct.analysis.formulations.coupling`: the receptance of a constrained system by
   any of them, the paper's ``G`` and ``D`` as printed, and their agreement.
 
@@ -23,6 +27,13 @@ from substruct.analysis.formulations.coupling import (
     receptance_agreement,
     receptance_unconstrained,
 )
+from substruct.analysis.formulations.forms import (
+    GENERALIZED_INVERSE_FORM,
+    KKT_FORM,
+    NULL_SPACE_FORM,
+    Formulation,
+    formulation,
+)
 from substruct.analysis.formulations.projection import (
     MassSplit,
     constrained_acceleration,
@@ -33,6 +44,11 @@ from substruct.analysis.formulations.projection import (
 
 __all__ = [
     "FORMULATIONS",
+    "Formulation",
+    "GENERALIZED_INVERSE_FORM",
+    "KKT_FORM",
+    "NULL_SPACE_FORM",
+    "formulation",
     "MassSplit",
     "constrained_acceleration",
     "constraint_gain",

@@ -29,21 +29,13 @@ from substruct.analysis.formulations.projection import (
     projected_inverse,
     split_mass,
 )
-from substruct.analysis.formulations.receptance import (
-    generalized_inverse_sweep,
-    impedance,
-    inputs_matrix,
-    kkt_sweep,
-    null_space_sweep,
-)
-from substruct.linalg.constraints import (
-    ConstraintError,
-    check_consistent,
-    independent_rows,
-)
+from substruct.analysis.formulations.forms import formulation
+from substruct.analysis.formulations.receptance import impedance, inputs_matrix
+from substruct.linalg.constraints import ConstraintError, check_consistent
 from substruct.linalg.dense import dense
-from substruct.linalg.scaling import equilibrate, mass_column_scale
-from substruct.vocabulary import FORMULATIONS, GENERALIZED_INVERSE, KKT, NULL_SPACE
+from substruct.linalg.scaling import equilibrate
+from substruct.linalg.system import ConstrainedSystem
+from substruct.vocabulary import FORMULATIONS, GENERALIZED_INVERSE
 
 __all__ = [
     "FORMULATIONS",
@@ -57,6 +49,7 @@ __all__ = [
     "paper_G_D",
     "receptance",
     "receptance_agreement",
+    "receptance_of",
 ]
 
 
@@ -141,32 +134,32 @@ def receptance(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
         ConstraintError: if a redundant constraint row carries an inconsistent ``R``.
         substruct.linalg.scaling.ZeroRowError: a constraint row that is exactly zero.
     """
-    K = sp.csr_array(K, dtype=float)
-    n = K.shape[0]
-    M = sp.csr_array(M, dtype=float)
-    C = _csr(C, (n, n)).astype(float)
-    A = sp.csr_array(A, dtype=float).reshape(-1, n) if np.size(A) else sp.csr_array((0, n))
-    A.eliminate_zeros()
-    Rs: sp.csr_array | None = None if R is None else sp.csr_array(R, dtype=float)
-    if A.shape[0]:
-        eq = equilibrate(A, R=Rs, labels=labels)
-        A = sp.csr_array(eq.A)
-        Rs = None if eq.R is None else sp.csr_array(eq.R)
+    system = ConstrainedSystem.of(M, C, K, A, R=R, constraint_labels=labels)
+    return receptance_of(system, omegas, method, inputs, outputs)
+
+
+def receptance_of(system: ConstrainedSystem, omegas: float | Sequence[float] | np.ndarray,
+                  method: str = GENERALIZED_INVERSE,
+                  inputs: sp.sparray | np.ndarray | None = None,
+                  outputs: sp.sparray | np.ndarray | None = None) -> np.ndarray:
+    r""":func:`receptance` of a :class:`~substruct.linalg.system.ConstrainedSystem` (rows
+    already equilibrated): a force-tied ``R`` checked for consistency, then the sweep of the
+    formulation object ``method`` (:func:`substruct.analysis.formulations.forms.formulation`).
+
+    Raises:
+        ConstraintError: if a redundant constraint row carries an inconsistent ``R``.
+        ValueError: an unknown method.
+    """
+    form = formulation(method)
+    n = system.n
     scalar = np.ndim(omegas) == 0
     w = np.atleast_1d(np.asarray(omegas, dtype=float))
     E = inputs_matrix(inputs, n)
     O = sp.eye_array(n).tocsr() if outputs is None else sp.csr_array(outputs).reshape(-1, n)
-    rows = independent_rows(A, col_scale=mass_column_scale(M))
-    if Rs is not None:
-        check_consistent(A, Rs, rows, labels)
-    if method == GENERALIZED_INVERSE:
-        H = generalized_inverse_sweep(K, M, C, A, Rs, w, E, O)
-    elif method == NULL_SPACE:
-        H = null_space_sweep(K, M, C, A, Rs, w, E, O, rows)
-    elif method == KKT:
-        H = kkt_sweep(K, M, C, A, Rs, w, E, O, rows)
-    else:
-        raise ValueError(f"unknown method {method!r}; expected one of {', '.join(FORMULATIONS)}")
+    if system.R is not None:
+        labels = None if system.constraint_labels is None else list(system.constraint_labels)
+        check_consistent(system.A, system.R, system.independent, labels)
+    H = form.receptance(system, w, E, O)
     return H[0] if scalar else H
 
 

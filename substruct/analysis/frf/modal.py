@@ -52,7 +52,8 @@ from substruct.analysis.checks import (
 from substruct.analysis.formulations.coupling import receptance
 from substruct.analysis.modes.eigen import modes
 from substruct.analysis.errors import AnalysisInputError
-from substruct.analysis.results import DEFAULT_TOLERANCE, Modes, Receptance
+from substruct.analysis.system import ConstrainedSystem, SweepOptions
+from substruct.analysis.results import Modes, Receptance
 from substruct.analysis.modes.sparse import has_damping
 from substruct.linalg.constraints import independent_rows
 from substruct.linalg.factorize import factorizer
@@ -286,16 +287,9 @@ def check_indices(count: int, k: int = CHECK_FREQUENCIES) -> np.ndarray:
     return np.unique(np.round(np.linspace(0, count - 1, min(k, count))).astype(int))
 
 
-def modal_receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
-                           C: sp.sparray | np.ndarray | None, A: sp.sparray | np.ndarray | None,
-                           omegas: Sequence[float] | np.ndarray,
+def modal_receptance_sweep(system: ConstrainedSystem, omegas: Sequence[float] | np.ndarray,
                            inputs: sp.sparray | np.ndarray, outputs: sp.sparray | np.ndarray,
-                           *, R: sp.sparray | np.ndarray | None = None,
-                           options: ModalOptions = ModalOptions(),
-                           checks: Sequence[str] = (KKT,), tolerance: float = DEFAULT_TOLERANCE,
-                           input_names: Sequence[str] | None = None,
-                           output_names: Sequence[str] | None = None,
-                           what: str = "frf") -> Receptance:
+                           *, options: SweepOptions) -> Receptance:
     r"""Receptances at ``omegas`` by modal superposition plus residual flexibility, checked by
     the direct solve at ``n_check`` frequencies of the grid.
 
@@ -303,17 +297,19 @@ def modal_receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarra
                - \sum_{r \le N} T_r(0) \Big] E
 
     Args:
-        K, M, C, A: the assembled model (``C`` may be ``None``; ``A`` ``None`` for none).
+        system: the assembled model (:class:`~substruct.linalg.system.ConstrainedSystem`); its
+            ``R`` must be zero: a force-tied constraint is refused.
         omegas: circular frequencies (rad/s).
         inputs, outputs: ``n x p`` force patterns and ``q x n`` output rows.
-        R: must be zero: a force-tied constraint is refused.
-        options: the roots kept, the residual (:data:`RESIDUAL_ORDER`: ``"static"``, exact at
+        options: the checks, tolerance, names and ``what`` of the sweep
+            (:class:`~substruct.analysis.system.SweepOptions`), and in ``options.modal`` the
+            roots kept, the residual (:data:`RESIDUAL_ORDER`: ``"static"``, exact at
             ``omega = 0``; ``"second-order"``, also the ``s`` and ``s^2`` terms from two more
             back-substitutions; ``"none"`` only to show what the others are worth), the
             number of check frequencies, the eigensolver (:class:`ModalOptions`).
-        checks: direct formulations (``kkt``, ``generalized-inverse``, ``null-space``;
-            ``kkt`` if none).
-        tolerance: the largest ``max |H_direct - H| / max |H|`` at the check frequencies.
+            ``options.checks`` are the direct formulations (``kkt`` if none) and
+            ``options.tolerance`` the largest ``max |H_direct - H| / max |H|`` at the check
+            frequencies.
 
     Returns:
         A :class:`~substruct.analysis.results.Receptance` with ``method`` naming the roots
@@ -326,20 +322,19 @@ def modal_receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarra
         ValueError: ``R != 0``; a damped model with rigid-body modes; a zero frequency with
             rigid-body modes.
     """
-    Ks = sp.csr_array(K, dtype=float)
-    n = Ks.shape[0]
-    Ms = sp.csr_array(M, dtype=float)
-    Cs = None if C is None else sp.csr_array(C, dtype=float)
-    As = sp.csr_array((0, n)) if A is None or np.size(A) == 0 else sp.csr_array(A, dtype=float)
-    if R is not None and sp.csr_array(R).nnz and np.any(sp.csr_array(R).data != 0):
+    Ks, Ms, Cs, As = system.K, system.M, system.C, system.A
+    modal = options.modal if options.modal is not None else ModalOptions()
+    checks, tolerance, what = options.checks, options.tolerance, options.what
+    input_names, output_names = options.input_names, options.output_names
+    if system.R is not None:
         raise AnalysisInputError("the modal receptance needs A q = 0; a constraint tied to the force "
                          "(R) needs method: generalized-inverse")
     w = np.atleast_1d(np.asarray(omegas, dtype=float))
     E = sp.csc_array(inputs, dtype=float).toarray()
     O = sp.csr_array(outputs, dtype=float)
-    basis = modal_basis(Ms, Cs, Ks, As, float(w.max(initial=0.0)), count=options.count,
-                        cutoff=options.cutoff, solver=options.solver)
-    residual = options.residual
+    basis = modal_basis(Ms, Cs, Ks, As, float(w.max(initial=0.0)), count=modal.count,
+                        cutoff=modal.cutoff, solver=modal.solver)
+    residual = modal.residual
     if basis.rigid.shape[1] and np.any(w <= 0):
         raise AnalysisInputError("the receptance of a model with rigid-body modes is infinite at "
                          "omega = 0")
@@ -366,7 +361,7 @@ def modal_receptance_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarra
     size = np.maximum(np.abs(vectors).max(axis=0, initial=0.0), 1e-300) * norm_a
     constraint_residual = float((np.abs(As @ vectors).max(axis=0, initial=0.0) / size).max(
         initial=0.0)) if As.shape[0] and vectors.shape[1] else 0.0
-    idx = check_indices(len(w), options.n_check)
+    idx = check_indices(len(w), modal.n_check)
     agreement = {}
     for check in check_methods("modal", list(checks) or [KKT]) if idx.size else []:
         Hd = receptance(Ks, Ms, Cs, As, w[idx], None, method=check, inputs=E, outputs=O)

@@ -39,6 +39,7 @@ from substruct.analysis.formulations.coupling import (
     projected_inverse,
     split_mass,
 )
+from substruct.analysis.formulations.forms import formulation
 from substruct.analysis.modes.pencil import (
     Refine,
     fan_lin_van_dooren,
@@ -56,12 +57,13 @@ from substruct.linalg.nullspace import null_space_basis
 from substruct.linalg.scaling import equilibrate, mass_column_scale
 from substruct.vocabulary import FORMULATIONS, GENERALIZED_INVERSE, KKT, NULL_SPACE
 
-__all__ = ["FORMULATIONS", "coupled_modes"]
+__all__ = ["FORMULATIONS", "coupled_modes", "generalized_inverse_modes", "kkt_modes",
+           "null_space_modes"]
 
 
 
-def _modes_generalized_inverse(M: np.ndarray, C: np.ndarray, K: np.ndarray,
-                               A: np.ndarray) -> Modes:
+def generalized_inverse_modes(M: np.ndarray, C: np.ndarray, K: np.ndarray,
+                              A: np.ndarray) -> Modes:
     """Eqs (28)-(34): the state-space pencil of the projected equations.
 
     Solved for ``mu = lambda / gamma`` with ``gamma = sqrt(|M^* K| / |T|)``, which balances the
@@ -143,7 +145,7 @@ def _gi_polish(ms: MassSplit, M: np.ndarray, C: np.ndarray, K: np.ndarray, A: np
     return polish
 
 
-def _modes_null_space(M: np.ndarray, C: np.ndarray, K: np.ndarray, A: np.ndarray) -> Modes:
+def null_space_modes(M: np.ndarray, C: np.ndarray, K: np.ndarray, A: np.ndarray) -> Modes:
     """``u = N p`` with ``A N = 0``: ``N^T (lambda^2 M + lambda C + K) N p = 0``."""
     n = K.shape[0]
     N = null_space_basis(A, col_scale=mass_column_scale(M)) if A.size else np.eye(n)
@@ -164,7 +166,7 @@ def _modes_null_space(M: np.ndarray, C: np.ndarray, K: np.ndarray, A: np.ndarray
     return classify_roots(lam, U, A, M, C, K, NULL_SPACE, rayleigh_refiner(U, M, C, K))
 
 
-def _modes_kkt(M: np.ndarray, C: np.ndarray, K: np.ndarray, A: np.ndarray) -> Modes:
+def kkt_modes(M: np.ndarray, C: np.ndarray, K: np.ndarray, A: np.ndarray) -> Modes:
     """Lagrange multipliers: the pencil ``lambda^2 [M,0;0,0] + lambda [C,0;0,0] + [K,A^T;A,0]``."""
     n = K.shape[0]
     rows = independent_rows(A, col_scale=mass_column_scale(M))
@@ -189,7 +191,9 @@ def coupled_modes(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
     Args:
         M, C, K: ``n x n`` matrices (``M`` may be singular on massless coordinates, eq 6).
         A: ``m x n`` constraint matrix of any rank (``None`` for none).
-        method: ``generalized-inverse`` (the paper's eqs 28-34), ``null-space`` or ``kkt``.
+        method: ``generalized-inverse`` (the paper's eqs 28-34), ``null-space`` or ``kkt``
+            (the formulation object of that name,
+            :func:`substruct.analysis.formulations.forms.formulation`, solves).
         n_modes: keep the lowest ``n_modes`` physical modes (all if ``None``).
 
     Returns:
@@ -208,16 +212,10 @@ def coupled_modes(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
     Cd = np.zeros((n, n)) if C is None else dense(sp.csr_array(C, dtype=float))
     Ad = np.zeros((0, n)) if A is None or np.size(A) == 0 else \
         dense(sp.csr_array(A, dtype=float))
-    if Ad.shape[0]:  # D A u = 0, rows of unit norm: rank decided whatever a row's scale
+    if Ad.shape[0]:  # D A u = 0, rows of unit norm: rank decided whatever a row's scale (the
+        # rows of a ConstrainedSystem are so already: powers of two, no bit changes)
         Ad = np.asarray(equilibrate(Ad).A)
-    if method == GENERALIZED_INVERSE:
-        modes = _modes_generalized_inverse(Md, Cd, Kd, Ad)
-    elif method == NULL_SPACE:
-        modes = _modes_null_space(Md, Cd, Kd, Ad)
-    elif method == KKT:
-        modes = _modes_kkt(Md, Cd, Kd, Ad)
-    else:
-        raise ValueError(f"unknown method {method!r}; expected one of {', '.join(FORMULATIONS)}")
+    modes = formulation(method).dense_modes(Md, Cd, Kd, Ad)
     modes.solver = "dense"
     return modes.lowest(n_modes)
 

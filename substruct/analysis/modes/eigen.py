@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 import scipy.sparse as sp
@@ -50,12 +50,14 @@ from substruct.analysis.modes.krylov import (
 )
 from substruct.analysis.modes.production import production_modes
 from substruct.analysis.results import DEFAULT_TOLERANCE, Modes
+from substruct.analysis.system import ConstrainedSystem, ModesOptions
+from substruct.linalg.system import Matrix
 from substruct.analysis.modes.sparse import has_damping, sparse_coupled_modes
 from substruct.linalg.nullspace import Elimination
 from substruct.linalg.scaling import massless_coordinates
 from substruct.vocabulary import GENERALIZED_INVERSE, NULL_SPACE, SOLVERS
 
-__all__ = ["SOLVERS", "SPARSE_ABOVE", "SolverChoice", "choose_solver", "modes"]
+__all__ = ["SOLVERS", "SPARSE_ABOVE", "SolverChoice", "choose_solver", "modes", "system_modes"]
 
 
 #: ``solver="auto"`` takes the sparse path above this many coordinates, damped or not: the dense
@@ -137,12 +139,56 @@ def _sparse(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
         raise AnalysisInputError(f"sparse eigensolver: {text}") from None
 
 
-def modes(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
-          K: sp.sparray | np.ndarray, A: sp.sparray | np.ndarray | None,
-          count: int | None = None, *, method: str = GENERALIZED_INVERSE,
-          checks: Sequence[str] = (), solver: str = "auto",
-          tolerance: float = DEFAULT_TOLERANCE, what: str = "modes",
-          full_checks: bool = False, events: Phase | None = None) -> Modes:
+def modes(system: ConstrainedSystem | Matrix, *args: Any, options: ModesOptions | None = None,
+          **kwargs: Any) -> Modes:
+    r"""Coupled modes of ``M u'' + C u' + K u = 0`` under ``A u = 0``, with their cross-checks.
+
+    The call is ``modes(system, count=None, *, options=None)`` with a
+    :class:`~substruct.linalg.system.ConstrainedSystem` and
+    :class:`~substruct.analysis.system.ModesOptions` (:func:`system_modes`, which see).
+
+    The compatibility form ``modes(M, C, K, A, count=None, *, method=..., checks=(),
+    solver="auto", tolerance=1e-6, what="modes", full_checks=False, events=None)`` takes the
+    matrices and the options loose, as before the system type: it builds both and calls
+    :func:`system_modes`.
+
+    Examples
+    --------
+    Two unit masses, the first on a spring of 2 to the ground, a spring of 1 between them, held
+    together by ``q_1 = q_2``: one mode, a mass of 2 on a spring of 2 (``omega = 1``), checked
+    by the null-space form.
+
+    >>> import numpy as np
+    >>> from substruct.analysis.api import modes
+    >>> from substruct.analysis.system import ConstrainedSystem, ModesOptions
+    >>> s = ConstrainedSystem.of(np.eye(2), None, [[3.0, -1.0], [-1.0, 1.0]], [[1.0, -1.0]])
+    >>> res = modes(s, 1, options=ModesOptions(checks=["null-space"]))
+    >>> np.round(res.omega, 6), res.solver
+    (array([1.]), 'dense')
+    >>> bool(res.agreement["null-space"] < 1e-9)
+    True
+    """
+    if isinstance(system, ConstrainedSystem):
+        return system_modes(system, *args, options=options, **kwargs)
+    if options is not None:
+        raise TypeError("modes(): options= goes with a ConstrainedSystem; the matrix form takes "
+                        "the options as keywords")
+    return _compatible_modes(system, *args, **kwargs)
+
+
+def _compatible_modes(M: Matrix, C: Matrix | None, K: Matrix, A: Matrix | None,
+                      count: int | None = None, *, method: str = GENERALIZED_INVERSE,
+                      checks: Sequence[str] = (), solver: str = "auto",
+                      tolerance: float = DEFAULT_TOLERANCE, what: str = "modes",
+                      full_checks: bool = False, events: Phase | None = None) -> Modes:
+    """The loose-argument form of :func:`modes`: the options, then the system, then the call."""
+    options = ModesOptions(method=method, checks=checks, solver=solver, tolerance=tolerance,
+                           what=what, full_checks=full_checks, events=events)
+    return system_modes(ConstrainedSystem.of(M, C, K, A), count, options=options)
+
+
+def system_modes(system: ConstrainedSystem, count: int | None = None, *,
+                 options: ModesOptions | None = None) -> Modes:
     r"""Coupled modes of ``M u'' + C u' + K u = 0`` under ``A u = 0``, with their cross-checks.
 
     .. math::  (\lambda^2 M + \lambda C + K)\, u = A^T \mu, \qquad A u = 0
@@ -162,17 +208,14 @@ def modes(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
     independent one).
 
     Args:
-        M, C, K: ``n x n`` (``M`` may be singular on massless coordinates, eq 6; ``C`` may be
-            ``None``).
-        A: ``m x n`` constraint rows of any rank (``None`` for none).
+        system: ``M``, ``C``, ``K`` (``M`` may be singular on massless coordinates, eq 6) and
+            the rows ``A`` of any rank (:class:`~substruct.linalg.system.ConstrainedSystem`).
         count: the lowest ``count`` modes (all if ``None``; the sparse solvers need a count).
-        method: the main formulation, one of :data:`substruct.analysis.modes.dense.FORMULATIONS`.
-        checks: check formulations (the main one and repeats are skipped).
-        solver: ``"auto"``, ``"dense"`` or ``"sparse"`` (:func:`choose_solver`).
-        tolerance: the largest relative eigenvalue disagreement a check may have.
-        what: how the analysis is named in error messages.
-        full_checks: on the sparse path, solve ``method`` and each check in full.
-        events: called as each eigen solve starts (:class:`substruct.analysis.events.Phase`).
+        options: the main formulation ``method``, the ``checks``, the ``solver``
+            (:func:`choose_solver`), the ``tolerance`` (the largest relative eigenvalue
+            disagreement a check may have), ``what`` (the name in error messages),
+            ``full_checks`` and ``events`` (:class:`~substruct.analysis.system.ModesOptions`;
+            its defaults if ``None``).
 
     Returns:
         The main formulation's :class:`~substruct.analysis.results.Modes`, with ``agreement``
@@ -183,12 +226,12 @@ def modes(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
         CheckError: a check disagrees by more than ``tolerance``.
         AnalysisInputError: a model the solver cannot take (a motion with no mass, stiffness
             or constraint; more modes than a sparse solver can give).
-        ValueError: an unknown method or solver (a programming error).
     """
-    for name in (method, *checks):
-        if name not in FORMULATIONS:
-            raise ValueError(f"unknown method {name!r}; expected one of "
-                             f"{', '.join(FORMULATIONS)}")
+    opts = options if options is not None else ModesOptions()
+    method, checks, solver = opts.method, opts.checks, opts.solver
+    tolerance, what, full_checks, events = opts.tolerance, opts.what, opts.full_checks, \
+        opts.events
+    M, C, K, A = system.M, system.C, system.K, system.A
     choice = choose_solver(M, C, A, count, solver)
     others = check_methods(method, checks)
     if choice.strategy == "sparse-damped":  # one pencil for both: no check of one by the other
@@ -226,8 +269,7 @@ def modes(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
         if choice.note or not main.solver or main.solver == choice.strategy:
             solver_label = choice.label
     n = M.shape[0]
-    if not len(main.omega) and n and A is not None and np.size(A) and \
-            holds_every_coordinate(sp.csr_array(A, dtype=float), None, n):
+    if not len(main.omega) and n and system.m and holds_every_coordinate(A, None, n):
         solver_label += f"; no free coordinate: the constraints hold all {n} coordinates"
     # one type, one set of scalar types whatever the strategy: complex roots and shapes (the
     # undamped sparse solvers compute real ones), real frequencies, ratios and residuals
