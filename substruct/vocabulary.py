@@ -8,7 +8,7 @@ the analyses check against, so the two cannot disagree.
 =====================  ======================================================================
 vocabulary             words
 =====================  ======================================================================
-:data:`Formulation`    the three independent formulations of a constrained system: the
+:data:`FormulationName`    the three independent formulations of a constrained system: the
                        generalized inverse (eqs 5, 10, 15), null-space elimination and
                        Lagrange multipliers (KKT)
 :data:`TransientForm`  the forms of a transient run: generalized inverse, null space, modal
@@ -37,7 +37,7 @@ __all__ = [
     "DEFAULT_TOLERANCE",
     "FORMULATIONS",
     "FRF_METHODS",
-    "Formulation",
+    "FormulationName",
     "FrfMethod",
     "GENERALIZED_INVERSE",
     "INTEGRATORS",
@@ -67,8 +67,8 @@ KKT: Final = "kkt"
 MODAL: Final = "modal"
 
 #: The three independent formulations of a constrained system.
-Formulation = Literal["generalized-inverse", "null-space", "kkt"]
-FORMULATIONS: tuple[Formulation, ...] = get_args(Formulation)
+FormulationName = Literal["generalized-inverse", "null-space", "kkt"]
+FORMULATIONS: tuple[FormulationName, ...] = get_args(FormulationName)
 
 #: The forms of a transient run.
 TransientForm = Literal["generalized-inverse", "null-space", "modal"]

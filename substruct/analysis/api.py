@@ -207,35 +207,33 @@ def system_receptance_sweep(system: ConstrainedSystem, omegas: Sequence[float] |
     if method == "modal":
         return modal_receptance_sweep(system, omegas, inputs, outputs, options=opts)
     checks, tolerance, progress, what = opts.checks, opts.tolerance, opts.progress, opts.what
-    Ks, Ms, Cs, As, Rs = K, M, C, A, R
     n = system.n
     forces = sp.csc_array(inputs, dtype=float)
     out_rows = sp.csr_array(outputs, dtype=float)
     w = np.atleast_1d(np.asarray(omegas, dtype=float))
     m = system.m
-    labels = None if system.constraint_labels is None else list(system.constraint_labels)
     k_out = out_rows.shape[0]
     # no free coordinate: the exact H is zero, every figure is taken against the compliance
     # scale h0 of the problem (analysis/checks.py), the main formulation's rounding included
-    floor = compliance_scale(Ks, Ms, Cs, w, forces, out_rows) if held else 0.0
-    production = production_sweep_applies(n, Rs, method) and not held
+    floor = compliance_scale(K, M, C, w, forces, out_rows) if held else 0.0
+    production = production_sweep_applies(n, R, method) and not held
     if production:  # the outputs only; the constraint residual at the checked frequencies
-        H = production_sweep(Ks, Ms, Cs, As, w, forces, out_rows, progress)
-        residual = constraint_residual(Ks, Ms, Cs, As, w, forces, H)
+        H = production_sweep(K, M, C, A, w, forces, out_rows, progress)
+        residual = constraint_residual(K, M, C, A, w, forces, H)
     else:
         # the residual's rows are the system's, equilibrated with their R: its figure is that
         # of D A
-        rows = sp.csr_array(sp.vstack([out_rows, As])) if m else out_rows
+        rows = sp.csr_array(sp.vstack([out_rows, A])) if m else out_rows
         full = _sweep(system, w, method, forces, rows, progress)
         scale = max(_largest(full[:, :k_out]), floor)
         residual = 0.0
         if m and full.size:
-            RE = (Rs @ forces).toarray() if Rs is not None else np.zeros((m, forces.shape[1]))
+            RE = (R @ forces).toarray() if R is not None else np.zeros((m, forces.shape[1]))
             residual = float(np.abs(full[:, k_out:] - RE[None]).max() / scale)
         H = _leading_rows(full, k_out)
     agreement = {}
     if production:  # checked at a few frequencies (analysis/frf/production.py)
-        agreement = sweep_checks(Ks, Ms, Cs, As, w, forces, out_rows, H, method, checks, labels)
+        agreement = sweep_checks(system, w, forces, out_rows, H, method, checks)
         method = PRODUCTION_SWEEP
     for check in [] if production else check_methods(method, checks):
         Hc = _sweep(system, w, check, forces, out_rows, progress)

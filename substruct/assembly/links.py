@@ -50,7 +50,7 @@ __all__ = ["LinkError", "NodeRef", "Link", "rigid_link", "interpolation_link", "
 
 #: Relative size of the eigenvalues of the scaled normal matrix of an interpolation link that
 #: count as zero (the matrix is dimensionless, its eigenvalues of order 1 for a spread set).
-RANK_TOL = 1e-9
+LINK_RANK_TOL = 1e-9
 
 
 class LinkError(ValueError):
@@ -243,14 +243,14 @@ def interpolation_link(substructures: Mapping[str, Substructure] | Sequence[Subs
     Wd = np.repeat(w / w.sum(), len(own))
     N = S.T @ (Wd[:, None] * S)
     lam, V = np.linalg.eigh(N)
-    null = V[:, lam <= RANK_TOL * lam.max()]
+    null = V[:, lam <= LINK_RANK_TOL * lam.max()]
     for c in comps:
         if np.abs(null[c]).max(initial=0.0) > 1e-6:
             raise LinkError(
                 f"{name}: the nodes do not determine component {FRAME_COMPONENTS[c]} of the "
                 f"reference node {reference} (collinear or too few nodes for it), got "
                 f"{len(nodes)} nodes")
-    rank = lam > RANK_TOL * lam.max()
+    rank = lam > LINK_RANK_TOL * lam.max()
     G = (V[:, rank] / lam[rank]) @ V[:, rank].T @ (S.T * Wd)  # (6, len(own) * len(nodes))
     G[3:] /= Lc
     rows = []

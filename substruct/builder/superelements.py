@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
-from substruct.case.superelements import COMPONENTS, SuperelementSpec
+from substruct.case.superelements import SE_COMPONENTS, SuperelementSpec
 from substruct.substructure import Geometry, PointError, Substructure, as_csr
 
 __all__ = ["build_superelement", "superelement_where", "canonical_label", "RIGID_BODY_ATTR",
@@ -31,8 +31,8 @@ def canonical_label(where: Any) -> str | None:
     if c in ("x", "y", "z"):
         c = "u" + c
     if len(c) == 1 and c in "123456":
-        c = COMPONENTS[int(c) - 1]
-    return f"{int(head)}:{c}" if c in COMPONENTS else None
+        c = SE_COMPONENTS[int(c) - 1]
+    return f"{int(head)}:{c}" if c in SE_COMPONENTS else None
 
 
 def _geometry(spec: SuperelementSpec, index: dict[str, int], n: int) -> Geometry | None:
@@ -43,7 +43,7 @@ def _geometry(spec: SuperelementSpec, index: dict[str, int], n: int) -> Geometry
     points = np.array([spec.grids[g] for g in ids], dtype=float)
     rows, cols = [], []
     for k, g in enumerate(ids):
-        for d, c in enumerate(COMPONENTS[:3]):
+        for d, c in enumerate(SE_COMPONENTS[:3]):
             j = index.get(f"{g}:{c}")
             if j is not None:
                 rows.append(3 * k + d)

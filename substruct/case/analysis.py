@@ -31,7 +31,7 @@ from substruct.case.transient import TransientAnalysis
 from substruct.vocabulary import (
     DEFAULT_TOLERANCE,
     GENERALIZED_INVERSE,
-    Formulation,
+    FormulationName,
     FrfMethod,
     Quantity,
     Residual,
@@ -93,8 +93,8 @@ class ModesAnalysis(StrictModel):
 
     count: Count = 6
     band: ModesBand | None = None
-    method: Formulation = GENERALIZED_INVERSE
-    check: list[Formulation] = Field(default_factory=list)
+    method: FormulationName = GENERALIZED_INVERSE
+    check: list[FormulationName] = Field(default_factory=list)
     variants: list[Variant] = Field(default_factory=list)
     #: dense (eqs 28-34, all roots), sparse (shift-invert, the lowest count roots) or auto
     #: (sparse above SPARSE_ABOVE coordinates); see substruct.analysis.api.choose_solver
@@ -176,7 +176,7 @@ class FrfAnalysis(StrictModel):
     outputs: Annotated[list[Point], Field(min_length=1)]
     #: a direct formulation, modal (modal superposition) or auto (modal on large models)
     method: FrfMethod = GENERALIZED_INVERSE
-    check: list[Formulation] = Field(default_factory=list)
+    check: list[FormulationName] = Field(default_factory=list)
     modal: ModalFrf = Field(default_factory=ModalFrf)
     #: the unit of the omega grid's values (rad/s or Hz)
     units: Literal["rad/s", "Hz"] = "rad/s"

@@ -40,12 +40,12 @@ from substruct.case.bdf_constraints import read_mpc, read_rbe2, read_rbe3, read_
 from substruct.case.bdf_control import CASE_CONTROL, PARAMS, read_control, read_eigrl
 from substruct.case.bdf_fields import RawCard, split_bdf
 from substruct.case.bdf_include import bdf_lines
-from substruct.case.bdf_model import BulkData, Section
+from substruct.case.bdf_model import BulkData, BdfSection
 from substruct.case.bdf_shells import read_cquad4, read_ctria3, read_pshell
 from substruct.case.bdf_springs import read_cbush, read_celas, read_pbush, read_pelas
 from substruct.case.bdf_xref import ELEMENTS, Cards, cross_reference
 
-__all__ = ["BulkData", "Section", "read_bulk", "parse_bulk", "CARDS", "PARAMS",
+__all__ = ["BulkData", "BdfSection", "read_bulk", "parse_bulk", "CARDS", "PARAMS",
            "CASE_CONTROL"]
 
 #: Bulk data cards read (docs/structures.md has what is read of each).

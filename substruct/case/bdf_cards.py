@@ -18,7 +18,7 @@ import numpy as np
 
 from substruct.case.bdf_fields import RawCard, nastran_int, nastran_real
 
-__all__ = ["components", "Grid", "Coord", "Rod", "Bar", "Mat1", "Conm2", "read_grid",
+__all__ = ["components", "GridCard", "Coord", "Rod", "Bar", "Mat1", "Conm2", "read_grid",
            "read_cord2r", "read_prod", "read_pbar", "read_pbeam", "read_mat1", "read_rod",
            "read_bar", "read_conm2"]
 
@@ -35,7 +35,7 @@ def components(card: RawCard, i: int, name: str, blank_ok: bool = False) -> str:
 
 
 @dataclass(frozen=True)
-class Grid:
+class GridCard:
     """GRID: id, position in coordinate system ``cp``, permanent constraints ``ps``."""
 
     id: int
@@ -110,7 +110,7 @@ class Conm2:
     line: int
 
 
-def read_grid(c: RawCard) -> Grid:
+def read_grid(c: RawCard) -> GridCard:
     """GRID ID CP X1 X2 X3 CD PS SEID."""
     gid = c.integer(0, "ID")
     if gid <= 0:
@@ -123,7 +123,7 @@ def read_grid(c: RawCard) -> Grid:
         raise c.error("superelements are not supported", c.text(7), "SEID")
     c.blank_after(8, "GRID has one line")
     x = (c.real(2, "X1", 0.0), c.real(3, "X2", 0.0), c.real(4, "X3", 0.0))
-    return Grid(gid, c.integer(1, "CP", 0), x, components(c, 6, "PS", blank_ok=True), c.line)
+    return GridCard(gid, c.integer(1, "CP", 0), x, components(c, 6, "PS", blank_ok=True), c.line)
 
 
 def read_cord2r(c: RawCard) -> Coord:

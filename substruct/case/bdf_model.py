@@ -16,11 +16,11 @@ from substruct.case.bdf_control import Eigrl
 from substruct.case.bdf_shells import Plate
 from substruct.case.bdf_springs import Bush
 
-__all__ = ["Section", "ShellSection", "BushSpring", "BulkData"]
+__all__ = ["BdfSection", "ShellSection", "BushSpring", "BulkData"]
 
 
 @dataclass(frozen=True)
-class Section:
+class BdfSection:
     """A line element's property with its material: ``A, I1, I2, J, nsm`` and ``E, G, rho``
     (``I1``, ``I2`` zero for a rod); ``shear``: CBEAM's shear factors ``K1 = K2 = 1``."""
 
@@ -39,7 +39,7 @@ class BulkData:
 
     Attributes:
         grids: grid id -> position in basic coordinates.
-        rods, bars: elements with their :class:`Section`.
+        rods, bars: elements with their :class:`BdfSection`.
         plates: CQUAD4 and CTRIA3 with their :class:`ShellSection`.
         bushes: CBUSH with their stiffness and axes (:class:`BushSpring`).
         masses: CONM2 with offset and inertia in basic coordinates.
@@ -52,8 +52,8 @@ class BulkData:
 
     source: str
     grids: dict[int, np.ndarray] = field(default_factory=dict)
-    rods: list[tuple[Rod, Section]] = field(default_factory=list)
-    bars: list[tuple[Bar, Section]] = field(default_factory=list)
+    rods: list[tuple[Rod, BdfSection]] = field(default_factory=list)
+    bars: list[tuple[Bar, BdfSection]] = field(default_factory=list)
     masses: list[Conm2] = field(default_factory=list)
     springs: list[tuple[int, float, tuple[int, int], tuple[int, int] | None]] = \
         field(default_factory=list)

@@ -12,10 +12,10 @@ from typing import Any
 
 import numpy as np
 
-from substruct.case.bdf_cards import Conm2, Grid, Mat1
+from substruct.case.bdf_cards import Conm2, GridCard, Mat1
 from substruct.case.bdf_control import param, select_sets
 from substruct.case.bdf_fields import BdfError, RawCard
-from substruct.case.bdf_model import BulkData, BushSpring, Section, ShellSection
+from substruct.case.bdf_model import BulkData, BushSpring, BdfSection, ShellSection
 from substruct.case.bdf_shells import Pshell
 from substruct.case.fields import MAX_ELEMENTS, MAX_MATRIX_SIZE
 
@@ -35,7 +35,7 @@ class Cards:
     source: str
     control: dict[str, Any]
     by: dict[str, list[Any]] = field(default_factory=dict)
-    grids: dict[int, Grid] = field(default_factory=dict)
+    grids: dict[int, GridCard] = field(default_factory=dict)
     coords: dict[int, Any] = field(default_factory=dict)
     props: dict[int, tuple[RawCard, tuple[Any, ...]]] = field(default_factory=dict)
     pshell: dict[int, tuple[RawCard, Pshell]] = field(default_factory=dict)
@@ -114,15 +114,15 @@ def cross_reference(cards: Cards) -> BulkData:
             raise card.error("no such GRID", gid, name)
         return gid
 
-    def section(card: RawCard, pid: int, kinds: tuple[str, ...]) -> Section:
+    def section(card: RawCard, pid: int, kinds: tuple[str, ...]) -> BdfSection:
         if pid not in props or props[pid][0].name not in kinds:
             raise card.error(f"no {' or '.join(kinds)} of that id", pid, "PID")
         pcard, v = props[pid]
         if v[1] not in mats:
             raise pcard.error("no MAT1 of that id", v[1], "MID")
         if pcard.name == "PROD":
-            return Section(v[2], 0.0, 0.0, v[3], v[4], mats[v[1]], False)
-        sec = Section(v[2], v[3], v[4], v[5], v[6], mats[v[1]], pcard.name == "PBEAM")
+            return BdfSection(v[2], 0.0, 0.0, v[3], v[4], mats[v[1]], False)
+        sec = BdfSection(v[2], v[3], v[4], v[5], v[6], mats[v[1]], pcard.name == "PBEAM")
         if sec.shear and sec.mat.G == 0 and sec.A > 0:
             raise pcard.error("CBEAM shear flexibility (K1 = K2 = 1) needs G > 0 in the "
                               "material", v[1], "MID")

@@ -44,13 +44,13 @@ from substruct.case.errors import CaseError
 from substruct.case.fields import MAX_NAME_LENGTH, NAME_PATTERN
 from substruct.case.yaml_io import load_yaml
 
-__all__ = ["Channel", "ChannelTable", "COLUMNS", "KINDS", "MAX_CHANNELS", "MAX_CHANNEL_FILE",
+__all__ = ["Channel", "ChannelTable", "COLUMNS", "CHANNEL_KINDS", "MAX_CHANNELS", "MAX_CHANNEL_FILE",
            "parse_channels", "read_channels", "write_channels"]
 
 #: The columns of a channel table, in the order written.
 COLUMNS = ("name", "node", "x", "y", "z", "dx", "dy", "dz", "kind")
 #: The kinds of channel.
-KINDS = ("sensor", "impact")
+CHANNEL_KINDS = ("sensor", "impact")
 #: Most channels in one table.
 MAX_CHANNELS = 100_000
 #: Largest channel file read, in bytes.
@@ -181,8 +181,8 @@ def parse_channels(rows: Sequence[Mapping[str, Any]], source: str,
                             d.tolist())
         e = (d / big) / np.linalg.norm(d / big)  # scaled first: no overflow or underflow
         kind = row["kind"]
-        if not isinstance(kind, str) or kind.strip().lower() not in KINDS:
-            raise CaseError(source, f"{at}.kind", f"one of {', '.join(KINDS)}", kind)
+        if not isinstance(kind, str) or kind.strip().lower() not in CHANNEL_KINDS:
+            raise CaseError(source, f"{at}.kind", f"one of {', '.join(CHANNEL_KINDS)}", kind)
         out.append(Channel(name, node, (pos[0], pos[1], pos[2]),
                            (float(e[0]), float(e[1]), float(e[2])), kind.strip().lower()))
     _check_copies(out, paths, source)

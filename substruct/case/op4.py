@@ -46,7 +46,7 @@ import scipy.sparse as sp
 from substruct.case.fields import MAX_MATRIX_SIZE, MEMORY_LIMIT, gigabytes
 
 __all__ = ["Op4Error", "Op4Matrix", "read_op4", "op4_names", "BIGMAT_ROWS", "FORMS",
-           "MAX_LINE"]
+           "MAX_OP4_LINE"]
 
 #: Rows from which a sparse matrix uses the BIGMAT strings (Nastran's rule).
 BIGMAT_ROWS = 65536
@@ -54,7 +54,7 @@ BIGMAT_ROWS = 65536
 FORMS = {1: "square", 2: "rectangular", 4: "lower triangular", 5: "upper triangular",
          6: "symmetric"}
 #: Longest line of a text file (characters).
-MAX_LINE = 1024
+MAX_OP4_LINE = 1024
 #: Bytes held per stored entry of a sparse matrix while it is read (row index, value, copies).
 _SPARSE_ENTRY = 40
 _NAME = re.compile(r"^[A-Za-z0-9_.-]{1,16}$")
@@ -328,20 +328,20 @@ def _read_binary(fp: BinaryIO, size: int, file: str, order: str, isz: int,
 
 
 class _Lines:
-    """Lines of a text file, each at most :data:`MAX_LINE` characters."""
+    """Lines of a text file, each at most :data:`MAX_OP4_LINE` characters."""
 
     def __init__(self, fp: BinaryIO, file: str) -> None:
         self.fp, self.file, self.number = fp, file, 0
 
     def next(self, where: str, eof_ok: bool = False) -> str | None:
-        raw = self.fp.readline(MAX_LINE + 1)
+        raw = self.fp.readline(MAX_OP4_LINE + 1)
         self.number += 1
         if not raw:
             if eof_ok:
                 return None
             raise Op4Error(f"{where}: truncated: the file ends at line {self.number}")
-        if len(raw) > MAX_LINE and not raw.endswith(b"\n"):
-            raise Op4Error(f"{where}: line {self.number} is longer than {MAX_LINE} characters")
+        if len(raw) > MAX_OP4_LINE and not raw.endswith(b"\n"):
+            raise Op4Error(f"{where}: line {self.number} is longer than {MAX_OP4_LINE} characters")
         return raw.decode("latin-1").rstrip("\r\n")
 
     def integers(self, where: str, widths: Sequence[int]) -> list[int]:

@@ -60,10 +60,10 @@ from substruct.case.rigid_body import (
     rigid_body_vectors,
 )
 
-__all__ = ["SuperelementSpec", "COMPONENTS", "SYMMETRY_RTOL", "MAX_DOF_FILE"]
+__all__ = ["SuperelementSpec", "SE_COMPONENTS", "SYMMETRY_RTOL", "MAX_DOF_FILE"]
 
 #: Names of the components 1-6 of a grid, as coordinate labels use them.
-COMPONENTS = ("ux", "uy", "uz", "rx", "ry", "rz")
+SE_COMPONENTS = ("ux", "uy", "uz", "rx", "ry", "rz")
 #: Relative asymmetry of ``M`` and ``K`` accepted, by the precision of the data (bytes).
 SYMMETRY_RTOL = {8: 1e-10, 4: 1e-5}
 #: Largest CSV DOF map read (bytes).
@@ -339,7 +339,7 @@ class SuperelementSpec(StrictModel):
                 k += 1
                 out.append(f"mode:{k}")
             else:
-                out.append(f"{g}:{COMPONENTS[c - 1]}")
+                out.append(f"{g}:{SE_COMPONENTS[c - 1]}")
         return out
 
     def rigid_body(self) -> dict[str, Any] | None:

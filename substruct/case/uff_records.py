@@ -1,7 +1,7 @@
 r"""The records of a Universal File: the functions of dataset 58 (ASCII and binary ``58b``) and
 the node numbers of datasets 15 and 2411, read in one pass with every size checked first.
 
-The file is read line by line (no line longer than :data:`MAX_LINE` bytes), never whole.  A
+The file is read line by line (no line longer than :data:`MAX_UFF_LINE` bytes), never whole.  A
 58 dataset is parsed by the fixed columns of its specification (records 6-11:
 ``2(I5,I10),2(1X,10A1,I10,I4)``, ``3I10,3E13.5``, ``I10,3I5,2(1X,20A1)``); its data (record
 12) only after the points it declares (record 7 field 2) are known to be at most
@@ -24,10 +24,10 @@ import numpy as np
 
 from substruct.case.fields import MEMORY_LIMIT
 
-__all__ = ["Uff58", "UffFile", "read_uff_records", "MAX_LINE", "MAX_POINTS"]
+__all__ = ["Uff58", "UffFile", "read_uff_records", "MAX_UFF_LINE", "MAX_POINTS"]
 
 #: Longest line read (the specification's records are 80 columns).
-MAX_LINE = 1024
+MAX_UFF_LINE = 1024
 #: Most points a function may declare (ten times the frequencies an analysis may have).
 MAX_POINTS = 1_000_000
 
@@ -81,18 +81,18 @@ class UffFile:
 
 
 class _Lines:
-    """Lines of a binary stream, each at most :data:`MAX_LINE` bytes, counted."""
+    """Lines of a binary stream, each at most :data:`MAX_UFF_LINE` bytes, counted."""
 
     def __init__(self, fh: BinaryIO, name: str, size: int):
         self.fh, self.name, self.size, self.number = fh, name, size, 0
 
     def next(self) -> bytes | None:
-        raw = self.fh.readline(MAX_LINE + 2)
+        raw = self.fh.readline(MAX_UFF_LINE + 2)
         if not raw:
             return None
         self.number += 1
-        if len(raw) > MAX_LINE and not raw.endswith(b"\n"):
-            raise ValueError(f"{self.name}: line {self.number} is longer than {MAX_LINE} "
+        if len(raw) > MAX_UFF_LINE and not raw.endswith(b"\n"):
+            raise ValueError(f"{self.name}: line {self.number} is longer than {MAX_UFF_LINE} "
                              "characters: not a Universal File")
         return raw.rstrip(b"\r\n")
 

@@ -52,7 +52,7 @@ __all__ = [
     "AUTO_ORDER",
     "BACKENDS",
     "MATRIX_KINDS",
-    "Backend",
+    "FactorizationBackend",
     "FactorizationFallback",
     "auto_backend",
     "auto_factorizer",
@@ -73,7 +73,7 @@ class FactorizationFallback(RuntimeWarning):
 
 
 @dataclass(frozen=True)
-class Backend:
+class FactorizationBackend:
     """A factorization backend of the registry.
 
     Attributes:
@@ -103,7 +103,7 @@ def _superlu(A: sp.sparray | sp.spmatrix, kind: str) -> Solve:
     if kind == "symmetric":
         return _slu.superlu_saddle(A)
     if kind == "complex-symmetric":
-        return _slu.complex_symmetric(A)
+        return _slu.superlu_complex_symmetric(A)
     return _slu.complex_lu(A)
 
 
@@ -136,15 +136,15 @@ def _superlu_failures() -> tuple[type[BaseException], ...]:
 
 
 #: Every backend, by name.
-BACKENDS: dict[str, Backend] = {
-    "pardiso": Backend("pardiso", "PARDISO", MATRIX_KINDS, "pypardiso", _pardiso.load,
+BACKENDS: dict[str, FactorizationBackend] = {
+    "pardiso": FactorizationBackend("pardiso", "PARDISO", MATRIX_KINDS, "pypardiso", _pardiso.load_mkl_pardiso,
                        _pardiso_kind, _pardiso_failures),
-    "cholmod": Backend("cholmod", "CHOLMOD", ("spd",), "sksparse", _import_cholmod,
+    "cholmod": FactorizationBackend("cholmod", "CHOLMOD", ("spd",), "sksparse", _import_cholmod,
                        lambda A, kind: _cholmod.cholmod(A), _cholmod.cholmod_failures),
-    "superlu-metis": Backend("superlu-metis", "SuperLU (METIS)",
+    "superlu-metis": FactorizationBackend("superlu-metis", "SuperLU (METIS)",
                              ("spd", "symmetric", "complex-symmetric"), "pymetis",
                              _import_metis, _metis.superlu_metis, _superlu_failures),
-    "superlu": Backend("superlu", "SuperLU", MATRIX_KINDS, "scipy", lambda: None, _superlu,
+    "superlu": FactorizationBackend("superlu", "SuperLU", MATRIX_KINDS, "scipy", lambda: None, _superlu,
                        _superlu_failures),
 }
 
@@ -232,7 +232,7 @@ def auto_factorizer(kind: str, superlu: Factorize | None = None) -> Factorize:
         what = f"the {A.shape[0]}-coordinate {_DESCRIBED[kind]} matrix"
         skipped: list[str] = []
 
-        def used(backend: Backend, solve: Solve) -> Solve:
+        def used(backend: FactorizationBackend, solve: Solve) -> Solve:
             """Name the backends skipped before ``backend`` (only once one has succeeded: a
             matrix that no backend factorizes raises the last error, with no warning)."""
             for reason in skipped:

@@ -32,9 +32,9 @@ import scipy.sparse as sp
 
 from substruct.linalg.backends import auto_factorizer, backend_factorizer
 from substruct.linalg.cholmod import cholmod, has_cholmod
-from substruct.linalg.pardiso import available as has_pardiso
+from substruct.linalg.pardiso import pardiso_available as has_pardiso
 from substruct.linalg.solve_type import Factorize, Solve
-from substruct.linalg.superlu import complex_symmetric as superlu_complex_symmetric
+from substruct.linalg.superlu import superlu_complex_symmetric
 from substruct.linalg.superlu import (
     complex_lu,
     fill_ordering,
@@ -108,7 +108,7 @@ def complex_symmetric(A: sp.sparray | sp.spmatrix, order: np.ndarray | None = No
     r"""A factorization of the complex symmetric impedance :math:`Z = K - \omega^2 M + i \omega C`
     of a frequency sweep: PARDISO (``mtype`` 6, its own nested-dissection ordering) where it
     is installed and succeeds, else SuperLU in the symmetric ordering ``order``
-    (:func:`substruct.linalg.superlu.complex_symmetric`; ``ordered``: ``A`` is in it already).
+    (:func:`substruct.linalg.superlu.superlu_complex_symmetric`; ``ordered``: ``A`` is in it already).
     """
     def own(B: sp.sparray) -> Solve:
         return superlu_complex_symmetric(B, order, ordered=ordered)

@@ -15,13 +15,13 @@ import scipy.sparse as sp
 from substruct.linalg.solve_type import Solve
 from substruct.linalg.superlu import superlu_ordered
 
-__all__ = ["METIS_PIVOTS", "available", "metis_ordering", "superlu_metis"]
+__all__ = ["METIS_PIVOTS", "metis_available", "metis_ordering", "superlu_metis"]
 
 #: SuperLU's diagonal pivot threshold after a METIS ordering, for each matrix kind.
 METIS_PIVOTS = {"spd": 0.0, "symmetric": 0.1, "complex-symmetric": 0.1}
 
 
-def available() -> bool:
+def metis_available() -> bool:
     """Whether ``pymetis`` can be imported."""
     try:
         import pymetis  # noqa: F401

@@ -37,7 +37,7 @@ from typing import Any, Callable
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["MTYPES", "PardisoError", "available", "load", "pardiso",
+__all__ = ["MTYPES", "PardisoError", "pardiso_available", "load_mkl_pardiso", "pardiso",
            "pardiso_factor_entries"]
 
 #: PARDISO's matrix type for each matrix kind of :mod:`substruct.linalg.backends`.
@@ -63,7 +63,7 @@ class PardisoError(RuntimeError):
                          f"{message or _MESSAGES.get(code, 'unknown error')}")
 
 
-def load() -> Any:
+def load_mkl_pardiso() -> Any:
     """The ``pardiso`` routine of the ``mkl_rt`` library ``pypardiso`` found (imported here,
     each call, so an uninstalled ``pypardiso`` raises :class:`ImportError`)."""
     import pypardiso  # optional dependency: x86_64 Linux and Windows wheels (with mkl)
@@ -78,10 +78,10 @@ def load() -> Any:
     return _LIB[0]
 
 
-def available() -> bool:
+def pardiso_available() -> bool:
     """Whether PARDISO can be loaded (``pypardiso`` importable and its ``mkl_rt`` found)."""
     try:
-        load()
+        load_mkl_pardiso()
     except (ImportError, OSError, AttributeError):
         return False
     return True
@@ -93,7 +93,7 @@ class _Handle:
 
     def __init__(self, mtype: int, n: int, data: np.ndarray, indptr: np.ndarray,
                  indices: np.ndarray):
-        self.fn = load()
+        self.fn = load_mkl_pardiso()
         self.pt = np.zeros(64, dtype=np.int64)
         self.iparm = np.zeros(64, dtype=np.int32)
         ip = self.iparm

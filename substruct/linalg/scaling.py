@@ -38,7 +38,7 @@ __all__ = [
     "spectral_norm",
 ]
 
-Matrix = TypeVar("Matrix", np.ndarray, sp.csr_array)
+MatrixT = TypeVar("MatrixT", np.ndarray, sp.csr_array)
 
 
 class ZeroRowError(ValueError):
@@ -76,7 +76,7 @@ class RowScale:
     exponent: np.ndarray
     norms: np.ndarray
 
-    def apply(self, X: Matrix) -> Matrix:
+    def apply(self, X: MatrixT) -> MatrixT:
         r"""``D X``: row ``i`` of ``X`` (a vector, an array or a sparse matrix with as many rows
         as ``A``) multiplied by :math:`2^{-e_i}`, exactly."""
         if sp.issparse(X):

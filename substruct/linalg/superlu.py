@@ -7,7 +7,7 @@ function                   matrices and method
                            ordering, diagonal pivots, ``diag_pivot_thresh = 0``)
 :func:`superlu_saddle`     symmetric indefinite saddle points ``[B, A^T; A, 0]`` (KKT):
                            symmetric mode with threshold pivoting (``diag_pivot_thresh = 0.1``)
-:func:`complex_symmetric`  complex symmetric (the impedances of sweeps) in a fill-reducing
+:func:`superlu_complex_symmetric`  complex symmetric (the impedances of sweeps) in a fill-reducing
                            symmetric ordering, symmetric mode, threshold pivoting
 :func:`superlu`            any square matrix: ``MMD_AT_PLUS_A``, partial pivoting
 :func:`complex_lu`         any square matrix, real or complex: ``COLAMD``, partial pivoting
@@ -17,7 +17,7 @@ function                   matrices and method
 
 Frequency sweeps of one structure factorize matrices of one sparsity pattern many times:
 :func:`fill_ordering` computes a fill-reducing symmetric ordering once and
-:func:`complex_symmetric` factorizes each (complex symmetric, not Hermitian) impedance in that
+:func:`superlu_complex_symmetric` factorizes each (complex symmetric, not Hermitian) impedance in that
 order, so SuperLU skips its ordering step at every frequency.
 
 SuperLU factors real matrices in real arithmetic; a complex right-hand side is solved as its
@@ -34,7 +34,7 @@ from substruct.linalg.solve_type import Solve
 
 __all__ = [
     "complex_lu",
-    "complex_symmetric",
+    "superlu_complex_symmetric",
     "fill_ordering",
     "superlu_ordered",
     "superlu",
@@ -109,7 +109,7 @@ def fill_ordering(pattern: sp.sparray | sp.spmatrix) -> np.ndarray:
     return order if order.size == n else np.arange(n)
 
 
-def complex_symmetric(A: sp.sparray | sp.spmatrix, order: np.ndarray | None = None, *,
+def superlu_complex_symmetric(A: sp.sparray | sp.spmatrix, order: np.ndarray | None = None, *,
                       ordered: bool = False) -> Solve:
     r"""SuperLU of a complex symmetric matrix (the impedance
     :math:`Z = K - \omega^2 M + i \omega C` in a null-space basis) in the symmetric ordering

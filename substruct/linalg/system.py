@@ -39,11 +39,11 @@ import scipy.sparse as sp
 
 from substruct.linalg.constraints import IndependentRows, independent_rows
 from substruct.linalg.scaling import equilibrate, mass_column_scale
+from substruct.linalg.solve_type import Matrix
 
-__all__ = ["ConstrainedSystem", "Matrix"]
+__all__ = ["ConstrainedSystem"]
 
 #: A matrix as the analyses accept it: dense or scipy.sparse.
-Matrix: TypeAlias = sp.sparray | sp.spmatrix | np.ndarray
 
 
 def _square(name: str, X: Matrix, n: int | None) -> sp.csr_array:

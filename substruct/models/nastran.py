@@ -39,7 +39,7 @@ from typing import Any, Collection, Mapping
 import numpy as np
 import scipy.sparse as sp
 
-from substruct.case.bdf import BulkData, Section
+from substruct.case.bdf import BulkData, BdfSection
 from substruct.case.bdf_cards import Bar
 from substruct.case.bdf_fields import BdfError
 from substruct.models.beam import bending_matrices, release, rotation
@@ -69,7 +69,7 @@ def conm2_matrix(m: float, r: np.ndarray, J: np.ndarray) -> np.ndarray:
     return (out + out.T) / 2
 
 
-def bar_matrices(xa: np.ndarray, xb: np.ndarray, v: np.ndarray, s: Section, coupled: bool,
+def bar_matrices(xa: np.ndarray, xb: np.ndarray, v: np.ndarray, s: BdfSection, coupled: bool,
                  shear: bool, released: list[int], wa: np.ndarray, wb: np.ndarray
                  ) -> tuple[np.ndarray, np.ndarray]:
     """Stiffness and mass (12 x 12, basic) of a CBAR/CBEAM between grids at ``xa``, ``xb`` with
@@ -106,7 +106,7 @@ def bar_matrices(xa: np.ndarray, xb: np.ndarray, v: np.ndarray, s: Section, coup
     return TE.T @ K @ TE, TE.T @ M @ TE
 
 
-def _rod(xa: np.ndarray, xb: np.ndarray, s: Section, coupled: bool
+def _rod(xa: np.ndarray, xb: np.ndarray, s: BdfSection, coupled: bool
          ) -> tuple[np.ndarray, np.ndarray]:
     """Stiffness and mass (12 x 12, basic) of a CROD (module docstring)."""
     d = xb - xa
@@ -216,7 +216,7 @@ def nastran_matrices(bulk: BulkData) -> NastranMatrices:
                            pairs, bulk, faces)
 
 
-def _bar(bulk: BulkData, bar: Bar, s: Section) -> tuple[np.ndarray, np.ndarray]:
+def _bar(bulk: BulkData, bar: Bar, s: BdfSection) -> tuple[np.ndarray, np.ndarray]:
     xa, xb = bulk.grids[bar.nodes[0]], bulk.grids[bar.nodes[1]]
     v = np.asarray(bar.v) if bar.g0 is None else bulk.grids[bar.g0] - xa
     released = [int(c) - 1 for c in bar.pa] + [6 + int(c) - 1 for c in bar.pb]

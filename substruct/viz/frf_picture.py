@@ -19,10 +19,10 @@ from substruct.viz.units import frf_axis_label
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["plot_frf", "draw_frf", "MAX_CURVES", "MAGNITUDES", "case_magnitude", "decibels"]
+__all__ = ["plot_frf", "draw_frf", "MAX_FRF_CURVES", "MAGNITUDES", "case_magnitude", "decibels"]
 
 #: Output/input pairs drawn by default (the first ones, outputs varying slowest).
-MAX_CURVES = 9
+MAX_FRF_CURVES = 9
 #: Grids of at most this many frequencies are drawn with a marker at each.
 SPARSE_GRID = 60
 #: How the magnitude is drawn: ``log`` (|H| on a log axis) or ``db`` (20 log10 |H| re 1 unit).
@@ -52,7 +52,7 @@ def case_magnitude(result: Result) -> str:
     return value if value in MAGNITUDES else "log"
 
 
-def draw_frf(result: Result, *, max_curves: int = MAX_CURVES,
+def draw_frf(result: Result, *, max_curves: int = MAX_FRF_CURVES,
              magnitude: str | None = None) -> Figure:
     """The receptance figure of ``result``, drawn and not written (see :func:`plot_frf`; the
     public :func:`substruct.viz.plotting.frf_figure` returns it and writes it on request).
@@ -92,7 +92,7 @@ def draw_frf(result: Result, *, max_curves: int = MAX_CURVES,
 
 
 def plot_frf(result: Result, png_path: str | os.PathLike, *,
-             max_curves: int = MAX_CURVES, magnitude: str | None = None) -> Path:
+             max_curves: int = MAX_FRF_CURVES, magnitude: str | None = None) -> Path:
     """Receptance magnitude (log axis, or dB re 1 unit with ``magnitude="db"`` or the case's
     ``analysis.frf.magnitude: db``) and phase against ``omega``, one curve per output/input
     pair.

@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING
 
 from substruct.io.hdf5 import atomic_path
 from substruct.run.result import Result
-from substruct.viz.frf_picture import MAX_CURVES, draw_frf, plot_frf
+from substruct.viz.frf_picture import MAX_FRF_CURVES, draw_frf, plot_frf
 from substruct.viz.layout import SCALE_FRACTION
 from substruct.viz.mode_picture import plot_modes, render_modes, save_png
 
@@ -34,7 +34,7 @@ __all__ = ["plot_modes", "plot_frf", "modes_figure", "frf_figure", "SCALE_FRACTI
 
 
 def frf_figure(result: Result, png_path: str | os.PathLike | None = None, *,
-               max_curves: int = MAX_CURVES, magnitude: str | None = None) -> Figure:
+               max_curves: int = MAX_FRF_CURVES, magnitude: str | None = None) -> Figure:
     """The receptance figure of :func:`plot_frf`, returned; written to ``png_path`` as well
     when one is given.  ``magnitude``: ``"log"`` or ``"db"``; ``None`` takes the case's
     ``analysis.frf.magnitude`` (:func:`substruct.viz.frf_picture.draw_frf`).

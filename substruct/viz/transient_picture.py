@@ -19,11 +19,11 @@ if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-__all__ = ["transient_figure", "plot_transient", "unit_names", "MAX_CURVES"]
+__all__ = ["transient_figure", "plot_transient", "unit_names", "MAX_TRANSIENT_CURVES"]
 
 #: Curves drawn per panel (the first outputs or constraint rows; the legend says how many are
 #: left out).
-MAX_CURVES = 8
+MAX_TRANSIENT_CURVES = 8
 
 
 def unit_names(units: str) -> dict[str, str]:
@@ -48,7 +48,7 @@ def _panel(ax: Axes, t: np.ndarray, values: np.ndarray, names: list[str], ylabel
         ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8, frameon=False)
 
 
-def transient_figure(result: Result, *, max_curves: int = MAX_CURVES) -> Figure:
+def transient_figure(result: Result, *, max_curves: int = MAX_TRANSIENT_CURVES) -> Figure:
     """The transient figure of ``result``, not yet written (see :func:`plot_transient`).
 
     Raises:
@@ -87,7 +87,7 @@ def transient_figure(result: Result, *, max_curves: int = MAX_CURVES) -> Figure:
 
 
 def plot_transient(result: Result, png_path: str | os.PathLike, *,
-                   max_curves: int = MAX_CURVES) -> Path:
+                   max_curves: int = MAX_TRANSIENT_CURVES) -> Path:
     """Displacement, velocity and acceleration at the output points and the constraint
     forces against time, at most ``max_curves`` curves a panel; written atomically as a PNG;
     return its path.

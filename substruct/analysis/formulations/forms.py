@@ -23,7 +23,7 @@ INVERSE_FORM`              pencil of eqs 28-34              ``max |A q - R F| / 
 (the residuals relative to ``|Z| |q| + |F|``; ``Z = K - omega^2 M + i omega C``, eq 13).  The
 three share no code path between their computations, so that each checks the others.
 :func:`formulation` is the registry the analyses dispatch through; a new formulation is a new
-subclass added to :data:`REGISTRY` (and its name to :data:`substruct.vocabulary.Formulation`).
+subclass added to :data:`REGISTRY` (and its name to :data:`substruct.vocabulary.FormulationName`).
 
 Examples
 --------
@@ -138,8 +138,8 @@ class GeneralizedInverse(Formulation):
     def dense_modes(self, M: np.ndarray, C: np.ndarray, K: np.ndarray,
                     A: np.ndarray) -> Modes:
         # imported here: the dense modes use the projection of this package (no import cycle)
-        from substruct.analysis.modes.dense import generalized_inverse_modes
-        return generalized_inverse_modes(M, C, K, A)
+        from substruct.analysis.modes.dense import dense_generalized_inverse_modes
+        return dense_generalized_inverse_modes(M, C, K, A)
 
     def residual(self, system: ConstrainedSystem, omega: float, q: np.ndarray,
                  F: np.ndarray) -> float:
@@ -162,8 +162,8 @@ class NullSpace(Formulation):
 
     def dense_modes(self, M: np.ndarray, C: np.ndarray, K: np.ndarray,
                     A: np.ndarray) -> Modes:
-        from substruct.analysis.modes.dense import null_space_modes
-        return null_space_modes(M, C, K, A)
+        from substruct.analysis.modes.dense import dense_null_space_modes
+        return dense_null_space_modes(M, C, K, A)
 
     def residual(self, system: ConstrainedSystem, omega: float, q: np.ndarray,
                  F: np.ndarray) -> float:

@@ -34,6 +34,7 @@ from substruct.linalg.dense import dense
 from substruct.linalg.factorize import factorizer
 from substruct.linalg.nullspace import null_space_basis
 from substruct.linalg.scaling import mass_column_scale
+from substruct.linalg.solve_type import Matrix
 
 __all__ = [
     "generalized_inverse_sweep",
@@ -43,7 +44,6 @@ __all__ = [
     "null_space_sweep",
 ]
 
-Matrix: TypeAlias = sp.sparray | np.ndarray
 
 
 def impedance(K: sp.sparray, M: sp.sparray, C: sp.sparray, omega: float) -> sp.csc_array:

@@ -59,7 +59,7 @@ from substruct.linalg.constraints import independent_rows
 from substruct.linalg.factorize import factorizer
 from substruct.vocabulary import GENERALIZED_INVERSE, KKT
 
-__all__ = ["MODAL_ABOVE", "ModalOptions", "frf_method", "DEFAULT_CUTOFF", "CHECK_FREQUENCIES", "ModalBasis", "modal_basis",
+__all__ = ["MODAL_ABOVE", "ModalOptions", "frf_method", "DEFAULT_CUTOFF", "MODAL_CHECK_FREQUENCIES", "ModalBasis", "modal_basis",
            "static_solver", "static_moments", "modal_terms", "modal_moment", "RESIDUAL_ORDER", "modal_receptance_sweep", "check_indices"]
 
 #: ``method: auto`` takes the modal sweep above this many coordinates.
@@ -67,7 +67,7 @@ MODAL_ABOVE = 2000
 #: Default cut-off: the modes up to this multiple of the highest frequency of the grid.
 DEFAULT_CUTOFF = 10.0
 #: Frequencies of the grid at which the direct solve checks the modal sweep.
-CHECK_FREQUENCIES = 3
+MODAL_CHECK_FREQUENCIES = 3
 #: Residual terms: none, the static flexibility (``G - sum_r T_r(0)``), or the Taylor terms
 #: up to ``s^2`` (:func:`static_moments`; error of the truncation then ``O((w / w_c)^3)``).
 RESIDUAL_ORDER = {"none": -1, "static": 0, "second-order": 2}
@@ -91,7 +91,7 @@ class ModalOptions:
     count: int | None = None
     cutoff: float = DEFAULT_CUTOFF
     residual: str = "second-order"
-    n_check: int = CHECK_FREQUENCIES
+    n_check: int = MODAL_CHECK_FREQUENCIES
     solver: str = "auto"
 
 
@@ -282,7 +282,7 @@ def modal_moment(basis: ModalBasis, P: np.ndarray, Q: np.ndarray, k: int) -> np.
     return np.asarray(out)
 
 
-def check_indices(count: int, k: int = CHECK_FREQUENCIES) -> np.ndarray:
+def check_indices(count: int, k: int = MODAL_CHECK_FREQUENCIES) -> np.ndarray:
     """``k`` indices spread over a grid of ``count`` frequencies (first, last, between)."""
     return np.unique(np.round(np.linspace(0, count - 1, min(k, count))).astype(int))
 

@@ -38,6 +38,7 @@ from substruct.analysis.formulations.coupling import FORMULATIONS, receptance
 from substruct.analysis.frf.sparse import null_space_sparse_sweep
 from substruct.linalg.scaling import equilibrate
 from substruct.vocabulary import KKT, NULL_SPACE
+from substruct.linalg.system import ConstrainedSystem
 
 __all__ = [
     "CHECK_FREQUENCIES",
@@ -114,14 +115,14 @@ def constraint_residual(K: sp.csr_array, M: sp.csr_array, C: sp.csr_array | None
     return float(np.abs(AH).max(initial=0.0) / scale)
 
 
-def sweep_checks(K: sp.csr_array, M: sp.csr_array, C: sp.csr_array | None, A: sp.csr_array,
-                 omegas: np.ndarray, inputs: sp.csc_array, outputs: sp.csr_array,
-                 H: np.ndarray, method: str, checks: Sequence[str],
-                 labels: list[str] | None) -> dict[str, float]:
+def sweep_checks(system: ConstrainedSystem, omegas: np.ndarray, inputs: sp.csc_array,
+                 outputs: sp.csr_array, H: np.ndarray, method: str,
+                 checks: Sequence[str]) -> dict[str, float]:
     """The check figures of a production sweep ``H``: each of ``method`` and ``checks`` other
     than ``null-space`` (``kkt`` if none is left) solved by
     :func:`substruct.analysis.formulations.coupling.receptance` at :func:`check_frequencies` for every
-    output and the :func:`checked_inputs`."""
+    output and the :func:`checked_inputs` (the system's own rows, ``R`` none on this path)."""
+    labels = None if system.constraint_labels is None else list(system.constraint_labels)
     names = [m for k, m in enumerate([method, *checks])
              if m != NULL_SPACE and m not in [method, *checks][:k]] or [KKT]
     idx = check_frequencies(len(omegas))
@@ -131,7 +132,7 @@ def sweep_checks(K: sp.csr_array, M: sp.csr_array, C: sp.csr_array | None, A: sp
     sample = sp.csc_array(inputs[:, cols])
     out = {}
     for name in names:
-        Hc = receptance(K, M, C, A, omegas[idx], None, method=name, inputs=sample,
-                        outputs=outputs, labels=labels)
+        Hc = receptance(system.K, system.M, system.C, system.A, omegas[idx], None, method=name,
+                        inputs=sample, outputs=outputs, labels=labels)
         out[name] = receptance_difference(Hc, H[idx][:, :, cols])
     return out

@@ -55,7 +55,7 @@ import numpy as np
 
 from substruct.case.channels import ChannelTable
 
-__all__ = ["VirtualPoint", "VptResult", "VP_COMPONENTS", "RANK_RTOL", "idm_rows",
+__all__ = ["VirtualPoint", "VptResult", "VP_COMPONENTS", "VP_RANK_RTOL", "idm_rows",
            "transformation", "VirtualPointTransform", "virtual_point_transform",
            "consistency", "check_measured"]
 
@@ -63,7 +63,7 @@ __all__ = ["VirtualPoint", "VptResult", "VP_COMPONENTS", "RANK_RTOL", "idm_rows"
 VP_COMPONENTS = ("x", "y", "z", "rx", "ry", "rz")
 #: A virtual point's reduction is refused if the smallest singular value of its (length-scaled)
 #: ``R`` is below this fraction of the largest.
-RANK_RTOL = 1e-8
+VP_RANK_RTOL = 1e-8
 
 
 @dataclass(frozen=True)
@@ -131,7 +131,7 @@ def transformation(R: np.ndarray, weights: np.ndarray | None, what: str,
     scaled = R.copy()
     scaled[:, 3:6] /= max(length, 1e-300)
     s = np.linalg.svd(scaled * np.sqrt(w)[:, None], compute_uv=False)
-    rank = int(np.sum(s > RANK_RTOL * s[0]))
+    rank = int(np.sum(s > VP_RANK_RTOL * s[0]))
     if rank < c:
         raise ValueError(f"{what}: the channels leave {c - rank} virtual-point motion(s) "
                          f"unobservable (rank {rank} of {c}; collinear positions or parallel "

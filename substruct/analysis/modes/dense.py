@@ -57,12 +57,12 @@ from substruct.linalg.nullspace import null_space_basis
 from substruct.linalg.scaling import equilibrate, mass_column_scale
 from substruct.vocabulary import FORMULATIONS, GENERALIZED_INVERSE, KKT, NULL_SPACE
 
-__all__ = ["FORMULATIONS", "coupled_modes", "generalized_inverse_modes", "kkt_modes",
-           "null_space_modes"]
+__all__ = ["FORMULATIONS", "coupled_modes", "dense_generalized_inverse_modes", "kkt_modes",
+           "dense_null_space_modes"]
 
 
 
-def generalized_inverse_modes(M: np.ndarray, C: np.ndarray, K: np.ndarray,
+def dense_generalized_inverse_modes(M: np.ndarray, C: np.ndarray, K: np.ndarray,
                               A: np.ndarray) -> Modes:
     """Eqs (28)-(34): the state-space pencil of the projected equations.
 
@@ -145,7 +145,7 @@ def _gi_polish(ms: MassSplit, M: np.ndarray, C: np.ndarray, K: np.ndarray, A: np
     return polish
 
 
-def null_space_modes(M: np.ndarray, C: np.ndarray, K: np.ndarray, A: np.ndarray) -> Modes:
+def dense_null_space_modes(M: np.ndarray, C: np.ndarray, K: np.ndarray, A: np.ndarray) -> Modes:
     """``u = N p`` with ``A N = 0``: ``N^T (lambda^2 M + lambda C + K) N p = 0``."""
     n = K.shape[0]
     N = null_space_basis(A, col_scale=mass_column_scale(M)) if A.size else np.eye(n)

@@ -49,12 +49,12 @@ import scipy.sparse as sp
 
 from substruct.linalg.factorize import Solve
 from substruct.vocabulary import INTEGRATORS
+from substruct.linalg.solve_type import Matrix
 
 __all__ = ["INTEGRATORS", "Scheme", "Correction", "Sink", "LoadSteps", "Restart", "StepState",
            "StepControl", "scheme", "integrate", "effective_matrix"]
 
 
-Matrix: TypeAlias = sp.sparray | np.ndarray
 
 
 @dataclass(frozen=True)

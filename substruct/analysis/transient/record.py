@@ -20,10 +20,10 @@ import scipy.sparse as sp
 from substruct.analysis.transient.integrators import LoadSteps, Work
 from substruct.analysis.transient.base import Motion
 from substruct.linalg.factorize import factorizer
+from substruct.linalg.solve_type import Matrix
 
 __all__ = ["Physical", "Recorder", "constraint_force_solver"]
 
-Matrix: TypeAlias = sp.sparray | np.ndarray
 
 
 def constraint_force_solver(A: sp.csr_array, keep: np.ndarray
