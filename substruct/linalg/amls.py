@@ -33,6 +33,7 @@ from typing import Callable
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 from substruct.linalg.amls_reduce import ReducedModel, amls_reduce
 from substruct.linalg.amls_tree import dissection_tree
@@ -88,13 +89,44 @@ def relative_residuals(K: sp.sparray, M: sp.sparray, lam: np.ndarray, U: np.ndar
         return np.where(den > 0, num / np.where(den > 0, den, 1.0), np.inf)
 
 
+#: Reduced pencils up to this size are solved by a dense ``eigh``; larger ones by Lanczos.
+DENSE_REDUCED = 3000
+
+
 def reduced_eigenpairs(red: ReducedModel, lam_max: float) -> tuple[np.ndarray, np.ndarray]:
     r"""Every eigenpair of :math:`\operatorname{diag}(\Lambda) y = \lambda M_r y` with
-    :math:`\lambda \le` ``lam_max`` (dense ``eigh``, subset by value), ``M_r``-normalized."""
+    :math:`\lambda \le` ``lam_max``, ``M_r``-normalized.
+
+    Small pencils (or a singular :math:`\Lambda`, a free body's rigid modes): dense ``eigh``
+    subset by value.  Otherwise, with :math:`\Lambda > 0` diagonal, the pencil is the
+    standard symmetric problem
+
+    .. math::  \hat M z = \mu z, \qquad \hat M = \Lambda^{-1/2} M_r \Lambda^{-1/2}, \qquad
+               \mu = 1/\lambda, \quad y = \Lambda^{-1/2} z,
+
+    whose largest eigenvalues Lanczos (``eigsh``, ``which="LA"``) finds with sparse products
+    only (the inverse iteration is free: :math:`K_r` is diagonal); the number asked for grows
+    until one found is beyond ``lam_max``.
+    """
     if red.size == 0:
         return np.zeros(0), np.zeros((0, 0))
-    return sla.eigh(np.diag(red.lam), red.M.toarray(), subset_by_value=(-np.inf, lam_max),
-                    driver="gvx")
+    if red.size <= DENSE_REDUCED or red.lam.min() <= 0:
+        return sla.eigh(np.diag(red.lam), red.M.toarray(), subset_by_value=(-np.inf, lam_max),
+                        driver="gvx")
+    d = 1.0 / np.sqrt(red.lam)
+    D = sp.diags_array(d)
+    Mh = sp.csr_array(D @ red.M @ D)
+    k = min(max(32, 2 * int(np.sum(red.lam <= lam_max))), red.size - 2)
+    v0 = np.random.default_rng(0).standard_normal(red.size)
+    while True:
+        mu, Z = spla.eigsh(Mh, k=k, which="LA", v0=v0)
+        if mu.min() < 1.0 / lam_max or k >= red.size - 2:
+            break
+        k = min(int(1.5 * k) + 1, red.size - 2)
+    lam = 1.0 / mu
+    order = np.argsort(lam)
+    order = order[lam[order] <= lam_max]
+    return lam[order], Z[:, order] * d[:, None]
 
 
 def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_max: float,

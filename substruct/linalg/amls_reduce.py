@@ -123,7 +123,7 @@ def block_modes(Kb: np.ndarray | sp.sparray, Mb: np.ndarray | sp.sparray, lam_cu
         return np.zeros(0), np.zeros((0, 0))
     if sp.issparse(Kb) and n > DENSE_LEAF and solve is not None:
         k = min(32, n // 4)
-        v0 = np.random.default_rng(0).standard_normal(n)
+        v0: np.ndarray = np.random.default_rng(0).standard_normal(n)
         while k < n // 4:
             lam, V = shift_invert_lanczos(sp.csr_array(Kb), sp.csr_array(Mb), k, 0.0, solve,
                                           v0=v0)
@@ -132,8 +132,8 @@ def block_modes(Kb: np.ndarray | sp.sparray, Mb: np.ndarray | sp.sparray, lam_cu
                 keep = order[lam[order] <= lam_cut]
                 return lam[keep], V[:, keep]
             k *= 2
-    Kd = Kb.toarray() if sp.issparse(Kb) else Kb
-    Md = Mb.toarray() if sp.issparse(Mb) else Mb
+    Kd = sp.csr_array(Kb).toarray() if sp.issparse(Kb) else np.asarray(Kb)
+    Md = sp.csr_array(Mb).toarray() if sp.issparse(Mb) else np.asarray(Mb)
     lam, V = sla.eigh(Kd, Md, subset_by_value=(-np.inf, lam_cut), driver="gvx")
     return lam, V
 
@@ -158,11 +158,8 @@ def amls_reduce(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, root: 
     P = sp.csr_array(abs(K) + abs(M))
     order = root.postorder()
     pos = np.empty(n, dtype=np.int64)
-    first = {}
     for i, b in enumerate(order):
         pos[b.dofs] = i
-    for i, b in enumerate(order):   # first post-order index of each subtree
-        first[id(b)] = min([first[id(c)] for c in b.children], default=i)
     factor = factorizer(factorization)
     passed: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = {}
     blocks: list[_Block] = []

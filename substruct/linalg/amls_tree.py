@@ -13,9 +13,9 @@ in the order *subdomains first, then their separator* (post-order) the matrix ha
 
 the structure AMLS reduces bottom-up (:mod:`substruct.linalg.amls`).
 
-Coordinates of one finite-element node share one row pattern; they are merged into one graph
-vertex first (supervariables), so a node is never split between a subdomain and a separator
-and METIS works on a graph three times smaller for a solid.
+Rows with one sparsity pattern are merged into one graph vertex first (supervariables), so
+METIS works on a smaller graph; any merging keeps the structure above, the patterns decide
+only how many rows merge.
 """
 
 from __future__ import annotations
