@@ -123,7 +123,7 @@ def block_modes(Kb: np.ndarray | sp.sparray, Mb: np.ndarray | sp.sparray, lam_cu
         return np.zeros(0), np.zeros((0, 0))
     if sp.issparse(Kb) and n > DENSE_LEAF and solve is not None:
         k = min(32, n // 4)
-        v0: np.ndarray = np.random.default_rng(0).standard_normal(n)
+        v0 = np.asarray(np.random.default_rng(0).standard_normal(n))
         while k < n // 4:
             lam, V = shift_invert_lanczos(sp.csr_array(Kb), sp.csr_array(Mb), k, 0.0, solve,
                                           v0=v0)
