@@ -1,0 +1,131 @@
+"""AMLS against shift-invert Lanczos: the lowest k modes of a clamped solid box.
+
+    OMP_NUM_THREADS=1 python benchmarks/amls.py [--sizes 30000 100000] [--modes 50 200 500]
+        [--cutoff 2] [--iterations 1] [--leaf-size 1000] [--quick]
+
+The model: a steel box ``4 x 1 x 1`` of Q1 hexahedra clamped at ``x = 0`` (the monolithic mesh
+of benchmarks/modes.py).  For each size and number of modes k, each in a fresh subprocess
+(peak memory: the process's ``VmHWM`` during the solve, reset before it):
+
+(a) Lanczos: ``eigsh`` shift-invert (ARPACK) with ``OPinv`` the registry's factorization of
+    ``K - sigma M`` (:func:`substruct.linalg.lanczos.shift_invert_lanczos`), k + 1 modes; the
+    wanted frequency is then put halfway between modes k and k + 1;
+(b) AMLS (:func:`substruct.linalg.amls.amls_modes`) for every mode below that frequency, with
+    the cut-off (a multiple of it), leaf size and subspace iterations given.
+
+The table: wall and CPU seconds and peak MB of both, the ratio of times, the number of
+reduced coordinates, the count of AMLS modes against k, the largest relative frequency error
+against (a) and the largest relative residual ``||K u - w^2 M u|| / ||K u||`` of AMLS.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+
+import numpy as np
+import scipy.sparse as sp
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from modes import _reset_peak, _status, divisions, machine  # noqa: E402
+
+
+def box(size: int) -> tuple[sp.csr_array, sp.csr_array]:
+    from substruct.models.solid import solid_box
+    nxh, m = divisions(size)
+    b = solid_box("box", (4.0, 1.0, 1.0), (2 * nxh, m, m), 2.1e11, 0.3, 7850.0,
+                  fixed=[{"box": [[0, 0, 0], [0, 1, 1]]}])
+    return sp.csr_array(b.K), sp.csr_array(b.M)
+
+
+def worker(args: argparse.Namespace) -> dict:
+    K, M = box(args.size)
+    _reset_peak()
+    t0, c0 = time.perf_counter(), time.process_time()
+    if args.worker == "lanczos":
+        from substruct.linalg.factorize import factorizer
+        from substruct.linalg.lanczos import shift_invert_lanczos
+        sigma = -1e-9 * K.diagonal().sum() / M.diagonal().sum()
+        solve = factorizer("auto")(sp.csc_array(K - sigma * M))
+        v0 = np.random.default_rng(0).standard_normal(K.shape[0])
+        lam, _ = shift_invert_lanczos(K, M, args.k + 1, sigma, solve, v0=v0)
+        out = {"lam": np.sort(lam).tolist()}
+    else:
+        from substruct.linalg.amls import amls_modes
+        r = amls_modes(K, M, args.omega_max, cutoff=args.cutoff, leaf_size=args.leaf_size,
+                       iterations=args.iterations, ritz_ratio=args.ritz_ratio)
+        out = {"lam": r.lam.tolist(), "residual": float(r.residual.max(initial=0)),
+               "n_reduced": r.n_reduced, "times": r.times}
+    out.update(n=K.shape[0], time=time.perf_counter() - t0, cpu=time.process_time() - c0,
+               peak=_status("VmHWM"))
+    return out
+
+
+def measure(kind: str, size: int, k: int, args: argparse.Namespace,
+            omega_max: float = 0.0) -> dict:
+    env = {**os.environ, "OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1",
+           "MKL_NUM_THREADS": "1"}
+    cmd = [sys.executable, __file__, "--worker", kind, "--size", str(size), "--k", str(k),
+           "--omega-max", repr(omega_max), "--cutoff", str(args.cutoff), "--iterations",
+           str(args.iterations), "--leaf-size", str(args.leaf_size), "--ritz-ratio",
+           str(args.ritz_ratio)]
+    out = subprocess.run(cmd, env=env, capture_output=True, text=True)
+    if out.returncode != 0:
+        raise RuntimeError(f"worker {kind} {size} {k} failed:\n{out.stderr[-3000:]}")
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def main(argv: list[str] | None = None) -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--sizes", type=int, nargs="+", default=[30000, 100000])
+    p.add_argument("--modes", type=int, nargs="+", default=[50, 200, 500])
+    p.add_argument("--cutoff", type=float, default=2.0)
+    p.add_argument("--iterations", type=int, default=1)
+    p.add_argument("--ritz-ratio", type=float, default=1.5)
+    p.add_argument("--leaf-size", type=int, default=1000)
+    p.add_argument("--quick", action="store_true", help="30000 coordinates only")
+    p.add_argument("--json", default=None, help="also write the raw measurements here")
+    p.add_argument("--worker", choices=["lanczos", "amls"], help=argparse.SUPPRESS)
+    p.add_argument("--size", type=int, help=argparse.SUPPRESS)
+    p.add_argument("--k", type=int, help=argparse.SUPPRESS)
+    p.add_argument("--omega-max", type=float, help=argparse.SUPPRESS)
+    args = p.parse_args(argv)
+    if args.worker:
+        print(json.dumps(worker(args)))
+        return
+    sizes = [30000] if args.quick else args.sizes
+    print(f"machine: {machine()}")
+    print(f"AMLS: cut-off {args.cutoff} x the wanted frequency, {args.iterations} subspace "
+          f"iteration(s) on the Ritz vectors up to {args.ritz_ratio} x, leaves <= "
+          f"{args.leaf_size} coordinates; Lanczos: eigsh shift-invert, registry factorization")
+    head = (f"{'n':>7} {'k':>4} {'L: s':>7} {'L: cpu':>7} {'L: MB':>6} {'A: s':>7} "
+            f"{'A: cpu':>7} {'A: MB':>6} {'A/L t':>6} {'n_red':>6} {'found':>5} "
+            f"{'max df/f':>9} {'max res':>8}")
+    print(head)
+    rows = []
+    for size in sizes:
+        for k in args.modes:
+            a = measure("lanczos", size, k, args)
+            lam = np.array(a["lam"])
+            wmax = float(np.sqrt(0.5 * (lam[k - 1] + lam[k])))
+            b = measure("amls", size, k, args, wmax)
+            lb = np.array(b["lam"])
+            m = min(lb.size, k)
+            err = float(np.max(np.abs(np.sqrt(lb[:m] / lam[:m]) - 1))) if m else float("nan")
+            rows.append({"lanczos": a, "amls": b, "k": k, "freq_err": err})
+            print(f"{a['n']:>7} {k:>4} {a['time']:>7.1f} {a['cpu']:>7.1f} "
+                  f"{a['peak'] / 2**20:>6.0f} {b['time']:>7.1f} {b['cpu']:>7.1f} "
+                  f"{b['peak'] / 2**20:>6.0f} {b['time'] / a['time']:>6.2f} "
+                  f"{b['n_reduced']:>6} {lb.size:>5} {err:>9.1e} {b['residual']:>8.1e}",
+                  flush=True)
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump({"machine": machine(), "rows": rows, "args": vars(args)}, f, indent=1)
+
+
+if __name__ == "__main__":
+    main()

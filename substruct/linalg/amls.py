@@ -1,0 +1,194 @@
+r"""Automated multilevel substructuring (AMLS): all eigenpairs of :math:`K u = \lambda M u`
+below a wanted frequency, for many modes of large sparse models.
+
+1. Nested dissection of the graph of ``K`` into subdomains and separators
+   (:func:`substruct.linalg.amls_tree.dissection_tree`, METIS bisections and minimum vertex
+   covers of the cuts).
+2. Bottom-up reduction (:func:`substruct.linalg.amls_reduce.amls_reduce`): in every block the
+   fixed-interface modes with eigenvalue up to the cut-off
+   :math:`\lambda_c = (r\,\omega_{max})^2` (``r`` = ``cutoff``, a multiple of the highest
+   wanted circular frequency) and the exact static (constraint-mode) coupling onto its
+   ancestors' separators; the reduced pencil :math:`(\operatorname{diag}\Lambda, M_r)`.
+3. The reduced eigenproblem, dense, for every eigenvalue up to :math:`\omega_{max}^2` (or, to be
+   improved, up to :math:`(s\,\omega_{max})^2`, ``s`` = ``ritz_ratio``), expanded to physical
+   coordinates :math:`U = Z Y`.
+4. Optionally ``iterations`` steps of subspace iteration with the full factorization,
+   :math:`W = (K - \sigma M)^{-1} M U`, then Rayleigh-Ritz on :math:`W`
+   (:func:`substruct.linalg.lanczos.rayleigh_ritz`); one step multiplies the error of
+   :math:`\lambda_j` by about :math:`((\lambda_j - \sigma)/(\lambda_{p+1} - \sigma))^2`,
+   :math:`\lambda_{p+1}` the first Ritz value left out.
+
+Accuracy: AMLS is a Rayleigh-Ritz method on nested subspaces, so every computed
+:math:`\lambda_j` is an upper bound of the exact one and decreases monotonically as the
+cut-off grows, reaching it (to round-off) when every mode is kept.  Every returned mode has
+its relative residual :math:`\|K u - \lambda M u\| / \|K u\|` in the full space.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from substruct.linalg.amls_reduce import ReducedModel, amls_reduce
+from substruct.linalg.amls_tree import dissection_tree
+from substruct.linalg.factorize import factorizer
+from substruct.linalg.lanczos import rayleigh_ritz
+
+__all__ = ["AMLSModes", "amls_modes", "relative_residuals"]
+
+#: The shift of the subspace iteration, as a fraction of the wanted eigenvalue
+#: :math:`\omega_{max}^2` (negative: ``K - sigma M`` is positive definite for a free body).
+SHIFT_FRACTION = -1e-3
+
+
+@dataclass
+class AMLSModes:
+    r"""Eigenpairs by AMLS, ascending.
+
+    Attributes:
+        lam: eigenvalues :math:`\omega^2` up to the wanted one.
+        U: ``n x k`` mode shapes, ``M``-orthonormal.
+        residual: relative residual :math:`\|K u - \lambda M u\| / \|K u\|` of each mode.
+        n_reduced: number of reduced coordinates (modes kept over all blocks).
+        kept_per_level: number of modes kept at each tree level (0: the root separator).
+        n_blocks: number of blocks (subdomains and separators) of the tree.
+        iterations: subspace iterations done.
+        times: seconds spent in each stage (``tree``, ``reduce``, ``reduced``, ``expand``,
+            ``improve``, ``residual``).
+    """
+
+    lam: np.ndarray
+    U: np.ndarray
+    residual: np.ndarray
+    n_reduced: int
+    kept_per_level: np.ndarray
+    n_blocks: int
+    iterations: int
+    times: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def omega(self) -> np.ndarray:
+        """Circular frequencies :math:`\\sqrt{\\max(\\lambda, 0)}`."""
+        return np.sqrt(np.maximum(self.lam, 0.0))
+
+
+def relative_residuals(K: sp.sparray, M: sp.sparray, lam: np.ndarray, U: np.ndarray
+                       ) -> np.ndarray:
+    r""":math:`\|K u_j - \lambda_j M u_j\| / \|K u_j\|` per column (``inf`` where
+    :math:`K u_j = 0`)."""
+    KU = K @ U
+    num = np.linalg.norm(KU - (M @ U) * lam, axis=0)
+    den = np.linalg.norm(KU, axis=0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(den > 0, num / np.where(den > 0, den, 1.0), np.inf)
+
+
+#: Reduced pencils up to this size are solved by a dense ``eigh``; larger ones by Lanczos.
+DENSE_REDUCED = 3000
+
+
+def reduced_eigenpairs(red: ReducedModel, lam_max: float) -> tuple[np.ndarray, np.ndarray]:
+    r"""Every eigenpair of :math:`\operatorname{diag}(\Lambda) y = \lambda M_r y` with
+    :math:`\lambda \le` ``lam_max``, ``M_r``-normalized.
+
+    Small pencils (or a singular :math:`\Lambda`, a free body's rigid modes): dense ``eigh``
+    subset by value.  Otherwise, with :math:`\Lambda > 0` diagonal, the pencil is the
+    standard symmetric problem
+
+    .. math::  \hat M z = \mu z, \qquad \hat M = \Lambda^{-1/2} M_r \Lambda^{-1/2}, \qquad
+               \mu = 1/\lambda, \quad y = \Lambda^{-1/2} z,
+
+    whose largest eigenvalues Lanczos (``eigsh``, ``which="LA"``) finds with sparse products
+    only (the inverse iteration is free: :math:`K_r` is diagonal); the number asked for grows
+    until one found is beyond ``lam_max``.
+    """
+    if red.size == 0:
+        return np.zeros(0), np.zeros((0, 0))
+    if red.size <= DENSE_REDUCED or red.lam.min() <= 0:
+        return sla.eigh(np.diag(red.lam), red.M.toarray(), subset_by_value=(-np.inf, lam_max),
+                        driver="gvx")
+    d = 1.0 / np.sqrt(red.lam)
+    D = sp.diags_array(d)
+    Mh = sp.csr_array(D @ red.M @ D)
+    k = min(max(32, 2 * int(np.sum(red.lam <= lam_max))), red.size - 2)
+    v0 = np.random.default_rng(0).standard_normal(red.size)
+    while True:
+        mu, Z = spla.eigsh(Mh, k=k, which="LA", v0=v0)
+        if mu.min() < 1.0 / lam_max or k >= red.size - 2:
+            break
+        k = min(int(1.5 * k) + 1, red.size - 2)
+    lam = 1.0 / mu
+    order = np.argsort(lam)
+    order = order[lam[order] <= lam_max]
+    return lam[order], Z[:, order] * d[:, None]
+
+
+def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_max: float,
+               cutoff: float = 5.0, leaf_size: int = 1000, iterations: int = 0,
+               ritz_ratio: float = 1.5, factorization: str = "auto",
+               progress: Callable[[str], None] | None = None) -> AMLSModes:
+    r"""The eigenpairs of :math:`K u = \omega^2 M u` with :math:`\omega \le` ``omega_max`` by
+    AMLS (module docstring).
+
+    Args:
+        K, M: ``n x n`` sparse symmetric stiffness (positive semi-definite; positive definite on
+            every subdomain the dissection makes) and mass (positive definite).
+        omega_max: the highest wanted circular frequency.
+        cutoff: ``r``: every block keeps its modes up to ``r * omega_max``.
+        leaf_size: subdomains are split until they have at most this many coordinates.
+        iterations: subspace iterations with the full factorization after the reduction.
+        ritz_ratio: with iterations, the Ritz vectors iterated are those up to
+            ``ritz_ratio * omega_max`` (capped by the cut-off).
+        factorization: registry name (:mod:`substruct.linalg.factorize`) for the subdomains'
+            and the full factorization.
+        progress: receives one line per stage and tree level.
+    """
+    if not (np.isfinite(omega_max) and omega_max > 0):
+        raise ValueError(f"omega_max must be positive and finite, got {omega_max!r}")
+    if not (np.isfinite(cutoff) and cutoff >= 1):
+        raise ValueError(f"cutoff must be at least 1, got {cutoff!r}")
+    if iterations < 0:
+        raise ValueError(f"iterations must be non-negative, got {iterations!r}")
+    say = progress or (lambda line: None)
+    K = sp.csr_array(K, dtype=float)
+    M = sp.csr_array(M, dtype=float)
+    lam_w = float(omega_max) ** 2
+    lam_c = (cutoff * omega_max) ** 2
+    times: dict[str, float] = {}
+    t = time.perf_counter()
+    root = dissection_tree(K, leaf_size)
+    n_blocks = len(root.postorder())
+    times["tree"] = time.perf_counter() - t
+    say(f"AMLS tree: {n_blocks} blocks, {max(b.level for b in root.postorder()) + 1} levels")
+    t = time.perf_counter()
+    red = amls_reduce(K, M, root, lam_c, factorization, say)
+    times["reduce"] = time.perf_counter() - t
+    say(f"AMLS reduced: {red.size} coordinates from {red.n}")
+    t = time.perf_counter()
+    bound = min(ritz_ratio ** 2, cutoff ** 2) * lam_w if iterations else lam_w
+    lam, Y = reduced_eigenpairs(red, bound)
+    times["reduced"] = time.perf_counter() - t
+    t = time.perf_counter()
+    U = red.expand(Y)
+    times["expand"] = time.perf_counter() - t
+    t = time.perf_counter()
+    if iterations and U.shape[1]:
+        solve = factorizer(factorization)(sp.csc_array(K - SHIFT_FRACTION * lam_w * M))
+        for it in range(iterations):
+            W = np.asarray(solve(M @ U)).reshape(U.shape)
+            lam, U = rayleigh_ritz(K, M, W)
+            say(f"AMLS subspace iteration {it + 1}: {U.shape[1]} vectors")
+    times["improve"] = time.perf_counter() - t
+    keep = lam <= lam_w
+    lam, U = lam[keep], U[:, keep]
+    t = time.perf_counter()
+    res = relative_residuals(K, M, lam, U)
+    times["residual"] = time.perf_counter() - t
+    levels = np.bincount(red.level, minlength=int(red.level.max(initial=0)) + 1)
+    return AMLSModes(lam, U, res, red.size, levels, n_blocks, iterations, times)

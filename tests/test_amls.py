@@ -1,0 +1,183 @@
+"""Automated multilevel substructuring (substruct.linalg.amls*) against the exact eigenpairs.
+
+The reference is a dense generalized ``eigh`` of the same (small) model.  What is asserted:
+
+* the dissection tree is a partition whose blocks couple only along ancestor lines;
+* every mode kept at every level: the exact eigenvalues, to round-off;
+* truncated: every AMLS eigenvalue is an upper bound of the exact one (Rayleigh-Ritz) and
+  decreases monotonically as the cut-off grows (nested subspaces); the measured errors;
+* one subspace iteration with the full factorization: the lower modes to 1e-8;
+* the number of modes below the wanted frequency equals the exact count;
+* a free box (rigid modes from the singular root separator) and a two-part tied assembly
+  through the null-space elimination of A.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.linalg as sla
+import scipy.sparse as sp
+
+from substruct.analysis.modes.krylov import eliminate
+from substruct.assembly.interfaces import tie_nodes
+from substruct.assembly.stack import assemble
+from substruct.linalg.amls import amls_modes, relative_residuals
+from substruct.linalg.amls_tree import dissection_tree
+from substruct.models.solid import solid_box
+
+E, NU, RHO = 2.1e11, 0.3, 7850.0
+EPS = np.finfo(float).eps
+CLAMP = [{"box": [[0, 0, 0], [0, 1, 1]]}]
+
+
+def box(divisions=(16, 4, 4), fixed=CLAMP):
+    b = solid_box("b", (4.0, 1.0, 1.0), divisions, E, NU, RHO, fixed=fixed)
+    return sp.csr_array(b.K), sp.csr_array(b.M)
+
+
+@pytest.fixture(scope="module")
+def clamped():
+    K, M = box()
+    lam = sla.eigh(K.toarray(), M.toarray(), eigvals_only=True)
+    return K, M, lam
+
+
+def mid_gap(lam: np.ndarray, k: int) -> float:
+    """A wanted circular frequency between the k-th and the (k+1)-th exact mode."""
+    return float(np.sqrt(0.5 * (lam[k - 1] + lam[k])))
+
+
+def test_tree_is_a_partition_coupled_along_ancestors(clamped):
+    K, _, _ = clamped
+    root = dissection_tree(K, 100)
+    blocks = root.postorder()
+    assert len(blocks) > 7 and max(b.level for b in blocks) >= 3
+    owner = np.full(K.shape[0], -1)
+    for i, b in enumerate(blocks):
+        assert np.all(owner[b.dofs] == -1)
+        owner[b.dofs] = i
+    assert np.all(owner >= 0)
+    ancestors: dict[int, set[int]] = {}
+
+    def walk(node, above):
+        ancestors[id(node)] = above
+        for c in node.children:
+            walk(c, above | {id(node)})
+    walk(root, set())
+    ids = [id(b) for b in blocks]
+    C = sp.coo_array(K)
+    pairs = set(zip(owner[C.row].tolist(), owner[C.col].tolist()))
+    for i, j in pairs:
+        if i != j:
+            assert ids[j] in ancestors[ids[i]] or ids[i] in ancestors[ids[j]]
+    # the root separator is small against its two subtrees (a plane across the box)
+    assert root.dofs.size < 0.2 * min(sum(b.dofs.size for b in c.postorder())
+                                      for c in root.children)
+
+
+def test_all_modes_kept_is_exact(clamped):
+    K, M, lam = clamped
+    r = amls_modes(K, M, mid_gap(lam, 30), cutoff=1e6, leaf_size=100)
+    assert r.n_reduced == K.shape[0]
+    assert r.lam.size == 30
+    # round-off of a Rayleigh-Ritz on a well-conditioned basis: eps times the condition of K
+    cond = lam[-1] / lam[0]
+    assert np.max(np.abs(r.lam / lam[:30] - 1)) < 100 * EPS * cond
+    assert np.allclose(r.U.T @ (M @ r.U), np.eye(30), atol=1e-8)
+    assert np.allclose(r.residual, relative_residuals(K, M, r.lam, r.U))
+    assert r.residual.max() < 1e-6
+
+
+def test_truncation_upper_bounds_decrease_with_cutoff(clamped):
+    K, M, lam = clamped
+    wmax = mid_gap(lam, 30)
+    prev = None
+    errors = []
+    for cutoff in (1.5, 2.0, 3.0, 5.0):
+        r = amls_modes(K, M, wmax, cutoff=cutoff, leaf_size=100, iterations=0)
+        # compare the first modes found (a truncated basis may push the last over wmax)
+        k = r.lam.size
+        rel = r.lam / lam[:k] - 1
+        assert rel.min() > -1e3 * EPS * lam[-1] / lam[0]   # Ritz values are upper bounds
+        if prev is not None:
+            m = min(k, prev.size)
+            # nested subspaces: no eigenvalue grows when the cut-off is raised
+            assert np.all(r.lam[:m] <= prev[:m] * (1 + 1e-10))
+        prev = r.lam
+        errors.append(float(np.max(rel[:20])))
+    assert all(a > b for a, b in zip(errors, errors[1:])), errors
+    # the measured trade-off on this model (docs/amls.md): 5x cut-off, below 1e-3 in lambda
+    assert errors[-1] < 1e-3 < errors[0]
+
+
+def test_one_subspace_iteration(clamped):
+    K, M, lam = clamped
+    wmax = mid_gap(lam, 30)
+    r0 = amls_modes(K, M, wmax, cutoff=5.0, leaf_size=100)
+    r1 = amls_modes(K, M, wmax, cutoff=5.0, leaf_size=100, iterations=1, ritz_ratio=2.0)
+    assert r1.iterations == 1
+    assert r1.lam.size == 30                      # the exact count below wmax
+    e0 = r0.lam / lam[:r0.lam.size] - 1
+    e1 = r1.lam / lam[:30] - 1
+    assert np.max(e1) < 1e-2 * np.max(e0)
+    # the lowest third: error times (lambda_j / lambda_p+1)^2 with lambda_p+1 >= 4 lambda_30
+    assert np.max(np.abs(e1[:10])) < 1e-8
+    assert np.all(r1.residual <= r0.residual.max())
+
+
+def test_count_below_wanted_frequency(clamped):
+    K, M, lam = clamped
+    for k in (10, 25):
+        r = amls_modes(K, M, mid_gap(lam, k), cutoff=3.0, leaf_size=150, iterations=1,
+                       ritz_ratio=3.0)
+        assert r.lam.size == int(np.sum(lam <= mid_gap(lam, k) ** 2)) == k
+
+
+def test_free_box_rigid_modes():
+    K, M = box((12, 3, 3), fixed=[])
+    lam = sla.eigh(K.toarray(), M.toarray(), eigvals_only=True)
+    wmax = mid_gap(lam, 16)
+    r = amls_modes(K, M, wmax, cutoff=1e6, leaf_size=100)
+    assert r.lam.size == 16
+    scale = lam[-1]
+    assert np.all(np.abs(r.lam[:6]) < 1e-9 * scale)
+    assert np.allclose(r.lam[6:], lam[6:16], rtol=1e-8)
+    r3 = amls_modes(K, M, wmax, cutoff=4.0, leaf_size=100, iterations=1, ritz_ratio=3.0)
+    assert r3.lam.size == 16
+    assert np.allclose(r3.lam[6:], lam[6:16], rtol=1e-5)
+
+
+def test_tied_assembly_through_null_space():
+    left = solid_box("left", (2.0, 1.0, 1.0), (6, 3, 3), E, NU, RHO, fixed=CLAMP)
+    right = solid_box("right", (2.0, 1.0, 1.0), (6, 3, 3), E, NU, RHO, origin=(2.0, 0, 0))
+    asm = assemble([left, right], tie_nodes(left, right, {"box": [[2, 0, 0], [2, 1, 1]]}))
+    el = eliminate(asm.M, asm.A)
+    T = el.T
+    Kt = sp.csr_array(T.T @ asm.K @ T)
+    Mt = sp.csr_array(T.T @ asm.M @ T)
+    # the monolithic box of the same mesh: the same spectrum
+    Km, Mm = box((12, 3, 3))
+    lam = sla.eigh(Km.toarray(), Mm.toarray(), eigvals_only=True)
+    wmax = mid_gap(lam, 20)
+    r = amls_modes(Kt, Mt, wmax, cutoff=1e6, leaf_size=80)
+    assert r.lam.size == 20
+    assert np.allclose(r.lam, lam[:20], rtol=1e-8)
+    U = T @ r.U
+    assert np.abs(asm.A @ U).max() < 1e-12 * np.abs(U).max()
+    r3 = amls_modes(Kt, Mt, wmax, cutoff=3.0, leaf_size=80, iterations=1, ritz_ratio=3.0)
+    assert r3.lam.size == 20
+    err = r3.lam / lam[:20] - 1
+    assert np.max(err) < 1e-4
+    # a Ritz value's error is second order in its residual: below the residual itself
+    assert np.all(err <= r3.residual)
+
+
+def test_bad_arguments(clamped):
+    K, M, _ = clamped
+    with pytest.raises(ValueError, match="omega_max"):
+        amls_modes(K, M, float("nan"))
+    with pytest.raises(ValueError, match="cutoff"):
+        amls_modes(K, M, 100.0, cutoff=0.5)
+    with pytest.raises(ValueError, match="leaf_size"):
+        dissection_tree(K, 0)
