@@ -3,6 +3,7 @@ independent formulations (Miles' equation, the Lyapunov covariance of the state-
 the partitioned dynamic stiffness, the quadratic formula)."""
 
 import numpy as np
+
 import pytest
 import scipy.linalg as sla
 import scipy.sparse as sp
@@ -10,6 +11,7 @@ import scipy.sparse as sp
 from substruct.analysis.api import receptance_sweep
 from substruct.analysis.errors import AnalysisInputError
 from substruct.analysis.frf.base_drive import RELATIVE, base_drive_sweep
+from substruct.analysis.system import SweepOptions
 from substruct.analysis.frf.random import (
     check_psd_table,
     check_spectral_matrix,
@@ -51,7 +53,7 @@ def test_sdof_transmissibility_exact(base_mass):
     K, M, C, A, wn = sdof_on_base(zeta=zeta, base_mass=base_mass)
     w = np.linspace(0.5, 4 * wn, 121)
     res = base_drive_sweep(K, M, C, A, w, np.array([[1.0]]), np.array([[0.0, 1.0]]),
-                           checks=["null-space", "kkt"])
+                           options=SweepOptions(checks=["null-space", "kkt"]))
     r = w / wn
     exact = (1 + 2j * zeta * r) / (1 - r ** 2 + 2j * zeta * r)
     assert np.abs(res.H[:, 0, 0] - exact).max() <= 1e-12 * np.abs(exact).max()
@@ -68,7 +70,8 @@ def test_sdof_transmissibility_loss_factor():
     K, M, _, A, wn = sdof_on_base()
     w = np.linspace(1.0, 3 * wn, 120)
     res = base_drive_sweep(K, M, None, A, w, np.array([[1.0]]), np.array([[0.0, 1.0]]),
-                           loss=[LossFactor(eta, sp.csr_array(K))], checks=["kkt"])
+                           loss=[LossFactor(eta, sp.csr_array(K))],
+                           options=SweepOptions(checks=["kkt"]))
     r = w / wn
     exact = (1 + 1j * eta) / (1 - r ** 2 + 1j * eta)
     assert np.abs(res.H[:, 0, 0] - exact).max() <= 1e-12 * np.abs(exact).max()
@@ -84,7 +87,8 @@ def test_two_supports_against_partitioned_stiffness():
     A = np.array([[1.0, 0, 0, 0], [0, 0, 0, 2.0]])  # the second row scaled: E follows it
     E = np.array([[1.0, 0.0], [0.0, 2.0]])
     w = np.linspace(1.0, 60.0, 80)
-    res = base_drive_sweep(K, M, C, A, w, E, np.eye(n)[[1, 2]], checks=["null-space"])
+    res = base_drive_sweep(K, M, C, A, w, E, np.eye(n)[[1, 2]],
+                           options=SweepOptions(checks=["null-space"]))
     free, held = [1, 2], [0, 3]
     for k, wk in enumerate(w):
         Z = K + 1j * wk * C - wk ** 2 * M

@@ -29,7 +29,7 @@ import numpy as np
 from substruct.case.bdf_fields import BdfError
 from substruct.case.bdf_model import BulkData, BushSpring
 from substruct.models.beam import rotation
-from substruct.models.shell import shell_matrices
+from substruct.models.shell import ShellTerms, shell_matrices
 
 __all__ = ["plate_matrices", "bush_matrices"]
 
@@ -51,9 +51,10 @@ def plate_matrices(bulk: BulkData, index: dict[int, int]
         try:
             K, M = shell_matrices(X, main.E, main.E / (2 * main.G) - 1, sec.t, sec.rho,
                                   "consistent" if bulk.coupled else "lumped", sec.nsm,
-                                  bending_material=bend_mat, bend=sec.bend,
-                                  membrane=m1 is not None, bending=m2 is not None,
-                                  rotary=bulk.coupled)
+                                  terms=ShellTerms(bending_material=bend_mat, bend=sec.bend,
+                                                   membrane=m1 is not None,
+                                                   bending=m2 is not None,
+                                                   rotary=bulk.coupled))
         except ValueError as err:
             raise BdfError(bulk.source, str(err), line=plate.line, card=plate.kind,
                            ident=plate.id) from None

@@ -46,14 +46,16 @@ on edges as degrees of freedom, but no shell element with three rotations per no
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from substruct.models.plate_bending import (
     bending_matrices_local, corner_shapes, plane_stress, tabulated,
 )
 
-__all__ = ["MAX_WARP", "DRILL_PENALTY", "SHELL_MASSES", "shell_axes", "membrane_matrices",
-           "shell_matrices"]
+__all__ = ["MAX_WARP", "DRILL_PENALTY", "SHELL_MASSES", "ShellTerms", "shell_axes",
+           "membrane_matrices", "shell_matrices"]
 
 #: Largest warp of a quadrilateral (distance of a corner from the mean plane over the shorter
 #: diagonal) accepted for a flat facet.
@@ -156,20 +158,30 @@ def _area(xy: np.ndarray) -> float:
     return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
 
 
+@dataclass(frozen=True)
+class ShellTerms:
+    """Which terms a shell element has, as Nastran's PSHELL gives them: ``bending_material``
+    ``(E, nu)`` of the bending (MID2; the membrane's if ``None``), ``bend`` the ratio
+    ``12 I / t^3`` multiplying the bending stiffness, ``membrane`` / ``bending`` whether the
+    element has each (MID1 / MID2 given), ``rotary`` whether the mass has the rotary inertia of
+    the thickness.  The default is a plain shell of one material."""
+
+    bending_material: tuple[float, float] | None = None
+    bend: float = 1.0
+    membrane: bool = True
+    bending: bool = True
+    rotary: bool = True
+
+
 def shell_matrices(X: np.ndarray, E: float, nu: float, t: float, rho: float,
                    mass: str = "consistent", nsm: float = 0.0, *,
-                   bending_material: tuple[float, float] | None = None, bend: float = 1.0,
-                   membrane: bool = True, bending: bool = True, rotary: bool = True
-                   ) -> tuple[np.ndarray, np.ndarray]:
+                   terms: ShellTerms = ShellTerms()) -> tuple[np.ndarray, np.ndarray]:
     r"""Stiffness and mass ``(6n, 6n)``, global axes, of a flat shell element with corners
     ``X`` ``(n, 3)``, ``n`` = 3 or 4, six coordinates ``(ux, uy, uz, rx, ry, rz)`` per corner
     (module docstring).  ``nsm`` is a non-structural mass per area, added to :math:`\rho t`
     on the translations.
 
-    For Nastran's PSHELL: ``bending_material`` ``(E, nu)`` of the bending (MID2; the
-    membrane's if ``None``), ``bend`` the ratio ``12 I / t^3`` multiplying the bending
-    stiffness, ``membrane`` / ``bending`` whether the element has each (MID1 / MID2 given),
-    ``rotary`` whether the mass has the rotary inertia of the thickness.
+    ``terms``: the terms of the element (:class:`ShellTerms`, for Nastran's PSHELL).
 
     Raises:
         ValueError: bad properties, a degenerate, non-convex or warped element.
@@ -183,6 +195,8 @@ def shell_matrices(X: np.ndarray, E: float, nu: float, t: float, rho: float,
     if not (E > 0 and t > 0 and rho >= 0 and nsm >= 0 and -1 < nu < 0.5):
         raise ValueError(f"a shell needs E > 0, t > 0, rho >= 0, nsm >= 0 and -1 < nu < 0.5, "
                          f"got E={E!r}, t={t!r}, rho={rho!r}, nsm={nsm!r}, nu={nu!r}")
+    bending_material, bend = terms.bending_material, terms.bend
+    membrane, bending, rotary = terms.membrane, terms.bending, terms.rotary
     R, xy = shell_axes(X)
     if _area(xy) <= 0:
         raise ValueError("the corners are not in order around the element")

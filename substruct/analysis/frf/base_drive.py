@@ -45,6 +45,7 @@ from substruct.analysis.frf.structural import LossFactor, equivalent_damping, hy
 from substruct.analysis.results import DEFAULT_TOLERANCE, Receptance
 from substruct.analysis.transient.base import influence
 from substruct.vocabulary import GENERALIZED_INVERSE
+from substruct.analysis.system import SweepOptions
 
 __all__ = ["RELATIVE", "base_inputs", "base_drive_sweep"]
 
@@ -75,10 +76,8 @@ def base_drive_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
                      C: sp.sparray | np.ndarray | None, A: sp.sparray | np.ndarray,
                      omegas: Sequence[float] | np.ndarray, E: np.ndarray,
                      outputs: sp.sparray | np.ndarray, *, per: str = "displacement",
-                     loss: Sequence[LossFactor] = (), method: str = GENERALIZED_INVERSE,
-                     checks: Sequence[str] = (), tolerance: float = DEFAULT_TOLERANCE,
-                     input_names: Sequence[str] | None = None,
-                     output_names: Sequence[str] | None = None) -> Receptance:
+                     loss: Sequence[LossFactor] = (), options: SweepOptions | None = None
+                     ) -> Receptance:
     r"""Output displacement per base motion, :math:`H[k, i, j] = o_i \hat q / G_j` (or per
     base acceleration, ``per="acceleration"``), by the paper's ``R`` (module docstring),
     checked by the relative-coordinates form (``agreement["relative-coordinates"]``).
@@ -87,7 +86,8 @@ def base_drive_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
         E: ``m x p``: column ``j`` the coefficients of base input ``j`` in the rows of ``A``.
         per: ``"displacement"`` or ``"acceleration"`` (then ``omega > 0``).
         loss: loss factors (:mod:`substruct.analysis.frf.structural`).
-        method, checks, tolerance: as :func:`substruct.analysis.api.receptance_sweep`
+        options: the main formulation, checks, tolerance and names, as for
+            :func:`substruct.analysis.api.receptance_sweep` (its defaults if ``None``)
             (a direct formulation).
 
     Raises:
@@ -96,6 +96,9 @@ def base_drive_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
             acceleration.
         ValueError: an unknown ``per`` (a programming error).
     """
+    opts = options if options is not None else SweepOptions()
+    method, checks, tolerance = opts.method, opts.checks, opts.tolerance
+    input_names, output_names = opts.input_names, opts.output_names
     if per not in ("displacement", "acceleration"):
         raise ValueError(f"unknown base input {per!r}")
     w = np.atleast_1d(np.asarray(omegas, dtype=float))
