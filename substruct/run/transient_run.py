@@ -181,8 +181,11 @@ def _initial(case: Case, model: Model) -> tuple[np.ndarray | None, np.ndarray | 
     return d0, v0
 
 
-def transient_result(case: Case, model: Model) -> Transient:
-    """The time histories ``case.analysis.transient`` asks for.
+def transient_result(case: Case, model: Model, extra: sp.csr_array | None = None,
+                     extra_names: list[str] | None = None) -> Transient:
+    """The time histories ``case.analysis.transient`` asks for; ``extra`` output rows (named
+    ``extra_names``) are recorded after the case's outputs (the recovery of superelements'
+    interiors, :mod:`substruct.run.recovery`).
 
     Raises:
         CaseError: at ``analysis.transient``, for input the analysis cannot take.
@@ -206,6 +209,10 @@ def transient_result(case: Case, model: Model) -> Transient:
          if spec.loads else sp.csc_array((n, 0)))
     O = (asm.rows([model.points[p] for p in spec.outputs]) if spec.outputs
          else sp.csr_array((0, n)))
+    names = list(spec.outputs)
+    if extra is not None and extra.shape[0]:
+        O = sp.csr_array(sp.vstack([O, extra]))
+        names += list(extra_names or [f"recovered {k + 1}" for k in range(extra.shape[0])])
     d0, v0 = _initial(case, model)
     opts = TransientOptions(integrator=spec.integrator, rho_inf=spec.spectral_radius,
                             every=spec.every, field_every=spec.field_every,
@@ -213,7 +220,7 @@ def transient_result(case: Case, model: Model) -> Transient:
     ground = _base(case, model, t)
     try:
         return transient(asm.M, asm.C, asm.K, asm.A, asm.b, B, f, spec.dt, steps, O,
-                         output_names=spec.outputs, constraint_labels=asm.constraint_labels,
+                         output_names=names, constraint_labels=asm.constraint_labels,
                          d0=d0, v0=v0, method=spec.method, checks=spec.check,
                          tolerance=spec.tolerance, options=opts, base=ground, pairs=pairs,
                          static=spec.initial.static)
