@@ -264,3 +264,29 @@ def test_bad_recovery(tmp_path: Path, extra: str, message: str) -> None:
     _write_models(tmp_path, 6)
     with pytest.raises(CaseError, match=message):
         load_case(_case(tmp_path, True, ["b@11:uz"], extra=extra))
+
+
+def test_compare_two_runs_peaks(runs, tmp_path: Path, capsys) -> None:
+    """``substruct compare`` of the reductions by 6 and 24 modes: the modes and a table of the
+    recovered peaks, matched by recovery and row, largest change first."""
+    import json
+
+    from substruct import cli
+
+    save(runs[6][3], tmp_path / "a.h5")
+    save(runs[24][3], tmp_path / "b.h5")
+    assert cli.main(["compare", str(tmp_path / "a.h5"), str(tmp_path / "b.h5"), "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    rows = data["peaks"]
+    assert len(rows) == 2 * len(runs[6][1])
+    first = rows[0]
+    k = runs[6][1].index(first["row"])
+    rec_a = runs[6][3].recovery[0 if first["recovery"] == "a.dtm" else 1]
+    rec_b = runs[24][3].recovery[0 if first["recovery"] == "a.dtm" else 1]
+    ea, eb = rec_a.peaks().extreme()[k], rec_b.peaks().extreme()[k]
+    assert first["change"] == pytest.approx((eb - ea) / abs(ea), rel=1e-12)
+    assert abs(first["change"]) >= max(abs(r["change"]) for r in rows[1:] if r["change"])
+    assert cli.main(["compare", str(tmp_path / "a.h5"), str(tmp_path / "b.h5")]) == 0
+    text = capsys.readouterr().out
+    assert f"recovered peaks ({len(rows)} quantities in both; largest change first):" in text
+    assert f"  {first['recovery']}@{first['row']}" in text
