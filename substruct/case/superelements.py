@@ -5,7 +5,7 @@ r"""Case-file superelements: ``type: superelement``, a reduced model delivered a
 
     - name: sc
       type: superelement
-      file: sc.op4              # or .npz
+      file: sc.op4              # or .npz, or bulk data with DMIG entries (.bdf, .dat ...)
       M: MAA                    # matrix names in the file (OP4, any case) or keys (NPZ)
       K: KAA
       C: BAA                    # optional viscous damping
@@ -16,12 +16,16 @@ r"""Case-file superelements: ``type: superelement``, a reduced model delivered a
       grids: {100: [0, 0, 0], 200: [0, 0, 1.2]}   # optional: rigid-body checks
       reference: [0, 0, 0]      # point the rigid-body mass matrix is taken about
       free: true                # the model has six rigid-body modes (K D = 0 checked)
+      recovery: [{name: dtm, matrix: DTM, of: displacement, labels: {file: rows.csv}}]
 
 The DOF map gives, row by row, the grid and the component of each coordinate: components 1-6
 (``ux uy uz rx ry rz``) of boundary grids, 0 for a modal (fixed-interface) coordinate, which is
 labelled ``mode:<k>`` in order.  A CSV file has one ``grid, component`` line per coordinate
 (an optional header line and ``#`` comments); a member (OP4 matrix or NPZ array) is ``n x 2``.
-Points are ``sc@100:uz`` (or ``sc@100:3``) and ``sc@mode:2``.
+Points are ``sc@100:uz`` (or ``sc@100:3``) and ``sc@mode:2``.  From bulk data the map is
+that of the DMIG entries (:mod:`substruct.case.dmig`: rows and columns in ascending ``(grid,
+component)``, scalar points modal), and ``dofs`` is left out.  ``recovery`` lists output
+transformation matrices (:mod:`substruct.case.recovery`).
 
 Checked while the case is read (:mod:`substruct.case.rigid_body`): the matrices square, of one
 size, real, finite, ``M`` and ``K`` symmetric and positive semidefinite (to the precision of
@@ -35,7 +39,6 @@ computed, and, for a free model, the rigid-body "frequencies" of ``(D^T K D, D^T
 from __future__ import annotations
 
 import re
-import stat
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
@@ -51,14 +54,14 @@ from substruct.case.fields import (
     Positive,
     StrictModel,
 )
-from substruct.case.npz_files import read_npz
 from substruct.case.numbers import array_problem
-from substruct.case.op4 import Op4Error, read_op4
+from substruct.case.recovery import RecoverySpec, load_recovery
 from substruct.case.rigid_body import (
     rigid_body_properties,
     rigid_body_frequency_ratio,
     rigid_body_vectors,
 )
+from substruct.case.superelement_files import read_matrix_file
 
 __all__ = ["SuperelementSpec", "SE_COMPONENTS", "SYMMETRY_RTOL", "MAX_DOF_FILE"]
 
@@ -89,57 +92,34 @@ class SuperelementSpec(StrictModel):
     C: str | None = None
     K4: str | None = None
     W4: Positive | None = None
-    dofs: Any
+    dofs: Any = None
     grids: dict[int, tuple[Number, Number, Number]] | None = None
     reference: tuple[Number, Number, Number] = (0.0, 0.0, 0.0)
     free: bool = True
     rigid_tolerance: Annotated[Number, Field(gt=0, lt=1)] = 1e-3
+    recovery: list[RecoverySpec] = Field(default_factory=list)
     _matrices: dict[str, np.ndarray] = PrivateAttr(default_factory=dict)
     _dofs: list[tuple[int, int]] = PrivateAttr(default_factory=list)
     _rigid: dict[str, Any] | None = PrivateAttr(default=None)
 
     # ----------------------------------------------------------------- reading
 
-    def _read(self, base: Path) -> tuple[dict[str, np.ndarray], int, Any]:
-        """The named matrices (dense float64), the bytes per number of the data, and the
-        DOF-map member if ``dofs: {key: ...}``."""
-        path = Path(self.file)
-        path = path if path.is_absolute() else base / path
-        suffix = path.suffix.lower()
-        if suffix not in (".op4", ".npz"):
-            raise FieldError("file", "superelement matrices are in an .op4 or .npz file",
-                             self.file)
-        try:
-            mode = path.stat().st_mode
-        except OSError:
-            raise FieldError("file", f"no such file ({path})", self.file) from None
-        if not stat.S_ISREG(mode):
-            raise FieldError("file", f"{path} is not a regular file", self.file)
+    def _read(self, base: Path) -> tuple[dict[str, np.ndarray], int, Any,
+                                         list[tuple[int, int]] | None]:
+        """The named matrices (dense float64), the bytes per number of the data, the DOF-map
+        member if ``dofs: {key: ...}`` and the DOF map of DMIG entries."""
         names = {f: getattr(self, f) for f in _MATRICES if getattr(self, f) is not None}
         member = self.dofs.get("key") if isinstance(self.dofs, dict) else None
-        wanted = list(names.values()) + ([member] if isinstance(member, str) else [])
-        out: dict[str, np.ndarray] = {}
-        try:
-            if suffix == ".op4":
-                got = {k.upper(): m for k, m in read_op4(path, wanted).items()}
-                for field, key in names.items():
-                    m = got[key.upper()]
-                    if m.is_complex:
-                        raise FieldError(field, f"matrix {key!r} of {path.name} is complex; "
-                                         "a superelement's matrices are real", key)
-                    out[field] = m.dense()
-                nbytes = 4 if any(got[k.upper()].type == 1 for k in names.values()) else 8
-                extra = got[member.upper()].dense() if isinstance(member, str) else None
-            else:
-                arrays = read_npz(path, wanted, {k: np.float64 for k in names.values()})
-                out = {f: arrays[k] for f, k in names.items()}
-                nbytes = 8
-                extra = arrays[member] if isinstance(member, str) else None
-        except (Op4Error, ValueError) as err:
-            if isinstance(err, FieldError):
-                raise
-            raise FieldError("file", " ".join(str(err).split()), self.file) from None
-        return out, nbytes, extra
+        got = read_matrix_file(self.file, base, "file", names,
+                               [member] if isinstance(member, str) else [])
+        if got.dofs is not None and self.dofs is not None:
+            raise FieldError("dofs", f"{got.path.name} is bulk data: the DOF map is that of "
+                             "its DMIG entries (leave dofs out)", self._shown_dofs())
+        if got.dofs is None and self.dofs is None:
+            raise FieldError("dofs", "a DOF map is required for matrices from an OP4 or NPZ "
+                             "file ({file: map.csv}, {key: <member>} or a list)")
+        extra = got.members[member] if isinstance(member, str) else None
+        return got.matrices, got.nbytes, extra, got.dofs
 
     def _check_matrices(self, mats: dict[str, np.ndarray], nbytes: int) -> None:
         n = mats["M"].shape[0] if mats["M"].ndim == 2 else -1
@@ -264,10 +244,11 @@ class SuperelementSpec(StrictModel):
                              "damping) and W4 (rad/s) go together: K4 enters as the viscous "
                              "damping K4 / W4 (Nastran's PARAM,W4)",
                              self.K4 if self.K4 is not None else self.W4)
-        mats, nbytes, member = self._read(base)
+        mats, nbytes, member, dmig = self._read(base)
         self._check_matrices(mats, nbytes)
         n = mats["M"].shape[0]
-        dofs = self._dof_rows(base, member)
+        dofs = [(0, 0) if c == 0 else (g, c) for g, c in dmig] if dmig is not None else \
+            self._dof_rows(base, member)
         if len(dofs) != n:
             raise FieldError("dofs", f"the DOF map has {len(dofs)} rows for the {n} "
                              f"coordinates of the matrices", self._shown_dofs())
@@ -280,6 +261,7 @@ class SuperelementSpec(StrictModel):
         if self.K4 is not None:
             mats["C"] = mats.get("C", np.zeros((n, n))) + mats.pop("K4") / float(self.W4 or 1)
         self._matrices, self._dofs = mats, dofs
+        load_recovery(self.recovery, base, self.file, n)
         if self.grids is not None:
             self._rigid_body(mats, dofs)
         return self

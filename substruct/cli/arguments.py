@@ -82,10 +82,14 @@ def build_parser() -> argparse.ArgumentParser:
     info.add_argument("result", metavar="RESULT.h5")
     info.add_argument("--json", action="store_true", help="machine-readable summary")
 
-    export = sub.add_parser("export", help="write mode shapes for ParaView (VTU or XDMF), or "
-                            "receptances and modes as UFF 58/55/15 (uff)")
+    export = sub.add_parser("export", help="write mode shapes for ParaView (VTU or XDMF), "
+                            "receptances and modes as UFF 58/55/15 (uff), or the model's "
+                            "matrices with their DOF map (op4, npz)")
     export.add_argument("result", metavar="RESULT.h5")
-    export.add_argument("--format", required=True, choices=("vtu", "xdmf", "uff"))
+    export.add_argument("--format", required=True, choices=("vtu", "xdmf", "uff", "op4", "npz"))
+    export.add_argument("--part", default=None, metavar="NAME",
+                        help="with --format op4 or npz: this part's matrices instead of the "
+                        "coupled model")
     export.add_argument("--modes", default=None, metavar="SPEC",
                         help="mode numbers, e.g. 1-6 or 1,3,5 (default: all)")
     export.add_argument("--variant", default=None, help="export the modes of this variant")

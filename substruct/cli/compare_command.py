@@ -1,4 +1,5 @@
-"""``substruct compare A.h5 B.h5``: the modes of two results (or two variants) side by side.
+"""``substruct compare A.h5 B.h5``: the modes of two results (or two variants) side by side,
+and the peaks of their recovered transient quantities (:mod:`substruct.cli.compare_recovery`).
 
 Prints a frequency table (each mode of the first paired with the mode of the second of largest
 MAC, :mod:`substruct.analysis.modes.mac`; by order when no coordinates are shared) and the MAC
@@ -18,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -90,13 +92,42 @@ def compare_modes(a: Any, ma: Any, b: Any, mb: Any) -> dict[str, Any]:
             "mac": None if mac is None else mac.tolist()}
 
 
+def _peaks_only(args: argparse.Namespace) -> int | None:
+    """Two results without modes but with recovered transient peaks: their table alone
+    (:mod:`substruct.cli.compare_recovery`); ``None`` when the modes are to be compared."""
+    from substruct.cli.compare_recovery import compare_peaks, print_peak_comparison
+
+    a, b = load_result(args.first), load_result(args.second)
+    if a.modes is not None and b.modes is not None or args.variant_a or args.variant_b or \
+            args.image is not None:
+        return None
+    rows = compare_peaks(a, b)
+    if not rows:
+        return None
+    if args.json:
+        print(json.dumps({"a": args.first, "b": args.second, "peaks": rows}, indent=1))
+        return 0
+    print(f"A: {args.first}\nB: {args.second}")
+    print_peak_comparison(rows, sys.stdout)
+    return 0
+
+
 def compare_command(args: argparse.Namespace) -> int:
-    """Print the comparison of the modes of ``args.first`` and ``args.second``; return 0."""
+    """Print the comparison of the modes of ``args.first`` and ``args.second`` and of their
+    recovered transient peaks; return 0."""
+    from substruct.cli.compare_recovery import compare_peaks, print_peak_comparison
+
+    only = _peaks_only(args)
+    if only is not None:
+        return only
     image = check_out_file(args.image, "--image", _PICTURES) if args.image is not None \
         else None
     a, ma = _modes(args.first, args.variant_a)
     b, mb = _modes(args.second, args.variant_b)
     data = compare_modes(a, ma, b, mb)
+    peaks = compare_peaks(a, b)
+    if peaks:
+        data["peaks"] = peaks
     name_a = args.first + (f" ({args.variant_a})" if args.variant_a else "")
     name_b = args.second + (f" ({args.variant_b})" if args.variant_b else "")
     if image is not None:
@@ -125,6 +156,7 @@ def compare_command(args: argparse.Namespace) -> int:
         print("MAC matrix (rows: A, columns: B):")
         for row in data["mac"]:
             print("  " + " ".join(f"{v:5.3f}" for v in row))
+    print_peak_comparison(peaks, sys.stdout)
     if image is not None:
         print(f"written: {image[0] / image[1]}")
     return 0

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING, Any, Sequence, TextIO
 import numpy as np
 
 from substruct.builder.superelements import rigid_body_lines
+from substruct.cli.recovery_summary import print_recovery, recovery_json
 from substruct.cli.transient_summary import print_transient, transient_json
 
 if TYPE_CHECKING:
@@ -89,6 +90,8 @@ def summary_json(result: Result, files: Sequence[Path] = ()) -> dict[str, Any]:
             out["frf"]["H"] = {"real": H.real.tolist(), "imag": H.imag.tolist()}
     if result.transient is not None:
         out["transient"] = transient_json(result.transient)
+    if result.recovery:
+        out["recovery"] = recovery_json(result.recovery)
     return out
 
 
@@ -179,3 +182,4 @@ def print_summary(result: Result, out: TextIO, requested: int | None = None,
         print_frf(result.frf, out)
     if result.transient is not None:
         print_transient(result.transient, out, str(result.attrs.get("units", "")))
+    print_recovery(result.recovery, out)

@@ -64,6 +64,13 @@ def export_uff_command(args: argparse.Namespace) -> int:
 
 
 def export_dispatch(args: argparse.Namespace) -> int:
-    """``substruct export``: UFF here, VTU and XDMF by
+    """``substruct export``: UFF here, OP4 and NPZ by
+    :func:`substruct.cli.model_export.export_model_command`, VTU and XDMF by
     :func:`substruct.cli.result_commands.export_command`."""
+    if args.format in ("op4", "npz"):
+        from substruct.cli.model_export import export_model_command
+
+        return export_model_command(args)
+    if getattr(args, "part", None) is not None:
+        raise InputError("--part applies to --format op4 and npz")
     return export_uff_command(args) if args.format == "uff" else export_command(args)

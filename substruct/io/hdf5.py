@@ -15,6 +15,8 @@ The layout is documented in ``docs/results.md``; in short::
                            A (CSR group), b, R (CSR group), constraint_labels
     /model/drawings/<i>/   points, interp (CSR group), cells/<k> (attr cell_type),
                            glyph_names, glyph_indices; attrs name, kind
+    /recovery/<i>/         labels, modes, history, peak_max(_t), peak_min(_t); attrs part,
+                           name, of (:mod:`substruct.io.recovery_hdf5`)
 
 :func:`save` writes to a temporary file in the target directory and renames it over the
 target, so an interrupted run never leaves a broken (or half-overwritten) result.
@@ -38,6 +40,7 @@ import scipy.sparse as sp
 from substruct import __version__
 from substruct.analysis.results import Modes, Receptance
 from substruct.io.file_set import TEMP_PREFIX
+from substruct.io.recovery_hdf5 import write_recovery
 from substruct.io.transient_hdf5 import write_transient
 from substruct.io.result_reader import FORMAT, FORMAT_VERSION, RESERVED_ATTRS, load
 from substruct.run.result import ModelInfo, Result
@@ -80,6 +83,8 @@ def save(result: Result, path: str | os.PathLike) -> Path:
                 _write_frf(f.create_group("frf", track_order=True), result.frf)
             if result.transient is not None:
                 write_transient(f.create_group("transient", track_order=True), result.transient)
+            if result.recovery:
+                write_recovery(f.create_group("recovery", track_order=True), result.recovery)
     return path
 
 

@@ -30,6 +30,7 @@ import scipy.sparse as sp
 
 from substruct.analysis.results import DEFAULT_TOLERANCE, Modes, Receptance
 from substruct.builder.drawing import Drawing
+from substruct.io.recovery_hdf5 import read_recovery
 from substruct.io.transient_hdf5 import read_transient
 from substruct.run.result import ModelInfo, Result
 
@@ -288,8 +289,17 @@ def _read(f: h5py.File) -> Result:
             transient = read_transient(rd, rd.node(f, "transient", h5py.Group), n)
         except ValueError as exc:
             raise _Bad(str(exc)) from None
+    recovery = []
+    if f.get("recovery", getlink=True) is not None:
+        groups = _numbered(rd.members(f, "recovery"), "/recovery")
+        try:
+            recovery = read_recovery(rd, groups, None if modes is None else len(modes.omega),
+                                     None if transient is None else transient.t)
+        except ValueError as exc:
+            raise _Bad(str(exc)) from None
     return Result(case_name=_text(root["case_name"]), case_yaml=_text(root["case_yaml"]),
                   model=model, modes=modes, frf=frf, transient=transient, variants=variants,
+                  recovery=recovery,
                   attrs={k: v for k, v in root.items() if k not in RESERVED_ATTRS})
 
 

@@ -18,6 +18,7 @@ import scipy.sparse as sp
 from substruct.analysis.results import Modes, Receptance
 from substruct.analysis.transient.results import Transient
 from substruct.builder.drawing import Drawing
+from substruct.run.recovered import Recovered
 
 __all__ = ["ModelInfo", "Result"]
 
@@ -56,4 +57,6 @@ class Result:
     frf: Receptance | None = None
     transient: Transient | None = None
     variants: dict[str, Modes] = field(default_factory=dict)
+    #: responses recovered inside superelements (:mod:`substruct.run.recovered`)
+    recovery: list[Recovered] = field(default_factory=list)
     attrs: dict[str, Any] = field(default_factory=dict)

@@ -31,6 +31,12 @@ from substruct.run.analyses import (
     modes_result,
 )
 from substruct.run.frf_route import coupled_frf_result
+from substruct.run.recovery import (
+    recover_modes,
+    recovery_plan,
+    recovery_rows,
+    split_recovered,
+)
 from substruct.run.transient_run import transient_result
 from substruct.run.result import Result
 from substruct.substructure import Substructure
@@ -124,13 +130,22 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
                    f"x {len(frf.inputs)} input(s), {asm.n_dof} coordinates", n_omega)
         result.frf = coupled_frf_result(case, model, progress) if has_frf_parts(case) else \
             frf_result(case, model, progress)
+    plan = recovery_plan(case, asm)
+    result.recovery = plan.empty()
+    if plan and result.modes is not None:
+        recover_modes(plan, result.modes, result.recovery)
     if case.analysis.transient is not None:
         if events is not None:
             events("sweep", f"transient: {case.analysis.transient.steps} steps, "
                    f"{asm.n_dof} coordinates", case.analysis.transient.steps)
+        rows = recovery_rows(plan, asm.n_dof)
+        names = [f"{r.title}@{lab}" for r, (_, _, spec) in zip(result.recovery, plan.entries)
+                 for _s in spec.histories() for lab in r.labels]
         # an overflow of the histories is refused below in one line, not warned about first
         with np.errstate(over="ignore", invalid="ignore"):
-            result.transient = transient_result(case, model)
+            tr = transient_result(case, model, rows, names)
+        result.transient = split_recovered(plan, tr, len(case.analysis.transient.outputs),
+                                           result.recovery) if plan else tr
     _require_finite_result(result)
     return result
 
@@ -153,3 +168,5 @@ def _require_finite_result(result: Result) -> None:
         require_finite("transient", displacement=tr.displacement, velocity=tr.velocity,
                        acceleration=tr.acceleration, constraint_forces=tr.constraint_forces,
                        energy=tr.energy)
+    for rec in result.recovery:
+        require_finite(f"recovery {rec.title}", modes=rec.modes, history=rec.history)

@@ -203,8 +203,11 @@ def _initial(case: Case, model: Model) -> tuple[np.ndarray | None, np.ndarray | 
     return d0, v0
 
 
-def transient_result(case: Case, model: Model) -> Transient:
-    """The time histories ``case.analysis.transient`` asks for.
+def transient_result(case: Case, model: Model, extra: sp.csr_array | None = None,
+                     extra_names: list[str] | None = None) -> Transient:
+    """The time histories ``case.analysis.transient`` asks for; ``extra`` output rows (named
+    ``extra_names``) are recorded after the case's outputs (the recovery of superelements'
+    interiors, :mod:`substruct.run.recovery`).
 
     Raises:
         CaseError: at ``analysis.transient``, for input the analysis cannot take.
@@ -228,6 +231,10 @@ def transient_result(case: Case, model: Model) -> Transient:
          if spec.loads else sp.csc_array((n, 0)))
     O = (asm.rows([model.points[p] for p in spec.outputs]) if spec.outputs
          else sp.csr_array((0, n)))
+    names = list(spec.outputs)
+    if extra is not None and extra.shape[0]:
+        O = sp.csr_array(sp.vstack([O, extra]))
+        names += list(extra_names or [f"recovered {k + 1}" for k in range(extra.shape[0])])
     d0, v0 = _initial(case, model)
     ground = _base(case, model, t)
     try:
@@ -238,7 +245,7 @@ def transient_result(case: Case, model: Model) -> Transient:
         initial = InitialConditions(d0=d0, v0=v0, static=spec.initial.static)
         return transient(asm.M, asm.C, asm.K, asm.A, asm.b,
                          LoadHistory(B, f, spec.dt, steps, pairs=pairs, base=ground),
-                         TransientOutputs(O, spec.outputs),
+                         TransientOutputs(O, names),
                          constraint_labels=asm.constraint_labels, initial=initial, options=opts)
     except InitialStateError as err:
         raise case.error(("analysis", "transient", "initial"), " ".join(str(err).split())

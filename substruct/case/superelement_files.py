@@ -1,0 +1,117 @@
+"""The files a superelement's matrices come from: OP4 (:mod:`substruct.case.op4`), NPZ
+(:mod:`substruct.case.npz_files`) or Nastran bulk data holding DMIG entries
+(:mod:`substruct.case.dmig`, which also gives the DOF map).
+
+Every problem is a :class:`~substruct.case.errors.FieldError` at the field that names the
+file or the matrix, one line naming the file, the matrix and what is wrong.
+"""
+
+from __future__ import annotations
+
+import stat
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from substruct.case.dmig import dmig_matrices
+from substruct.case.errors import CaseError, FieldError
+from substruct.case.npz_files import read_npz
+from substruct.case.op4 import Op4Error, read_op4
+
+__all__ = ["MatrixFile", "read_matrix_file", "MATRIX_SUFFIXES", "BULK_SUFFIXES"]
+
+#: Endings of the bulk data files read for DMIG entries.
+BULK_SUFFIXES = (".bdf", ".dat", ".nas", ".blk", ".pch")
+#: Endings of the files a superelement's matrices are read from.
+MATRIX_SUFFIXES = (".op4", ".npz") + BULK_SUFFIXES
+
+
+@dataclass
+class MatrixFile:
+    """What :func:`read_matrix_file` read.
+
+    Attributes:
+        path: the file.
+        matrices: by the key the caller gave (a field name): dense, real ``float64``.
+        nbytes: bytes per number of the data (4 single, 8 double precision).
+        members: the other members asked for, by name, as stored (numbers or, from an NPZ,
+            strings).
+        dofs: the ``(grid, component)`` of each coordinate, from DMIG entries; ``None``
+            otherwise.
+    """
+
+    path: Path
+    matrices: dict[str, np.ndarray]
+    nbytes: int
+    members: dict[str, np.ndarray] = field(default_factory=dict)
+    dofs: list[tuple[int, int]] | None = None
+
+
+def _path(file: str, base: Path, loc: Any, suffixes: Sequence[str]) -> Path:
+    path = Path(file)
+    path = path if path.is_absolute() else base / path
+    if path.suffix.lower() not in suffixes:
+        raise FieldError(loc, f"superelement matrices are in a file ending in "
+                         f"{', '.join(suffixes)}", file)
+    try:
+        mode = path.stat().st_mode
+    except OSError:
+        raise FieldError(loc, f"no such file ({path})", file) from None
+    if not stat.S_ISREG(mode):
+        raise FieldError(loc, f"{path} is not a regular file", file)
+    return path
+
+
+def read_matrix_file(file: str, base: Path, loc: Any, names: Mapping[str, str],
+                     members: Sequence[str] = (), where: Mapping[str, Any] | None = None,
+                     suffixes: Sequence[str] = MATRIX_SUFFIXES) -> MatrixFile:
+    """Read the matrices ``names`` (key -> name in the file) and the ``members`` of ``file``.
+
+    Args:
+        file: as written in the case (relative to ``base``).
+        loc: the field that names the file (its errors).
+        names: the real matrices wanted, by key; OP4 and DMIG names match without regard to
+            case.
+        members: more members read as stored (a DOF map, row labels); not from bulk data.
+        where: the field of each key (complex-matrix errors), the key itself if absent.
+        suffixes: the endings accepted.
+
+    Raises:
+        FieldError: at ``loc`` for a file that cannot be read or lacks a member; at the key's
+            field for a complex matrix.
+    """
+    path = _path(file, base, loc, suffixes)
+    suffix = path.suffix.lower()
+    wanted = list(dict.fromkeys(list(names.values()) + list(members)))
+    where = where or {}
+    try:
+        if suffix == ".op4":
+            got = {k.upper(): m for k, m in read_op4(path, wanted).items()}
+            out = {}
+            for key, name in names.items():
+                m = got[name.upper()]
+                if m.is_complex:
+                    raise FieldError(where.get(key, key), f"matrix {name!r} of {path.name} is "
+                                     "complex; a superelement's matrices are real", name)
+                out[key] = m.dense()
+            nbytes = 4 if any(got[n.upper()].type == 1 for n in names.values()) else 8
+            extra = {m: got[m.upper()].dense() for m in members}
+            return MatrixFile(path, out, nbytes, extra)
+        if suffix == ".npz":
+            arrays = read_npz(path, wanted, {n: np.float64 for n in names.values()})
+            return MatrixFile(path, {k: arrays[n] for k, n in names.items()}, 8,
+                              {m: arrays[m] for m in members})
+    except (Op4Error, ValueError) as err:
+        if isinstance(err, FieldError):
+            raise
+        raise FieldError(loc, " ".join(str(err).split()), file) from None
+    if members:
+        raise FieldError(loc, f"{path.name} is bulk data: its DMIG entries hold square "
+                         f"matrices only, not {', '.join(members)}", file)
+    try:
+        dofs, mats, nbytes = dmig_matrices(path, path.name, list(names.values()))
+    except CaseError as err:
+        raise FieldError(loc, str(err)) from None
+    return MatrixFile(path, {k: mats[n] for k, n in names.items()}, nbytes, {}, dofs)
