@@ -83,13 +83,13 @@ def test_require_finite_names_the_array_and_the_count():
 
 def test_an_overflow_in_the_receptances_is_one_line_exit_1_nothing_written(
         tmp_path, capsys, monkeypatch):
-    real = api.receptance
+    real = api.receptance_of
 
     def overflow(*args, **kwargs):
         H = real(*args, **kwargs)
         H[0, 0, 0] = complex(np.inf, 0.0)
         return H
-    monkeypatch.setattr(api, "receptance", overflow)
+    monkeypatch.setattr(api, "receptance_of", overflow)
     out = tmp_path / "out"
     code, stdout, stderr = run(capsys, "run", CASES / "three_dof_frf.yaml", "--out", out,
                                "--set", "analysis.frf.check=[]", "--set",
