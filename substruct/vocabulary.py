@@ -13,7 +13,8 @@ vocabulary             words
                        Lagrange multipliers (KKT)
 :data:`TransientForm`  the forms of a transient run: generalized inverse, null space, modal
 :data:`FrfMethod`      a receptance sweep: a formulation, ``modal`` or ``auto``
-:data:`Solver`         the eigensolver strategy: ``auto``, ``dense``, ``sparse``
+:data:`Solver`         the eigensolver strategy: ``auto``, ``dense``, ``sparse``,
+                       ``amls`` (automated multilevel substructuring)
 :data:`Integrator`     ``newmark`` (average acceleration), ``generalized-alpha``
 :data:`Residual`       the residual flexibility of a modal receptance
 :data:`Quantity`       receptance, mobility (``i omega H``), accelerance (``-omega^2 H``)
@@ -79,7 +80,7 @@ FrfMethod = Literal["generalized-inverse", "null-space", "kkt", "modal", "auto"]
 FRF_METHODS: tuple[FrfMethod, ...] = get_args(FrfMethod)
 
 #: The eigensolver strategy.
-Solver = Literal["auto", "dense", "sparse"]
+Solver = Literal["auto", "dense", "sparse", "amls"]
 SOLVERS: tuple[Solver, ...] = get_args(Solver)
 
 #: The time integrators.

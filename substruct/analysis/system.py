@@ -38,6 +38,7 @@ from substruct.vocabulary import (
 if TYPE_CHECKING:  # at run time only attributes are read: no import of the analyses here
     from substruct.analysis.events import Phase
     from substruct.analysis.frf.modal import ModalOptions
+    from substruct.analysis.modes.amls import AmlsOptions
 
 __all__ = ["ConstrainedSystem", "ModesOptions", "Progress", "SweepOptions"]
 
@@ -68,12 +69,14 @@ class ModesOptions:
     Attributes:
         method: the main formulation, one of :data:`substruct.vocabulary.FORMULATIONS`.
         checks: check formulations (the main one and repeats are skipped).
-        solver: ``"auto"``, ``"dense"`` or ``"sparse"``
+        solver: ``"auto"``, ``"dense"``, ``"sparse"`` or ``"amls"``
             (:func:`substruct.analysis.modes.eigen.choose_solver`).
         tolerance: the largest relative eigenvalue disagreement a check may have.
         what: how the analysis is named in error messages.
         full_checks: on the sparse path, solve ``method`` and each check in full.
         events: called as each eigen solve starts (:class:`substruct.analysis.events.Phase`).
+        amls: with ``solver="amls"``, the reduction
+            (:class:`substruct.analysis.modes.amls.AmlsOptions`; its defaults if ``None``).
 
     Raises:
         ValueError: an unknown method, check or solver; a tolerance below 0 or NaN.
@@ -86,6 +89,7 @@ class ModesOptions:
     what: str = "modes"
     full_checks: bool = False
     events: Phase | None = None
+    amls: AmlsOptions | None = None
 
     def __post_init__(self) -> None:
         for name in (self.method, *self.checks):

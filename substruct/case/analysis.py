@@ -10,7 +10,7 @@ from __future__ import annotations
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from substruct.case.errors import FieldError
 from substruct.case.fields import (
@@ -38,7 +38,7 @@ from substruct.vocabulary import (
     Solver,
 )
 
-__all__ = ["ConstraintSpec", "Variant", "ModesBand", "ModesAnalysis", "Omega", "ModalFrf",
+__all__ = ["ConstraintSpec", "Variant", "ModesBand", "AmlsSpec", "ModesAnalysis", "Omega", "ModalFrf",
            "FrfAnalysis", "Analysis", "Output"]
 
 
@@ -87,6 +87,17 @@ class ModesBand(StrictModel):
         return self
 
 
+class AmlsSpec(StrictModel):
+    """How ``solver: amls`` reduces (:mod:`substruct.analysis.modes.amls`): every block keeps
+    its modes up to ``cutoff`` times the highest wanted frequency; subdomains of at most
+    ``leaf_size`` coordinates; ``iterations`` subspace iterations with the full factorization
+    after the reduction."""
+
+    cutoff: Annotated[Number, Field(gt=1)] = 5.0
+    leaf_size: Annotated[int, Field(ge=8, le=1_000_000)] = 1000
+    iterations: Annotated[int, Field(ge=0, le=10)] = 0
+
+
 class ModesAnalysis(StrictModel):
     """Coupled modes (eqs 28-34) by ``method``, checked by the ``check`` formulations; with a
     ``band``, only the modes in it, ``count`` at most (Nastran's EIGRL ``V1``, ``V2``)."""
@@ -102,6 +113,15 @@ class ModesAnalysis(StrictModel):
     #: largest relative eigenvalue difference a check may have from the main formulation; a
     #: larger one fails the run (substruct.analysis.checks.require_agreement)
     tolerance: Positive = DEFAULT_TOLERANCE
+    #: the reduction of solver: amls (its defaults if blank)
+    amls: AmlsSpec | None = None
+
+    @model_validator(mode="after")
+    def _amls_block(self) -> "ModesAnalysis":
+        if self.amls is not None and self.solver != "amls":
+            raise FieldError("amls", f"the amls block is for solver: amls; the solver is "
+                             f"{self.solver}", "{...}")
+        return self
 
 
 class Omega(StrictModel):
@@ -166,6 +186,14 @@ class ModalFrf(StrictModel):
     #: frequencies of the grid at which the direct solve checks the modal sum
     check_frequencies: Annotated[int, Field(ge=0, le=100)] = 3
     solver: Solver = "auto"
+
+    @field_validator("solver")
+    @classmethod
+    def _not_amls(cls, value: Solver) -> Solver:
+        if value == "amls":
+            raise ValueError("amls computes the modes of analysis.modes only; use auto, dense "
+                             "or sparse here")
+        return value
 
 
 class FrfAnalysis(StrictModel):

@@ -100,6 +100,8 @@ def print_modes(modes: Any, out: TextIO, requested: int | None = None) -> None:
     n = len(modes.omega)
     more = f" of {requested} requested" if requested is not None and requested > n else ""
     out.write(f"  {n} physical mode(s){more}, {modes.method}:\n")
+    if str(modes.solver).startswith("amls"):
+        out.write(f"  solver: {modes.solver}\n")
     if not n and "no free coordinate" in modes.solver:
         out.write(f"  no mode: {modes.solver.split('; ', 1)[-1]}\n")
     out.write(f"  {'mode':>4s}  {'omega (rad/s)':>14s}  {'f (Hz)':>12s}  "

@@ -41,6 +41,7 @@ from substruct.analysis.errors import INPUT_ERRORS, CheckError
 from substruct.analysis.events import Phase
 from substruct.analysis.frf.quantity import as_quantity
 from substruct.analysis.frf.modal import ModalOptions
+from substruct.analysis.modes.amls import AmlsOptions
 from substruct.analysis.results import Modes, Receptance
 from substruct.assembly.stack import Assembly
 from substruct.builder.model import Model
@@ -74,6 +75,8 @@ def modes_result(case: Case, asm: Assembly, A: sp.csr_array, loc: tuple,
                                       coordinate_labels=asm.dof_labels or None)
         options = ModesOptions(method=spec.method, checks=spec.check, solver=spec.solver,
                                tolerance=spec.tolerance, what=what, events=events)
+        if spec.solver == "amls":
+            return _amls(case, system, options)
         if spec.band is None:
             return modes(system, spec.count, options=options)
         return _in_band(case, system, options)
@@ -81,6 +84,27 @@ def modes_result(case: Case, asm: Assembly, A: sp.csr_array, loc: tuple,
         raise case.error(loc, " ".join(str(err).split())) from None
     except CheckError as err:
         raise CheckError(f"{err}; to accept it, raise analysis.modes.tolerance") from None
+
+
+def _amls(case: Case, system: ConstrainedSystem, options: ModesOptions) -> Modes:
+    """``solver: amls``: with a band that has a ``max``, every mode below it by one AMLS run,
+    then those in the band, ``count`` at most; otherwise the lowest ``count`` (a band's
+    ``min`` by :func:`_in_band`)."""
+    spec = case.analysis.modes
+    assert spec is not None
+    block = spec.amls
+    top = spec.band.max if spec.band is not None else None
+    amls = AmlsOptions(**({} if block is None else block.model_dump()), omega_max=top)
+    options = dataclasses.replace(options, amls=amls)
+    if spec.band is None:
+        return modes(system, spec.count, options=options)
+    if top is None:
+        return _in_band(case, system, options)
+    res = modes(system, None, options=options)
+    idx = np.flatnonzero(res.omega >= spec.band.min * (1 - 1e-12))[:spec.count]
+    return dataclasses.replace(res, eigenvalues=res.eigenvalues[idx], omega=res.omega[idx],
+                               damping_ratio=res.damping_ratio[idx], shapes=res.shapes[:, idx],
+                               residual=res.residual[idx])
 
 
 def _in_band(case: Case, system: ConstrainedSystem, options: ModesOptions) -> Modes:

@@ -16,7 +16,10 @@ by a main formulation and the check formulations, and returns one
 * ``"sparse-damped"``: the lowest roots of a damped model by shift-invert Arnoldi on the
   first-order pencil of the null-space form
   (:func:`substruct.analysis.modes.damped.damped_sparse_modes`), the others again as
-  residual checks (:mod:`substruct.analysis.modes.production`).
+  residual checks (:mod:`substruct.analysis.modes.production`);
+* ``"amls"``: the modes of an undamped model by automated multilevel substructuring on the
+  null-space eliminated pencil, each checked by its residual
+  (:mod:`substruct.analysis.modes.amls`); only when asked for.
 
 It fails with :class:`~substruct.analysis.errors.CheckError` when a check disagrees with the
 main formulation by more than ``tolerance``, and with ``ValueError`` on input it cannot analyse.
@@ -39,6 +42,7 @@ from substruct.analysis.checks import (
     modes_agreement,
     require_agreement,
 )
+from substruct.analysis.modes.amls import AmlsOptions, amls_coupled_modes
 from substruct.analysis.modes.dense import FORMULATIONS, coupled_modes
 from substruct.analysis.errors import INPUT_ERRORS, AnalysisInputError
 from substruct.analysis.events import Phase
@@ -71,7 +75,7 @@ class SolverChoice:
     """The strategy :func:`choose_solver` picked.
 
     Attributes:
-        strategy: ``"dense"``, ``"sparse"`` or ``"sparse-damped"``.
+        strategy: ``"dense"``, ``"sparse"``, ``"sparse-damped"`` or ``"amls"``.
         note: why it is not the one asked for (empty if it is).
         elimination: the master-slave elimination of ``A`` computed to decide (reused by the
             sparse solvers), or ``None``.
@@ -93,7 +97,7 @@ def choose_solver(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
     """The strategy for the lowest ``count`` modes of a model: the one place where it is chosen.
 
     ``solver``: ``"dense"`` always dense; ``"sparse"`` sparse (``"sparse-damped"`` if ``C`` has
-    nonzeros); ``"auto"`` dense up to :data:`SPARSE_ABOVE` coordinates and sparse above.  An
+    nonzeros); ``"amls"`` AMLS (never chosen otherwise); ``"auto"`` dense up to :data:`SPARSE_ABOVE` coordinates and sparse above.  An
     undamped sparse choice falls back to dense, with a note saying so, when the constraints
     leave too few free coordinates for ``count`` roots and a Krylov basis around them
     (:func:`substruct.analysis.modes.krylov.krylov_size`; ARPACK fails there), and when every mode
@@ -105,6 +109,8 @@ def choose_solver(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
     """
     if solver not in SOLVERS:
         raise ValueError(f"unknown solver {solver!r}; expected one of {', '.join(SOLVERS)}")
+    if solver == "amls":
+        return SolverChoice("amls")
     n = M.shape[0]
     if solver == "dense" or (solver == "auto" and n <= SPARSE_ABOVE):
         return SolverChoice("dense")
@@ -137,6 +143,20 @@ def _sparse(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
         text = " ".join(str(err).split()).replace("(use the dense coupled_modes)",
                                                    "(use solver: dense)")
         raise AnalysisInputError(f"sparse eigensolver: {text}") from None
+
+
+def _amls(system: ConstrainedSystem, count: int | None, opts: ModesOptions) -> Modes:
+    """The ``"amls"`` strategy: modes, residual check (held to the tolerance) and label."""
+    amls = opts.amls if opts.amls is not None else AmlsOptions()
+    checks = check_methods(opts.method, opts.checks) if opts.checks else []
+    try:
+        main, agreement, label = amls_coupled_modes(system.M, system.C, system.K, system.A,
+                                                    count, amls, checks, opts.events)
+    except INPUT_ERRORS as err:
+        raise AnalysisInputError(f"amls eigensolver: {' '.join(str(err).split())}") from None
+    require_agreement(opts.what, main.method, agreement, opts.tolerance)
+    return dataclasses.replace(main, agreement=agreement, solver=label,
+                               tolerance=float(opts.tolerance))
 
 
 def modes(system: ConstrainedSystem | Matrix, *args: Any, options: ModesOptions | None = None,
@@ -233,6 +253,8 @@ def system_modes(system: ConstrainedSystem, count: int | None = None, *,
         opts.events
     M, C, K, A = system.M, system.C, system.K, system.A
     choice = choose_solver(M, C, A, count, solver)
+    if choice.strategy == "amls":
+        return _amls(system, count, opts)
     others = check_methods(method, checks)
     if choice.strategy == "sparse-damped":  # one pencil for both: no check of one by the other
         same = {NULL_SPACE, GENERALIZED_INVERSE}

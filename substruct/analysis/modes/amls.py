@@ -1,0 +1,168 @@
+r"""Coupled modes by automated multilevel substructuring (AMLS): the ``solver: amls`` strategy.
+
+The constraints are eliminated first (:func:`substruct.analysis.modes.krylov.eliminate`,
+``u = T p``, ``A T = 0``), and AMLS (:func:`substruct.linalg.amls.amls_modes`) computes the
+eigenpairs of the eliminated pencil
+
+.. math::  T^T K T\, y = \lambda\, T^T M T\, y, \qquad u = T y,
+
+every one below the wanted frequency :math:`\omega_{max}`.  With a ``count`` and no
+:math:`\omega_{max}`, :math:`\omega_{max}` grows from :math:`10^{-3}\sqrt{\operatorname{tr} K /
+\operatorname{tr} M}` (a scale of the model's own, so the decision does not depend on its units)
+by at least a factor 2 per pass (:math:`1.2\,(k/m)^{1/3}` when ``m`` of the ``k`` modes were
+found: the count of a solid grows as :math:`\omega^3`) until ``count`` modes are below it, and
+the lowest ``count`` are kept.
+
+The cross-check of each mode is its relative residual in the eliminated equations,
+
+.. math::  r_j = \|K_T y_j - \lambda_j M_T y_j\| / \|K_T y_j\|,
+
+reported as ``agreement["amls-residual"]`` (the largest) and held to the tolerance.  A Ritz
+value's relative error is of the order of :math:`r_j^2`, so a tolerance on :math:`r_j` of
+``t`` holds the frequencies to about :math:`t^2/2`.  The check formulations, if any, are the
+shift-invert Lanczos solution of the lowest :data:`CHECKED_MODES` modes
+(:func:`substruct.analysis.modes.production.production_modes`), compared by
+:func:`substruct.analysis.checks.modes_agreement`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+import scipy.sparse as sp
+
+from substruct.analysis.checks import modes_agreement
+from substruct.analysis.errors import AnalysisInputError
+from substruct.analysis.events import Phase
+from substruct.analysis.modes.krylov import (
+    check_inputs,
+    constraint_residuals,
+    eliminate,
+    stiffness_over_mass,
+)
+from substruct.analysis.modes.production import production_modes
+from substruct.analysis.modes.sparse import has_damping
+from substruct.analysis.results import Modes
+from substruct.linalg.amls import AMLSModes, amls_modes
+from substruct.linalg.scaling import massless_coordinates
+from substruct.linalg.system import Matrix
+
+__all__ = ["AMLS_CHECK", "AmlsOptions", "CHECKED_MODES", "amls_coupled_modes"]
+
+#: The name of the residual cross-check in ``Modes.agreement``.
+AMLS_CHECK = "amls-residual"
+#: The lowest modes that a ``check:`` formulation recomputes by shift-invert Lanczos.
+CHECKED_MODES = 6
+#: The first wanted frequency tried when only a count is given, times
+#: :math:`\sqrt{\operatorname{tr} K / \operatorname{tr} M}`.
+FIRST_GUESS = 1e-3
+#: Passes of the growing wanted frequency before giving up.
+MAX_PASSES = 40
+
+
+@dataclass(frozen=True)
+class AmlsOptions:
+    """How AMLS reduces (:func:`substruct.linalg.amls.amls_modes`).
+
+    Attributes:
+        cutoff: every block keeps its modes up to ``cutoff`` times the wanted frequency (> 1).
+        leaf_size: subdomains are split until at most this many coordinates.
+        iterations: subspace iterations with the full factorization after the reduction.
+        omega_max: the wanted circular frequency (every mode below it); ``None``: found from
+            the count.
+    """
+
+    cutoff: float = 5.0
+    leaf_size: int = 1000
+    iterations: int = 0
+    omega_max: float | None = None
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.cutoff) and self.cutoff > 1):
+            raise ValueError(f"cutoff must be > 1, got {self.cutoff!r}")
+        if self.leaf_size < 1 or self.iterations < 0:
+            raise ValueError(f"leaf_size >= 1 and iterations >= 0, got {self.leaf_size!r}, "
+                             f"{self.iterations!r}")
+        if self.omega_max is not None and not (np.isfinite(self.omega_max)
+                                               and self.omega_max > 0):
+            raise ValueError(f"omega_max must be positive, got {self.omega_max!r}")
+
+
+def _solve(K: sp.csr_array, M: sp.csr_array, count: int | None, opts: AmlsOptions,
+           say: Phase | None) -> tuple[AMLSModes, float]:
+    """AMLS at ``opts.omega_max``, or at a growing wanted frequency until ``count`` modes."""
+    def run(w: float) -> AMLSModes:
+        if say is not None:
+            say("sparse-eigen", f"modes: AMLS up to {w:.4g} rad/s (cut-off {opts.cutoff:g})", K.shape[0])
+        return amls_modes(K, M, w, cutoff=opts.cutoff, leaf_size=opts.leaf_size,
+                          iterations=opts.iterations, ritz_ratio=min(2.0, opts.cutoff))
+
+    if opts.omega_max is not None:
+        return run(opts.omega_max), opts.omega_max
+    assert count is not None
+    w = FIRST_GUESS * np.sqrt(stiffness_over_mass(K, M))
+    for _ in range(MAX_PASSES):
+        r = run(w)
+        m = r.lam.size
+        if m >= count:
+            return r, w
+        w *= max(2.0, 1.2 * (count / m) ** (1 / 3)) if m else 4.0
+    raise AnalysisInputError(f"AMLS found fewer than {count} modes below {w:.3g} rad/s")
+
+
+def amls_coupled_modes(M: Matrix, C: Matrix | None, K: Matrix, A: Matrix | None,
+                       count: int | None, opts: AmlsOptions, checks: Sequence[str] = (),
+                       events: Phase | None = None) -> tuple[Modes, dict[str, float], str]:
+    r"""The lowest modes of ``K u = lambda M u`` under ``A u = 0`` by AMLS on the null-space
+    eliminated pencil (module docstring).
+
+    Args:
+        M, C, K, A: the system; ``C`` must be zero (AMLS computes undamped modes).
+        count: at most this many modes (the lowest); ``None`` with ``opts.omega_max``: every
+            mode below it.
+        opts: the reduction (:class:`AmlsOptions`).
+        checks: if not empty, the lowest :data:`CHECKED_MODES` modes are recomputed by
+            shift-invert Lanczos and compared (``agreement["null-space/sparse"]``).
+        events: told as each AMLS pass starts.
+
+    Returns:
+        ``(modes, agreement, label)``: the modes (``method`` ``"null-space/amls"``, roots
+        :math:`i\omega_j`, shapes :math:`M`-orthonormal, ``residual``
+        the constraint residual :math:`|A u| / (|A| |u|)`), the figures
+        (``"amls-residual"``: the largest :math:`r_j`), and the strategy's label (cut-off,
+        reduced coordinates, iterations).
+
+    Raises:
+        AnalysisInputError: a damped model, massless coordinates left free, no count and no
+            wanted frequency.
+    """
+    if has_damping(C):
+        raise AnalysisInputError("solver amls computes undamped modes; the model has damping "
+                                 "(use solver: sparse)")
+    if count is None and opts.omega_max is None:
+        raise AnalysisInputError("solver amls needs a count or a band with a max")
+    Ms, Ks, As, _ = check_inputs(M, K, A, count or 1)
+    el = eliminate(Ms, As)
+    T = sp.csr_array(el.T)
+    Kt = sp.csr_array(T.T @ Ks @ T)
+    Mt = sp.csr_array(T.T @ Ms @ T)
+    if np.any(massless_coordinates(Mt)):
+        raise AnalysisInputError("solver amls needs mass on every free coordinate; the model "
+                                 "has massless ones (use solver: sparse)")
+    r, w = _solve(Kt, Mt, count, opts, events)
+    k = r.lam.size if count is None else min(count, r.lam.size)
+    U = T @ r.U[:, :k]
+    agreement = {AMLS_CHECK: float(r.residual[:k].max(initial=0.0))}
+    main = Modes(eigenvalues=1j * r.omega[:k], omega=r.omega[:k],
+                 damping_ratio=np.zeros(k), shapes=U.astype(complex),
+                 residual=constraint_residuals(As, U), method="null-space/amls")
+    if checks and k:
+        few = min(k, CHECKED_MODES)
+        ref, _, _ = production_modes(Ms, Ks, As, few, elimination=el)
+        agreement["null-space/sparse"] = modes_agreement(main.lowest(few), ref)
+    label = (f"amls (cut-off {opts.cutoff:g} x {w:.4g} rad/s, {r.n_reduced} reduced "
+             f"coordinates of {Kt.shape[0]}, {r.n_blocks} blocks, {r.iterations} "
+             f"iteration(s); largest residual {agreement[AMLS_CHECK]:.1e})")
+    return main, agreement, label

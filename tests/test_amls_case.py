@@ -1,0 +1,119 @@
+"""``analysis.modes.solver: amls`` from a case file, against ``solver: sparse`` (shift-invert
+Lanczos on the same null-space eliminated system).
+
+The model: two solid boxes tied at x = 2 (an interface, so the constraint rows of A are
+eliminated first), 768 free coordinates.  What is asserted:
+
+* truncated AMLS (cut-off 5, no iteration): every eigenvalue an upper bound of the exact one,
+  the largest relative error below 2e-3 (measured 1.2e-3; tests/test_amls.py measures below
+  1e-3 at this cut-off on a clamped box of 16 x 4 x 4), and below the largest residual (a Ritz
+  value's error is of second order in its residual);
+* one subspace iteration: the lowest seven to 1e-8 (measured 1.6e-11), all twenty to 1e-5;
+* a band with a max: every mode below it, as many as the exact ones;
+* a residual above the case's tolerance fails the run (exit 1, one line), never a print;
+* the summary names the strategy, its cut-off, the reduced coordinates and the residual.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from cli_helpers import run
+from substruct.analysis.errors import CheckError
+from substruct.case.loader import parse_case
+from substruct.run.runner import run_case
+
+ROOT = Path(__file__).resolve().parent.parent
+EPS = np.finfo(float).eps
+
+
+def case(modes: str) -> str:
+    return f"""\
+name: two_boxes
+substructures:
+  - name: left
+    type: solid
+    box: {{lengths: [2.0, 0.5, 0.5], divisions: [8, 3, 3]}}
+    E: 2.1e11
+    nu: 0.3
+    rho: 7850
+    fixed: [xmin]
+  - name: right
+    type: solid
+    box: {{lengths: [2.0, 0.5, 0.5], divisions: [8, 3, 3], origin: [2, 0, 0]}}
+    E: 2.1e11
+    nu: 0.3
+    rho: 7850
+interfaces:
+  - {{name: a, between: [left, right], nodes: {{box: [[2, 0, 0], [2, 0.5, 0.5]]}}}}
+analysis:
+  modes: {modes}
+output: {{pictures: false}}
+"""
+
+
+def solve(modes: str):
+    return run_case(parse_case(case(modes), "two.yaml", ROOT)).modes
+
+
+@pytest.fixture(scope="module")
+def exact():
+    return solve("{count: 20, solver: sparse}")
+
+
+def test_truncated_amls_within_the_cutoff_error(exact):
+    r = solve("{count: 20, solver: amls, tolerance: 0.5, "
+              "amls: {cutoff: 5, leaf_size: 100, iterations: 0}}")
+    assert len(r) == 20 and r.method == "null-space/amls"
+    rel = (r.omega / exact.omega) ** 2 - 1
+    assert rel.min() > -1e3 * EPS                      # Ritz values are upper bounds
+    assert 1e3 * EPS < rel.max() < 2e-3                # truncated, within the cut-off's error
+    assert rel.max() <= r.agreement["amls-residual"]
+    assert r.residual.max() < 1e-12                    # A u = 0 by the elimination
+    assert r.solver.startswith("amls (cut-off 5")
+
+
+def test_one_iteration_to_1e8(exact):
+    r = solve("{count: 20, solver: amls, tolerance: 0.05, check: [null-space], "
+              "amls: {cutoff: 5, leaf_size: 100, iterations: 1}}")
+    rel = (r.omega / exact.omega) ** 2 - 1
+    assert np.max(np.abs(rel[:7])) < 1e-8
+    assert np.max(np.abs(rel)) < 1e-5
+    # the shift-invert check of the lowest modes, relative in omega
+    assert r.agreement["null-space/sparse"] < 1e-8
+    assert "1 iteration(s)" in r.solver
+
+
+def test_band_max_gives_every_mode_below_it(exact):
+    top = 0.5 * (exact.omega[11] + exact.omega[12])
+    r = solve(f"{{count: 50, solver: amls, tolerance: 0.05, band: {{max: {top}}}, "
+              f"amls: {{leaf_size: 100, iterations: 1}}}}")
+    assert len(r) == 12
+    # the mode at the band's top: error x (lambda_j / lambda_p+1)^2 <= 1/16 after one
+    # iteration (Ritz vectors up to twice the top), from about 1e-3: below 1e-4 in omega
+    assert np.all(r.omega >= exact.omega[:12] * (1 - 1e-12))
+    assert np.allclose(r.omega, exact.omega[:12], rtol=1e-4)
+    assert np.allclose(r.omega[:5], exact.omega[:5], rtol=1e-8)
+
+
+def test_residual_beyond_tolerance_is_a_check_error():
+    with pytest.raises(CheckError, match="amls-residual"):
+        solve("{count: 10, solver: amls, amls: {leaf_size: 100}}")
+
+
+def test_summary_and_exit_codes(tmp_path, capsys):
+    path = tmp_path / "two.yaml"
+    path.write_text(case("{count: 8, solver: amls, tolerance: 0.05, amls: {leaf_size: 100, iterations: 1}}"))
+    code, out, err = run(capsys, "run", path, "--out", tmp_path / "ok")
+    assert code == 0, err
+    assert "8 physical mode(s), null-space/amls" in out
+    assert "solver: amls (cut-off 5" in out and "reduced coordinates of 768" in out
+    assert "amls-residual" in out
+    path.write_text(case("{count: 8, solver: amls, amls: {leaf_size: 100}}"))
+    code, out, err = run(capsys, "run", path, "--out", tmp_path / "bad")
+    assert code == 1 and "amls-residual" in err and "tolerance" in err
+    assert len(err.strip().splitlines()) == 1, err
+    assert not (tmp_path / "bad").exists() or not any((tmp_path / "bad").iterdir())
