@@ -35,9 +35,9 @@ from modes import _reset_peak, _status, divisions, machine  # noqa: E402
 
 
 def box(size: int) -> tuple[sp.csr_array, sp.csr_array]:
-    from substruct.models.solid import solid_box
+    from substruct.models.solid import BoxGrid, solid_box
     nxh, m = divisions(size)
-    b = solid_box("box", (4.0, 1.0, 1.0), (2 * nxh, m, m), 2.1e11, 0.3, 7850.0,
+    b = solid_box("box", BoxGrid((4.0, 1.0, 1.0), (2 * nxh, m, m)), 2.1e11, 0.3, 7850.0,
                   fixed=[{"box": [[0, 0, 0], [0, 1, 1]]}])
     return sp.csr_array(b.K), sp.csr_array(b.M)
 

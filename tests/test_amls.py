@@ -24,7 +24,7 @@ from substruct.assembly.interfaces import tie_nodes
 from substruct.assembly.stack import assemble
 from substruct.linalg.amls import amls_modes, relative_residuals
 from substruct.linalg.amls_tree import dissection_tree
-from substruct.models.solid import solid_box
+from substruct.models.solid import BoxGrid, solid_box
 
 E, NU, RHO = 2.1e11, 0.3, 7850.0
 EPS = np.finfo(float).eps
@@ -32,7 +32,7 @@ CLAMP = [{"box": [[0, 0, 0], [0, 1, 1]]}]
 
 
 def box(divisions=(16, 4, 4), fixed=CLAMP):
-    b = solid_box("b", (4.0, 1.0, 1.0), divisions, E, NU, RHO, fixed=fixed)
+    b = solid_box("b", BoxGrid((4.0, 1.0, 1.0), divisions), E, NU, RHO, fixed=fixed)
     return sp.csr_array(b.K), sp.csr_array(b.M)
 
 
@@ -149,8 +149,9 @@ def test_free_box_rigid_modes():
 
 
 def test_tied_assembly_through_null_space():
-    left = solid_box("left", (2.0, 1.0, 1.0), (6, 3, 3), E, NU, RHO, fixed=CLAMP)
-    right = solid_box("right", (2.0, 1.0, 1.0), (6, 3, 3), E, NU, RHO, origin=(2.0, 0, 0))
+    left = solid_box("left", BoxGrid((2.0, 1.0, 1.0), (6, 3, 3)), E, NU, RHO, fixed=CLAMP)
+    right = solid_box("right", BoxGrid((2.0, 1.0, 1.0), (6, 3, 3), origin=(2.0, 0, 0)), E, NU,
+                      RHO)
     asm = assemble([left, right], tie_nodes(left, right, {"box": [[2, 0, 0], [2, 1, 1]]}))
     el = eliminate(asm.M, asm.A)
     T = el.T
