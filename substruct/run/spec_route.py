@@ -152,7 +152,8 @@ def random_result(case: Case, model: Model) -> RandomResponse:
     outputs = asm.rows([model.points[p] for p in spec.outputs])
     tables = [spec.base.psd] if spec.base is not None else [ld.psd for ld in spec.forces]
     names = ["base"] if spec.base is not None else [ld.at for ld in spec.forces]
-    S_in = np.column_stack([interpolate_psd(*map(list, t.columns()), f) for t in tables])
+    columns = [t.columns() for t in tables]
+    S_in = np.column_stack([interpolate_psd(list(ft), list(st), f) for ft, st in columns])
     try:
         if spec.base is not None:
             E = grounding_column(case, model, spec.base.at, (*loc, "base", "at"))
