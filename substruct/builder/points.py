@@ -62,6 +62,14 @@ def point_uses(case: Case) -> list[PointUse]:
         for key in ("displacement", "velocity"):
             uses += [PointUse(p, ("analysis", "transient", "initial", key, p))
                      for p in getattr(tr.initial, key) or {}]
+    rnd = case.analysis.random
+    if rnd is not None:  # analysis.random: force points, base supports, outputs
+        uses += [PointUse(ld.at, ("analysis", "random", "forces", i, "at"))
+                 for i, ld in enumerate(rnd.forces)]
+        uses += [PointUse(p, ("analysis", "random", "base", "at", i))
+                 for i, p in enumerate(rnd.base.at if rnd.base is not None else [])]
+        uses += [PointUse(p, ("analysis", "random", "outputs", i))
+                 for i, p in enumerate(rnd.outputs)]
     uses += [PointUse(text, loc, shown) for text, loc, shown in link_point_texts(case)]
     return uses
 

@@ -38,8 +38,9 @@ from substruct.vocabulary import (
     Solver,
 )
 
-__all__ = ["ConstraintSpec", "Variant", "ModesBand", "AmlsSpec", "ModesAnalysis", "Omega", "ModalFrf",
-           "FrfAnalysis", "Analysis", "Output"]
+__all__ = ["ConstraintSpec", "Variant", "ModesBand", "AmlsSpec", "ModesAnalysis", "Omega",
+           "ModalFrf", "FrfAnalysis", "Analysis", "Output", "LossFactorSpec", "PsdTable",
+           "ForcePsd", "BasePsd", "RandomAnalysis", "SrsFrequencies", "SrsAnalysis"]
 
 
 
@@ -214,6 +215,8 @@ class FrfAnalysis(StrictModel):
     magnitude: Literal["log", "db"] = "log"
     #: largest max |H_check - H| / max |H| a check may have; a larger one fails the run
     tolerance: Positive = DEFAULT_TOLERANCE
+    #: structural damping: one loss factor on all of K, or {substructure: eta}
+    loss_factor: "LossFactorSpec | None" = None
 
     def omegas(self) -> np.ndarray:
         """The circular frequencies of the grid (rad/s), converted from Hz if ``units: Hz``."""
@@ -227,6 +230,9 @@ class FrfAnalysis(StrictModel):
             raise FieldError("omega", "the generalized-inverse receptance (eq 15) is singular "
                              "at omega = 0: use frequencies > 0 (or method kkt for statics)",
                              float(w[w <= 0][0]))
+        if self.loss_factor is not None and self.method in ("modal", "auto"):
+            raise FieldError("method", "a loss factor is taken by the direct formulations "
+                             "only (generalized-inverse, null-space, kkt)", self.method)
         sizes = {"frequencies": len(w), "outputs": len(self.outputs), "inputs": len(self.inputs)}
         # the result and, on a small model's direct path, one check sweep at a time (the
         # sparse path checks at three frequencies only)
@@ -247,11 +253,24 @@ class Analysis(StrictModel):
     frf: FrfAnalysis | None = None
     #: time histories (eqs 5, 10): substruct.case.transient
     transient: TransientAnalysis | None = None
+    #: response PSDs and RMS under force or base acceleration PSDs
+    random: "RandomAnalysis | None" = None
+    #: shock response spectra of the transient's output accelerations
+    srs: "SrsAnalysis | None" = None
 
     @model_validator(mode="after")
     def _something(self) -> "Analysis":
-        if self.modes is None and self.frf is None and self.transient is None:
+        if self.modes is None and self.frf is None and self.transient is None \
+                and self.random is None:
             raise ValueError("nothing to compute: give modes and/or frf")
+        if self.srs is not None:
+            if self.transient is None:
+                raise FieldError("srs", "a shock response spectrum is of a transient's "
+                                 "outputs: add analysis.transient")
+            for i, p in enumerate(self.srs.outputs or []):
+                if p not in self.transient.outputs:
+                    raise FieldError(("srs", "outputs", i), "not an output of "
+                                     "analysis.transient", p)
         return self
 
 
@@ -261,3 +280,149 @@ class Output(StrictModel):
     pictures: bool = True
     #: store the assembly's M, K, C (sparse) in the result file (``model/M``, ...)
     matrices: bool = False
+
+
+# ------------------------------------------------------------ specification analyses
+
+#: One loss factor on all of K, or one per substructure (by name).
+LossFactorSpec = NonNegative | dict[Name, NonNegative]
+
+
+class PsdTable(StrictModel):
+    """A PSD specification table ``[[f (Hz), level], ...]``, log-log interpolated between its
+    rows (0 outside them)."""
+
+    rows: list[tuple[NonNegative, NonNegative]]
+
+    @model_validator(mode="before")
+    @classmethod
+    def _list(cls, value: Any) -> Any:
+        if not isinstance(value, list):
+            raise ValueError("a PSD table is a list of [frequency (Hz), level] rows")
+        return {"rows": value}
+
+    @model_validator(mode="after")
+    def _table(self) -> "PsdTable":
+        if len(self.rows) < 2:
+            raise FieldError((), "a PSD table needs at least two [frequency, level] rows",
+                             len(self.rows))
+        if len(self.rows) > MAX_FREQUENCIES:
+            raise FieldError((), f"at most {MAX_FREQUENCIES} rows", len(self.rows))
+        for i in range(1, len(self.rows)):
+            if self.rows[i][0] <= self.rows[i - 1][0]:
+                raise FieldError((i, 0), f"frequencies must increase (after "
+                                 f"{self.rows[i - 1][0]:g} Hz)", self.rows[i][0])
+        return self
+
+    def columns(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(frequency (Hz), level)``."""
+        table = np.asarray(self.rows, dtype=float)
+        return table[:, 0], table[:, 1]
+
+
+class ForcePsd(StrictModel):
+    """A force PSD (force^2/Hz in the case's units) at a point; several are uncorrelated."""
+
+    at: Point
+    psd: PsdTable
+
+
+class BasePsd(StrictModel):
+    """A base acceleration PSD ((length/s^2)^2/Hz in the case's units) moving the grounded
+    supports ``at`` together (each held by a constraint on it alone, as a transient's base)."""
+
+    at: Annotated[list[Point], Field(min_length=1)]
+    psd: PsdTable
+
+
+class RandomAnalysis(StrictModel):
+    """Response PSDs ``S_y = H S_f H^H`` and RMS values at ``outputs`` over ``frequencies``
+    (Hz) for uncorrelated force PSDs ``forces`` or one base acceleration PSD ``base``."""
+
+    frequencies: Omega
+    forces: list[ForcePsd] = Field(default_factory=list)
+    base: BasePsd | None = None
+    outputs: Annotated[list[Point], Field(min_length=1)]
+    #: what the outputs' PSDs are of (absolute motion)
+    quantity: Literal["displacement", "velocity", "acceleration"] = "acceleration"
+    method: FormulationName = GENERALIZED_INVERSE
+    check: list[FormulationName] = Field(default_factory=list)
+    tolerance: Positive = DEFAULT_TOLERANCE
+    #: structural damping: one loss factor on all of K, or {substructure: eta}
+    loss_factor: LossFactorSpec | None = None
+
+    @model_validator(mode="after")
+    def _inputs(self) -> "RandomAnalysis":
+        if (not self.forces) == (self.base is None):
+            raise FieldError("forces", "give force PSDs (forces) or a base acceleration PSD "
+                             "(base), one of the two")
+        f = self.frequencies.grid()
+        if np.any(f <= 0):
+            raise FieldError("frequencies", "must be > 0 Hz", float(f[f <= 0][0]))
+        if np.any(np.diff(f) <= 0):
+            raise FieldError("frequencies", "must increase", self.frequencies.values)
+        p = max(len(self.forces), 1)
+        need = 16.0 * len(f) * len(self.outputs) * (p + len(self.outputs))
+        if need > memory_limit():
+            raise FieldError((), f"the response PSDs would need about {gigabytes(need)} of "
+                             f"memory, more than this machine has available", len(f))
+        return self
+
+    def hertz(self) -> np.ndarray:
+        """The frequency grid (Hz)."""
+        return self.frequencies.grid()
+
+
+class SrsFrequencies(StrictModel):
+    """The natural frequencies of an SRS (Hz): ``start`` to ``stop``, ``num`` log-spaced or
+    ``per_octave`` a factor ``2^(1/per_octave)`` apart."""
+
+    start: Positive
+    stop: Positive
+    num: Count | None = None
+    per_octave: Count | None = None
+
+    @model_validator(mode="after")
+    def _grid(self) -> "SrsFrequencies":
+        if self.stop <= self.start:
+            raise FieldError("stop", f"must be > start ({self.start:g})", self.stop)
+        if (self.num is None) == (self.per_octave is None):
+            raise FieldError("num", "give num or per_octave, one of the two")
+        if len(self.grid()) > MAX_FREQUENCIES:
+            raise FieldError("per_octave" if self.num is None else "num",
+                             f"at most {MAX_FREQUENCIES} frequencies", len(self.grid()))
+        return self
+
+    def grid(self) -> np.ndarray:
+        """The natural frequencies (Hz)."""
+        if self.num is not None:
+            return np.geomspace(self.start, self.stop, self.num)
+        assert self.per_octave is not None
+        count = int(np.floor(self.per_octave * np.log2(self.stop / self.start) + 1e-9)) + 1
+        return self.start * 2.0 ** (np.arange(count) / self.per_octave)
+
+
+class SrsAnalysis(StrictModel):
+    """Shock response spectra of the absolute accelerations of a transient's ``outputs``
+    (all of them if not given), damping ratio ``damping`` or ``Q = 1 / (2 damping)``."""
+
+    frequencies: SrsFrequencies
+    outputs: Annotated[list[Point], Field(min_length=1)] | None = None
+    damping: Annotated[Number, Field(gt=0, lt=1)] | None = None
+    Q: Annotated[Number, Field(gt=0.5)] | None = None
+
+    @model_validator(mode="after")
+    def _damping(self) -> "SrsAnalysis":
+        if self.damping is not None and self.Q is not None:
+            raise FieldError("Q", "give damping or Q, not both", self.Q)
+        return self
+
+    def zeta(self) -> float:
+        """The damping ratio (0.05, Q = 10, if neither is given)."""
+        if self.Q is not None:
+            return 1 / (2 * self.Q)
+        return 0.05 if self.damping is None else float(self.damping)
+
+
+FrfAnalysis.model_rebuild()
+Analysis.model_rebuild()

@@ -11,6 +11,7 @@ import numpy as np
 
 from substruct.builder.superelements import rigid_body_lines
 from substruct.cli.recovery_summary import print_recovery, recovery_json
+from substruct.cli.spec_summary import print_random, print_srs, random_json, srs_json
 from substruct.cli.transient_summary import print_transient, transient_json
 
 if TYPE_CHECKING:
@@ -90,6 +91,10 @@ def summary_json(result: Result, files: Sequence[Path] = ()) -> dict[str, Any]:
             out["frf"]["H"] = {"real": H.real.tolist(), "imag": H.imag.tolist()}
     if result.transient is not None:
         out["transient"] = transient_json(result.transient)
+    if result.random is not None:
+        out["random"] = random_json(result.random)
+    if result.srs is not None:
+        out["srs"] = srs_json(result.srs)
     if result.recovery:
         out["recovery"] = recovery_json(result.recovery)
     return out
@@ -184,4 +189,8 @@ def print_summary(result: Result, out: TextIO, requested: int | None = None,
         print_frf(result.frf, out)
     if result.transient is not None:
         print_transient(result.transient, out, str(result.attrs.get("units", "")))
+    if result.random is not None:
+        print_random(result.random, out)
+    if result.srs is not None:
+        print_srs(result.srs, out)
     print_recovery(result.recovery, out)

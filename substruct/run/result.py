@@ -19,6 +19,7 @@ from substruct.analysis.results import Modes, Receptance
 from substruct.analysis.transient.results import Transient
 from substruct.builder.drawing import Drawing
 from substruct.run.recovered import Recovered
+from substruct.run.spec_results import RandomResponse, ShockSpectra
 
 __all__ = ["ModelInfo", "Result"]
 
@@ -60,3 +61,6 @@ class Result:
     #: responses recovered inside superelements (:mod:`substruct.run.recovered`)
     recovery: list[Recovered] = field(default_factory=list)
     attrs: dict[str, Any] = field(default_factory=dict)
+    #: response PSDs and RMS of analysis.random; shock response spectra of analysis.srs
+    random: RandomResponse | None = None
+    srs: ShockSpectra | None = None

@@ -37,6 +37,7 @@ from substruct.run.recovery import (
     recovery_rows,
     split_recovered,
 )
+from substruct.run.spec_route import loss_frf_result, random_result, srs_result
 from substruct.run.transient_run import transient_result
 from substruct.run.result import Result
 from substruct.substructure import Substructure
@@ -128,7 +129,8 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
             n_omega = len(frf.omega.grid())
             events("sweep", f"receptances: {n_omega} frequencies, {len(frf.outputs)} output(s) "
                    f"x {len(frf.inputs)} input(s), {asm.n_dof} coordinates", n_omega)
-        result.frf = coupled_frf_result(case, model, progress) if has_frf_parts(case) else \
+        result.frf = loss_frf_result(case, model, progress) if frf.loss_factor is not None \
+            else coupled_frf_result(case, model, progress) if has_frf_parts(case) else \
             frf_result(case, model, progress)
     plan = recovery_plan(case, asm)
     result.recovery = plan.empty()
@@ -146,6 +148,12 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
             tr = transient_result(case, model, rows, names)
         result.transient = split_recovered(plan, tr, len(case.analysis.transient.outputs),
                                            result.recovery) if plan else tr
+    # specification analyses (substruct.run.spec_route)
+    if case.analysis.random is not None:
+        result.random = random_result(case, model)
+        require_finite("random", psd=result.random.psd)
+    if case.analysis.srs is not None and result.transient is not None:
+        result.srs = srs_result(case, result.transient)
     _require_finite_result(result)
     return result
 

@@ -1,0 +1,48 @@
+"""The printed tables of the specification analyses: the RMS of each random-response output
+(with its 3-sigma level) and the peaks of each shock response spectrum."""
+
+from __future__ import annotations
+
+from typing import Any, TextIO
+
+import numpy as np
+
+from substruct.run.spec_results import THREE_SIGMA_EXCEEDANCE, RandomResponse, ShockSpectra
+
+__all__ = ["print_random", "print_srs", "random_json", "srs_json"]
+
+
+def print_random(r: RandomResponse, out: TextIO) -> None:
+    """``output  rms  3 rms`` for each output, then the 3-sigma note."""
+    out.write(f"random response ({r.quantity}, {len(r.f)} frequencies "
+              f"{r.f[0]:.4g}-{r.f[-1]:.4g} Hz, inputs: {', '.join(r.inputs)}; {r.method})\n")
+    width = max(len("output"), *(len(o) for o in r.outputs))
+    out.write(f"  {'output':<{width}}  {'rms':>11}  {'3 rms':>11}\n")
+    for name, value in zip(r.outputs, r.rms):
+        out.write(f"  {name:<{width}}  {value:11.4e}  {3 * value:11.4e}\n")
+    out.write(f"  (a Gaussian response exceeds 3 rms {100 * THREE_SIGMA_EXCEEDANCE:.2f} % of "
+              f"the time)\n")
+
+
+def print_srs(s: ShockSpectra, out: TextIO) -> None:
+    """For each output, the largest of its spectrum and where it is."""
+    out.write(f"shock response spectra (Q = {1 / (2 * s.zeta):.4g}, {len(s.fn)} frequencies "
+              f"{s.fn[0]:.4g}-{s.fn[-1]:.4g} Hz, absolute acceleration, maximax)\n")
+    width = max(len("output"), *(len(o) for o in s.outputs))
+    out.write(f"  {'output':<{width}}  {'peak':>11}  {'at (Hz)':>9}  {'pos':>11}  "
+              f"{'neg':>11}  {'max pv':>11}\n")
+    for i, name in enumerate(s.outputs):
+        k = int(np.argmax(s.maxabs[i]))
+        out.write(f"  {name:<{width}}  {s.maxabs[i, k]:11.4e}  {s.fn[k]:9.4g}  "
+                  f"{s.pos[i].max():11.4e}  {s.neg[i].max():11.4e}  {s.pv[i].max():11.4e}\n")
+
+
+def random_json(r: RandomResponse) -> dict[str, Any]:
+    """The RMS table as JSON."""
+    return {"quantity": r.quantity, "rms": dict(zip(r.outputs, map(float, r.rms)))}
+
+
+def srs_json(s: ShockSpectra) -> dict[str, Any]:
+    """The peak of each spectrum as JSON."""
+    return {"zeta": s.zeta, "peaks": {o: float(s.maxabs[i].max())
+                                      for i, o in enumerate(s.outputs)}}

@@ -1,0 +1,212 @@
+r"""The specification analyses of a case: ``analysis.random``, ``analysis.srs`` and the
+loss factors of ``analysis.frf``, a thin adapter to :mod:`substruct.analysis.frf.random`,
+:mod:`substruct.analysis.frf.base_drive`, :mod:`substruct.analysis.frf.structural` and
+:mod:`substruct.analysis.transient.srs`.
+
+* loss factors: ``eta`` on all of ``K``, or ``eta_s`` on the block ``K_s`` of substructure
+  ``s``: :math:`Z = \sum_s K_s (1 + i \eta_s) + i \omega C - \omega^2 M`
+  (:func:`~substruct.analysis.frf.structural.hysteretic_sweep`);
+* random: :math:`S_y = H S_f H^H`, :math:`\sigma = \sqrt{\int S_{ii} df}`, ``H`` the
+  receptance to the force points, or per base acceleration
+  (:func:`~substruct.analysis.frf.base_drive.base_drive_sweep`, ``A q = E g``), times
+  :math:`(i \omega)^p` for velocity (``p = 1``) or acceleration (``p = 2``); the input PSDs are
+  log-log interpolated (:func:`~substruct.analysis.frf.random.interpolate_psd`), several
+  forces uncorrelated (a diagonal :math:`S_f`);
+* srs: Smallwood's filter on each output's absolute acceleration, sampled every recorded step.
+
+Input the analyses cannot take becomes a :class:`~substruct.case.loader.CaseError` naming the
+field (exit 2); a check beyond the tolerance stays a
+:class:`~substruct.analysis.errors.CheckError` (exit 1).
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+import scipy.sparse as sp
+
+from substruct.analysis.api import Progress, SweepOptions
+from substruct.analysis.errors import INPUT_ERRORS, CheckError
+from substruct.analysis.frf.base_drive import base_drive_sweep
+from substruct.analysis.frf.quantity import as_quantity
+from substruct.analysis.frf.random import interpolate_psd, response_psd, rms
+from substruct.analysis.frf.structural import LossFactor, hysteretic_sweep
+from substruct.analysis.results import Receptance
+from substruct.analysis.transient.results import Transient
+from substruct.analysis.transient.srs import MAX_FN_DT, srs
+from substruct.builder.frf_parts import has_frf_parts
+from substruct.builder.model import Model
+from substruct.case.analysis import LossFactorSpec
+from substruct.case.loader import Case
+from substruct.run.spec_results import RandomResponse, ShockSpectra
+
+__all__ = ["loss_parts", "loss_frf_result", "grounding_column", "random_result",
+           "srs_result", "POWER"]
+
+#: The power of ``i omega`` of each random-response quantity.
+POWER = {"displacement": 0, "velocity": 1, "acceleration": 2}
+
+
+def loss_parts(case: Case, model: Model, spec: LossFactorSpec, loc: tuple) -> list[LossFactor]:
+    r"""The :class:`~substruct.analysis.frf.structural.LossFactor` list of a ``loss_factor``
+    field: ``eta`` on all of ``K``, or ``eta_s`` on :math:`K_s = P_s K P_s` (:math:`P_s` the
+    0/1 diagonal of substructure ``s``'s stacked coordinates).
+
+    Raises:
+        CaseError: a name that is no substructure of the model.
+    """
+    asm = model.assembly
+    if not isinstance(spec, dict):
+        return [LossFactor(float(spec), sp.csr_array(asm.K))]
+    names = [s.name for s in asm.substructures]
+    parts = []
+    for name, eta in spec.items():
+        if name not in names:
+            raise case.error((*loc, name), f"not a substructure of the model (one of "
+                             f"{', '.join(names)})", name)
+        mask = np.zeros(asm.n_dof)
+        mask[asm.block(name)] = 1.0
+        P = sp.diags_array(mask)
+        parts.append(LossFactor(float(eta), sp.csr_array(P @ sp.csr_array(asm.K) @ P)))
+    return parts
+
+
+def _sweep_kw(spec, inputs: Sequence[str], outputs: Sequence[str]) -> dict:
+    return dict(method=spec.method, checks=spec.check, tolerance=spec.tolerance,
+                input_names=list(inputs), output_names=list(outputs))
+
+
+def loss_frf_result(case: Case, model: Model, progress: Progress | None = None) -> Receptance:
+    """The receptances of ``analysis.frf`` with its ``loss_factor``
+    (:func:`~substruct.analysis.frf.structural.hysteretic_sweep`, one frequency at a time).
+
+    Raises:
+        CaseError: FRF substructures in the case, an unknown substructure, a frequency <= 0.
+        CheckError: a check beyond ``analysis.frf.tolerance``.
+    """
+    spec = case.analysis.frf
+    if spec is None or spec.loss_factor is None:
+        raise TypeError(f"case {case.name!r} asks for no receptances with a loss factor")
+    loc = ("analysis", "frf", "loss_factor")
+    if has_frf_parts(case):
+        raise case.error(loc, "not taken with FRF substructures (type: frf), whose "
+                         "receptances are measured as they are", spec.loss_factor)
+    asm = model.assembly
+    parts = loss_parts(case, model, spec.loss_factor, loc)
+    inputs = sp.csc_array(asm.rows([model.points[p] for p in spec.inputs]).T)
+    outputs = asm.rows([model.points[p] for p in spec.outputs])
+    try:
+        H = hysteretic_sweep(asm.K, asm.M, asm.C, asm.A, spec.omegas(), inputs, outputs,
+                             parts, R=asm.R, **_sweep_kw(spec, spec.inputs, spec.outputs))
+    except INPUT_ERRORS as err:
+        raise case.error(("analysis", "frf"), " ".join(str(err).split())) from None
+    except CheckError as err:
+        raise CheckError(f"{err}; to accept it, raise analysis.frf.tolerance") from None
+    return as_quantity(H, spec.quantity)
+
+
+def grounding_column(case: Case, model: Model, points: Sequence[str], loc: tuple
+                     ) -> np.ndarray:
+    """``E`` (``m x 1``): the coefficient ``c`` of each constraint row ``A_k = c r(p)`` that
+    grounds a point ``p`` of ``points`` alone (``c u(p) = c g`` moves it with the base).
+
+    Raises:
+        CaseError: a point that no constraint row holds alone.
+    """
+    asm = model.assembly
+    A = sp.csr_array(asm.A)
+    E = np.zeros((A.shape[0], 1))
+    for i, p in enumerate(points):
+        r = asm.row(model.points[p]).toarray().ravel()
+        rr = float(r @ r)
+        found = False
+        for k in np.flatnonzero(np.abs(A @ r) > 0.0):
+            row = A[[k]].toarray().ravel()
+            c = float(row @ r) / rr if rr else 0.0
+            if c and np.abs(row - c * r).max() <= 1e-12 * np.abs(row).max():
+                E[k, 0], found = c, True
+        if not found:
+            raise case.error((*loc, i), "not a grounded support: no active constraint holds "
+                             "this point alone (add one with terms: {point: 1})", p)
+    return E
+
+
+def random_result(case: Case, model: Model) -> RandomResponse:
+    """The response PSDs and RMS values of ``analysis.random`` (module docstring).
+
+    Raises:
+        CaseError: an unknown substructure of ``loss_factor``, a base point not grounded,
+            input the sweep cannot take (a mechanism with the supports held).
+        CheckError: a check beyond ``analysis.random.tolerance``.
+    """
+    spec = case.analysis.random
+    if spec is None:
+        raise TypeError(f"case {case.name!r} asks for no random response")
+    loc = ("analysis", "random")
+    asm = model.assembly
+    f = spec.hertz()
+    w = 2 * np.pi * f
+    parts = loss_parts(case, model, spec.loss_factor, (*loc, "loss_factor")) \
+        if spec.loss_factor is not None else []
+    outputs = asm.rows([model.points[p] for p in spec.outputs])
+    tables = [spec.base.psd] if spec.base is not None else [ld.psd for ld in spec.forces]
+    names = ["base"] if spec.base is not None else [ld.at for ld in spec.forces]
+    columns = [t.columns() for t in tables]
+    S_in = np.column_stack([interpolate_psd(list(ft), list(st), f) for ft, st in columns])
+    try:
+        if spec.base is not None:
+            E = grounding_column(case, model, spec.base.at, (*loc, "base", "at"))
+            rec = base_drive_sweep(asm.K, asm.M, asm.C, asm.A, w, E, outputs,
+                                   per="acceleration", loss=parts,
+                                   options=SweepOptions(**_sweep_kw(spec, names, spec.outputs),
+                                                        what="random"))
+        else:
+            inputs = sp.csc_array(asm.rows([model.points[p] for p in names]).T)
+            rec = hysteretic_sweep(asm.K, asm.M, asm.C, asm.A, w, inputs, outputs, parts,
+                                   R=asm.R, **_sweep_kw(spec, names, spec.outputs))
+    except INPUT_ERRORS as err:
+        raise case.error(loc, " ".join(str(err).split())) from None
+    except CheckError as err:
+        raise CheckError(f"{err}; to accept it, raise analysis.random.tolerance") from None
+    H = rec.H * ((1j * w) ** POWER[spec.quantity])[:, None, None]
+    S = np.einsum("kp,pq->kpq", S_in, np.eye(len(names)))
+    Sy = response_psd(H, S)
+    auto = np.real(np.einsum("kii->ki", Sy))
+    return RandomResponse(f=f, outputs=list(spec.outputs), inputs=list(names),
+                          quantity=spec.quantity, input_psd=S_in, psd=Sy, rms=rms(f, auto),
+                          method=rec.method, agreement=dict(rec.agreement),
+                          tolerance=spec.tolerance)
+
+
+def srs_result(case: Case, tr: Transient) -> ShockSpectra | None:
+    """The shock response spectra of ``analysis.srs`` of the transient ``tr``'s absolute output
+    accelerations (``None`` if a history is not finite: the run refuses it then).
+
+    Raises:
+        CaseError: a frequency above ``0.1 / dt`` of the recorded histories (10 samples a
+            period), or fewer than two recorded samples.
+    """
+    spec = case.analysis.srs
+    if spec is None:
+        raise TypeError(f"case {case.name!r} asks for no shock response spectrum")
+    fn = spec.frequencies.grid()
+    if len(tr.t) < 2:
+        raise case.error(("analysis", "srs"), "a history of at least two samples is needed",
+                         len(tr.t))
+    dt = float(tr.t[1] - tr.t[0])
+    if float(fn.max()) * dt > MAX_FN_DT:
+        raise case.error(("analysis", "srs", "frequencies", "stop"),
+                         f"above {MAX_FN_DT / dt:.4g} Hz, 0.1 / the recorded step "
+                         f"({dt:g} s: 10 samples a period)", float(fn.max()))
+    outs = list(spec.outputs) if spec.outputs is not None else list(tr.outputs)
+    acc = np.asarray(tr.acceleration)
+    if not np.all(np.isfinite(acc)):
+        return None
+    cols = [tr.outputs.index(p) for p in outs]
+    spectra = [srs(acc[:, j], dt, fn, spec.zeta()) for j in cols]
+    return ShockSpectra(fn=fn, zeta=spec.zeta(), outputs=outs,
+                        pos=np.array([s.pos for s in spectra]),
+                        neg=np.array([s.neg for s in spectra]),
+                        maxabs=np.array([s.maxabs for s in spectra]),
+                        pv=np.array([s.pv for s in spectra]), dt=dt)
