@@ -41,6 +41,7 @@ from substruct import __version__
 from substruct.analysis.results import Modes, Receptance
 from substruct.io.file_set import TEMP_PREFIX
 from substruct.io.recovery_hdf5 import write_recovery
+from substruct.io.vp_hdf5 import write_virtual_points
 from substruct.io.transient_hdf5 import write_transient
 from substruct.io.result_reader import FORMAT, FORMAT_VERSION, RESERVED_ATTRS, load
 from substruct.run.result import ModelInfo, Result
@@ -85,6 +86,9 @@ def save(result: Result, path: str | os.PathLike) -> Path:
                 write_transient(f.create_group("transient", track_order=True), result.transient)
             if result.recovery:
                 write_recovery(f.create_group("recovery", track_order=True), result.recovery)
+            if result.virtual_points:
+                write_virtual_points(f.create_group("virtual_points", track_order=True),
+                                     result.virtual_points)
     return path
 
 

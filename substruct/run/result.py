@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
+from substruct.analysis.frf.virtual_point import VptResult
 from substruct.analysis.results import Modes, Receptance
 from substruct.analysis.transient.results import Transient
 from substruct.builder.drawing import Drawing
@@ -60,3 +61,5 @@ class Result:
     #: responses recovered inside superelements (:mod:`substruct.run.recovered`)
     recovery: list[Recovered] = field(default_factory=list)
     attrs: dict[str, Any] = field(default_factory=dict)
+    #: consistency indicators of the parts transformed to virtual points, by part
+    virtual_points: dict[str, VptResult] = field(default_factory=dict)
