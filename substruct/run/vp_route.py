@@ -169,6 +169,13 @@ def vp_frf_result(case: Case, model: Model, progress: Progress | None = None
     def stacked(point: str) -> str:
         return point if parse_point(point)[0] in frf_names else f"{MODEL_PART}@{point}"
 
+    for i, chain in enumerate(case.connections):
+        for j, point in enumerate(chain):
+            sub, where = parse_point(point)
+            if sub in indicators and (where or "").startswith("ch:"):
+                raise case.error(("connections", i, j), "a channel that passes through is "
+                                 "measured one way only: join the part at a virtual-point "
+                                 "coordinate (vp:<point>:<ux|uy|uz|rx|ry|rz>)", point)
     pairs = [(stacked(a), stacked(b)) for a, b in split.pairs]
     drop = [a for a, b in pairs for side in (a, b)
             if side.rsplit(":", 1)[-1] in weaken.get(parse_point(side)[0], [])]
