@@ -7,6 +7,8 @@ r"""A substructure known only by its receptances: ``type: frf``.
       file: measured.uff        # UFF 58 (or 58b) or .npz (H, labels, omega | freq_hz)
       interpolate: none         # or linear: onto the grid of analysis.frf
       decouple: false           # true: a known part removed from the assembly it is joined to
+      virtual_points: {...}     # optional: channels reduced to virtual points
+                                # (substruct.case.virtual_points; coordinates meas@vp:J:ux ...)
 
 Its points are its labels, ``meas@3:z``.  It has no mass, damping or stiffness matrices: the
 case is coupled by frequency-based substructuring (:mod:`substruct.analysis.frf.coupling`) on
