@@ -7,6 +7,8 @@ r"""A substructure known only by its receptances: ``type: frf``.
       file: measured.uff        # UFF 58 (or 58b) or .npz (H, labels, omega | freq_hz)
       interpolate: none         # or linear: onto the grid of analysis.frf
       decouple: false           # true: a known part removed from the assembly it is joined to
+      virtual_points: {...}     # optional: channels reduced to virtual points
+                                # (substruct.case.virtual_points; coordinates meas@vp:J:ux ...)
 
 Its points are its labels, ``meas@3:z``.  It has no mass, damping or stiffness matrices: the
 case is coupled by frequency-based substructuring (:mod:`substruct.analysis.frf.coupling`) on
@@ -27,6 +29,7 @@ from pydantic import PrivateAttr, ValidationInfo, model_validator
 from substruct.case.errors import FieldError
 from substruct.case.fields import Name, StrictModel
 from substruct.case.frf_files import read_frf_file
+from substruct.case.virtual_points import VirtualPointsSpec
 
 __all__ = ["FrfSpec"]
 
@@ -41,6 +44,8 @@ class FrfSpec(StrictModel):
     interpolate: Literal["none", "linear"] = "none"
     #: a known part to remove: its receptance enters the coupling negated
     decouple: bool = False
+    #: measured channels reduced to virtual points (:mod:`substruct.case.virtual_points`)
+    virtual_points: VirtualPointsSpec | None = None
     _data: tuple[np.ndarray, list[str], np.ndarray] | None = PrivateAttr(default=None)
 
     @model_validator(mode="after")
@@ -52,6 +57,15 @@ class FrfSpec(StrictModel):
             self._data = read_frf_file(path)
         except ValueError as err:
             raise FieldError("file", " ".join(str(err).split()), self.file) from None
+        if self.virtual_points is not None:
+            if self.decouple:
+                raise FieldError("decouple", "a part with virtual points is coupled, not "
+                                 "decoupled", True)
+            labels = set(self._data[1])
+            for c in self.virtual_points.table().channels:
+                if c.name not in labels:
+                    raise FieldError(("virtual_points", "channels"), f"channel {c.name!r} is "
+                                     f"not among the labels of {Path(self.file).name}", c.name)
         return self
 
     def data(self) -> tuple[np.ndarray, list[str], np.ndarray]:
@@ -61,7 +75,9 @@ class FrfSpec(StrictModel):
         return self._data
 
     def dof_labels(self) -> list[str]:
-        """The labels of the coordinates."""
+        """The labels of the coordinates (after the virtual point transformation, if any)."""
+        if self.virtual_points is not None:
+            return self.virtual_points.labels()
         return list(self.data()[1])
 
     def n_dof(self) -> Any:

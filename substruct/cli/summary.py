@@ -100,6 +100,16 @@ def summary_json(result: Result, files: Sequence[Path] = ()) -> dict[str, Any]:
     return out
 
 
+def vp_minima(ind: Any) -> str:
+    """The smallest consistency indicators of a transformed part, over frequencies (and
+    channels): overall and specific, sensors and impacts (1 when the adapter moves rigidly)."""
+    def least(d: dict) -> str:
+        return f"{min(float(np.min(v)) for v in d.values()):.4f}" if d else "-"
+    return (f"min consistency, sensors {least(ind.overall_u)} (specific "
+            f"{least(ind.specific_u)}), impacts {least(ind.overall_f)} (specific "
+            f"{least(ind.specific_f)})")
+
+
 def print_modes(modes: Any, out: TextIO, requested: int | None = None) -> None:
     """The table of physical modes, the spurious roots set aside and the check figures."""
     n = len(modes.omega)
@@ -187,6 +197,8 @@ def print_summary(result: Result, out: TextIO, requested: int | None = None,
         print_modes(modes, out, requested)
     if result.frf is not None:
         print_frf(result.frf, out)
+    for part, ind in result.virtual_points.items():
+        out.write(f"  virtual points of {part}: " + vp_minima(ind) + "\n")
     if result.transient is not None:
         print_transient(result.transient, out, str(result.attrs.get("units", "")))
     if result.random is not None:

@@ -22,7 +22,7 @@ def uff_target(result: Any, out: str | None, result_path: str) -> tuple[Path, st
     """The folder and file name of the UFF export: ``--out`` itself if it ends in ``.uff``,
     else ``<case>.uff`` in ``--out`` (default: the result's folder).  The case name is read
     from the result file, so it becomes a file name only through
-    :func:`~substruct.io.paths.safe_stem` (a name ``../x`` or ``/tmp/x`` stays in the
+    :func:`~substruct.io.paths.safe_stem` (a name ``../x`` or ``/var/x`` stays in the
     folder)."""
     from substruct.io.paths import safe_stem
 

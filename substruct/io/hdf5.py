@@ -42,6 +42,7 @@ from substruct.analysis.results import Modes, Receptance
 from substruct.io.file_set import TEMP_PREFIX
 from substruct.io.recovery_hdf5 import write_recovery
 from substruct.io.spec_hdf5 import write_random, write_srs
+from substruct.io.vp_hdf5 import write_virtual_points
 from substruct.io.transient_hdf5 import write_transient
 from substruct.io.result_reader import FORMAT, FORMAT_VERSION, RESERVED_ATTRS, load
 from substruct.run.result import ModelInfo, Result
@@ -90,6 +91,9 @@ def save(result: Result, path: str | os.PathLike) -> Path:
                 write_random(f.create_group("random", track_order=True), result.random)
             if result.srs is not None:
                 write_srs(f.create_group("srs", track_order=True), result.srs)
+            if result.virtual_points:
+                write_virtual_points(f.create_group("virtual_points", track_order=True),
+                                     result.virtual_points)
     return path
 
 

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
+from substruct.analysis.frf.virtual_point import VptResult
 from substruct.analysis.results import Modes, Receptance
 from substruct.analysis.transient.results import Transient
 from substruct.builder.drawing import Drawing
@@ -64,3 +65,5 @@ class Result:
     #: response PSDs and RMS of analysis.random; shock response spectra of analysis.srs
     random: RandomResponse | None = None
     srs: ShockSpectra | None = None
+    #: consistency indicators of the parts transformed to virtual points, by part
+    virtual_points: dict[str, VptResult] = field(default_factory=dict)

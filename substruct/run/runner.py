@@ -39,6 +39,7 @@ from substruct.run.recovery import (
 )
 from substruct.run.spec_route import loss_frf_result, random_result, srs_result
 from substruct.run.transient_run import transient_result
+from substruct.run.vp_route import has_virtual_points, vp_frf_result
 from substruct.run.result import Result
 from substruct.substructure import Substructure
 
@@ -129,9 +130,13 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
             n_omega = len(frf.omega.grid())
             events("sweep", f"receptances: {n_omega} frequencies, {len(frf.outputs)} output(s) "
                    f"x {len(frf.inputs)} input(s), {asm.n_dof} coordinates", n_omega)
-        result.frf = loss_frf_result(case, model, progress) if frf.loss_factor is not None \
-            else coupled_frf_result(case, model, progress) if has_frf_parts(case) else \
-            frf_result(case, model, progress)
+        if has_virtual_points(case):
+            result.frf, result.virtual_points = vp_frf_result(case, model, progress)
+        elif frf.loss_factor is not None:
+            result.frf = loss_frf_result(case, model, progress)
+        else:
+            result.frf = coupled_frf_result(case, model, progress) if has_frf_parts(case) \
+                else frf_result(case, model, progress)
     plan = recovery_plan(case, asm)
     result.recovery = plan.empty()
     if plan and result.modes is not None:

@@ -1,0 +1,219 @@
+r"""The analysis route of a case whose FRF substructures have ``virtual_points:``
+(:mod:`substruct.case.virtual_points`): each such part is transformed to its virtual points,
+
+.. math::  Y_{qm}(\omega) = T_u\, Y(\omega)\, T_f^T ,
+
+(:mod:`substruct.analysis.frf.virtual_point`), then every part (the finite-element model's
+receptance at its joined points, plain FRF parts, transformed parts) is coupled by
+:func:`substruct.analysis.frf.vp_coupling.couple_virtual_points`,
+
+.. math::  Y_c = Y - Y B_f^T \, (B_u Y B_f^T)^{\dagger} \, B_u Y ,
+
+with the parts' ``weaken`` components dropped from both :math:`B_u` and :math:`B_f` at their
+connections and the ``regularization`` given (the same in every part that gives one).
+Without either the result is checked against the generalized-inverse form.  The consistency
+indicators of every transformed part are returned with it.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+from substruct.analysis.api import Progress
+from substruct.analysis.checks import require_agreement
+from substruct.analysis.errors import AnalysisInputError, CheckError
+from substruct.analysis.frf.coupling import common_grid
+from substruct.analysis.frf.quantity import as_quantity
+from substruct.analysis.frf.virtual_point import (VirtualPoint, VptResult, consistency,
+                                                  virtual_point_transform)
+from substruct.analysis.frf.vp_coupling import (Regularisation, VpPart,
+                                                couple_virtual_points)
+from substruct.analysis.results import Receptance
+from substruct.builder.frf_parts import MODEL_PART, FrfPart, split_frf_case
+from substruct.builder.model import Model
+from substruct.case.fields import parse_point
+from substruct.case.frf_substructure import FrfSpec
+from substruct.case.loader import Case
+from substruct.case.virtual_points import VP_LABEL_COMPONENTS, VirtualPointsSpec, vp_label
+from substruct.run.analyses import frf_result
+from substruct.run.frf_route import ANALYSIS_GRID
+from substruct.vocabulary import GENERALIZED_INVERSE
+
+__all__ = ["has_virtual_points", "vp_frf_result", "transformed_part"]
+
+_LIBRARY = dict(zip(("x", "y", "z", "rx", "ry", "rz"), VP_LABEL_COMPONENTS))
+
+
+def has_virtual_points(case: Case) -> bool:
+    """Whether an FRF substructure of the case has ``virtual_points:``."""
+    return any(isinstance(s, FrfSpec) and s.virtual_points is not None
+               for s in case.substructures)
+
+
+def _relabel(label: str, points: set[str]) -> str:
+    """A library label (``J:x``, ``J:e1``, a channel name) as a case-file label."""
+    name, sep, comp = label.rpartition(":")
+    if sep and name in points:
+        return vp_label(name, _LIBRARY.get(comp, comp))
+    return f"ch:{label}"
+
+
+def transformed_part(case: Case, k: int, vps: VirtualPointsSpec, part: FrfPart
+                     ) -> tuple[VpPart, VptResult]:
+    """The measured part ``part`` (substructure ``k``, on the analysis grid) transformed to its
+    virtual points, and its consistency indicators.
+
+    Raises:
+        CaseError: a virtual point whose motions are unobservable or that has fewer channels
+            than coordinates; measured receptances that are not finite.
+    """
+    table = vps.table()
+    sensors = [c.name for c in table.of_kind("sensor")]
+    impacts = [c.name for c in table.of_kind("impact")]
+    where = {lab: i for i, lab in enumerate(part.labels)}
+    Y = part.Y[:, [where[s] for s in sensors]][:, :, [where[h] for h in impacts]]
+    points = []
+    for p in vps.points:
+        ex, wt = p.extra_modes, p.weights
+        points.append(VirtualPoint(
+            p.name, p.position, tuple(p.sensors), tuple(p.impacts),
+            None if ex is None else np.asarray(ex.sensors, dtype=float),
+            None if ex is None else np.asarray(ex.impacts, dtype=float),
+            None if wt is None else np.asarray(wt.sensors, dtype=float),
+            None if wt is None else np.asarray(wt.impacts, dtype=float)))
+    loc: tuple[str | int, ...] = ("substructures", k, "virtual_points")
+    try:
+        vpt = virtual_point_transform(table, points, sensors, impacts)
+    except ValueError as err:
+        m = re.match(r"virtual point (\S+) \((sensor|impact)s\)", str(err))
+        names = [p.name for p in vps.points]
+        if m and m.group(1) in names:
+            i = names.index(m.group(1))
+            raise case.error((*loc, "points", i, f"{m.group(2)}s"), str(err),
+                             getattr(vps.points[i], f"{m.group(2)}s")) from None
+        raise case.error(loc, str(err)) from None
+    try:
+        Yqm = vpt.apply(Y)
+    except ValueError as err:
+        raise case.error(("substructures", k, "file"), str(err)) from None
+    names_set = {p.name for p in vps.points}
+    out = VpPart(part.name, part.omega, [_relabel(x, names_set) for x in vpt.out_labels],
+                 [_relabel(x, names_set) for x in vpt.in_labels], Yqm)
+    return out, consistency(vpt, Y)
+
+
+def _regularisation(case: Case) -> tuple[Regularisation, float]:
+    """The one regularisation the parts ask for (none if none does)."""
+    chosen: tuple[Regularisation, float] | None = None
+    first = ""
+    for k, s in enumerate(case.substructures):
+        if not isinstance(s, FrfSpec) or s.virtual_points is None:
+            continue
+        r = s.virtual_points.regularization
+        if r is None:
+            continue
+        reg = Regularisation(r.method, rtol=1e-12 if r.rtol is None else r.rtol, rank=r.rank,
+                             alpha=0.0 if r.alpha is None else r.alpha)
+        if chosen is not None and chosen != (reg, r.length):
+            raise case.error(("substructures", k, "virtual_points", "regularization"),
+                             f"differs from that of {first}: the coupling has one "
+                             f"regularization", r.method)
+        chosen, first = (reg, r.length), s.name
+    return chosen if chosen is not None else (Regularisation(), 1.0)
+
+
+def vp_frf_result(case: Case, model: Model, progress: Progress | None = None
+                  ) -> tuple[Receptance, dict[str, VptResult]]:
+    """The receptances ``case.analysis.frf`` asks for, of the parts coupled at their virtual
+    points (module docstring), and the consistency indicators per transformed part.
+
+    Raises:
+        CaseError: as :func:`transformed_part`; an output that is not measured as an output
+            (an impact passing through) or an input that is not one; a connection at a
+            channel passing through; every interface row weakened; a singular interface.
+        CheckError: the generalized-inverse form disagrees beyond ``analysis.frf.tolerance``.
+    """
+    spec = case.analysis.frf
+    if spec is None:
+        raise TypeError(f"case {case.name!r} asks for no receptances")
+    split = split_frf_case(case)
+    checks: dict[str, float] = {}
+    if split.model_case is None:
+        w0 = spec.omegas()
+        first = FrfPart(ANALYSIS_GRID, w0, [], np.zeros((len(w0), 0, 0), dtype=complex))
+    else:
+        fe = frf_result(split.model_case, model, progress)
+        first = FrfPart(MODEL_PART, fe.omega, list(split.model_points), fe.H)
+        checks.update({f"{MODEL_PART} {k}": v for k, v in fe.agreement.items()})
+    w, same = common_grid([first, *split.parts])
+    index = {s.name: k for k, s in enumerate(case.substructures)}
+    parts: list[VpPart] = []
+    if split.model_case is not None:
+        parts.append(VpPart(MODEL_PART, w, first.labels, first.labels, same[0].Y))
+    indicators: dict[str, VptResult] = {}
+    weaken: dict[str, list[str]] = {}
+    for part in same[1:]:
+        k = index[part.name]
+        s = case.substructures[k]
+        assert isinstance(s, FrfSpec)
+        if s.virtual_points is None:
+            parts.append(VpPart(part.name, w, part.labels, part.labels, part.Y))
+            continue
+        vp, indicators[part.name] = transformed_part(case, k, s.virtual_points, part)
+        parts.append(vp)
+        weaken[part.name] = list(s.virtual_points.weaken)
+    frf_names = {p.name for p in split.parts}
+
+    def stacked(point: str) -> str:
+        return point if parse_point(point)[0] in frf_names else f"{MODEL_PART}@{point}"
+
+    for i, chain in enumerate(case.connections):
+        for j, point in enumerate(chain):
+            sub, where = parse_point(point)
+            if sub in indicators and (where or "").startswith("ch:"):
+                raise case.error(("connections", i, j), "a channel that passes through is "
+                                 "measured one way only: join the part at a virtual-point "
+                                 "coordinate (vp:<point>:<ux|uy|uz|rx|ry|rz>)", point)
+    pairs = [(stacked(a), stacked(b)) for a, b in split.pairs]
+    drop = [a for a, b in pairs for side in (a, b)
+            if side.rsplit(":", 1)[-1] in weaken.get(parse_point(side)[0], [])]
+    reg, length = _regularisation(case)
+    try:
+        res = couple_virtual_points(parts, pairs, reg, drop, drop, "coupled", length)
+    except AnalysisInputError as err:
+        raise case.error(("connections",), f"the interface receptance is singular ({err}): "
+                         "connections that repeat each other, or a joint the channels do not "
+                         "observe", [list(p) for p in split.pairs]) from None
+    except ValueError as err:
+        raise case.error(("connections",), str(err), [list(p) for p in split.pairs]) from None
+    Yc = res.part
+    outs: list[int] = []
+    ins: list[int] = []
+    for key, points, labels, acc, what in (
+            ("outputs", spec.outputs, Yc.out_labels, outs, "an output (a sensor or a joint)"),
+            ("inputs", spec.inputs, Yc.in_labels, ins, "an input (an impact or a joint)")):
+        for i, p in enumerate(points):
+            if stacked(p) not in labels:
+                raise case.error(("analysis", "frf", key, i), f"not measured as {what}", p)
+            acc.append(labels.index(stacked(p)))
+    H = Yc.Y[:, outs][:, :, ins]
+    kept = [(a, b) for a, b in pairs if a not in drop]
+    scale = max(float(np.abs(Yc.Y).max(initial=0.0)), 1e-300)
+    residual = max((float(np.abs(Yc.Y[:, Yc.out_labels.index(a)]
+                                 - Yc.Y[:, Yc.out_labels.index(b)]).max()) / scale
+                    for a, b in kept), default=0.0)
+    if np.isfinite(res.agreement):
+        checks = {GENERALIZED_INVERSE: res.agreement, **checks}
+        try:
+            require_agreement("frf (lm-fbs at virtual points)", "lm-fbs",
+                              {GENERALIZED_INVERSE: res.agreement}, spec.tolerance)
+        except CheckError as err:
+            raise CheckError(f"{err}; to accept it, raise analysis.frf.tolerance") from None
+    how = "lm-fbs at virtual points" + (f" ({reg.kind})" if reg.kind != "none" else "") + \
+        (" (weakened)" if drop else "")
+    coupled = Receptance(method=how, omega=w, H=H, inputs=list(spec.inputs),
+                         outputs=list(spec.outputs), agreement=checks,
+                         constraint_residual=residual, tolerance=spec.tolerance)
+    return as_quantity(coupled, spec.quantity), indicators
