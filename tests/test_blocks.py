@@ -126,3 +126,21 @@ def test_the_command_writes_the_receptances_the_library_computes(tmp_path, capsy
     assert np.array_equal(back.frf.H, mem.frf.H)
     assert np.array_equal(back.frf.omega, mem.frf.omega)
     assert report["frf"]["max_abs_H"] == float(np.abs(mem.frf.H).max())
+
+
+@pytest.mark.parametrize("quantity", ["mobility", "accelerance"])
+def test_mobility_and_accelerance_converted_in_place_are_the_same_numbers(quantity):
+    """``analysis.frf.quantity`` converts the computed receptances in place (no second array
+    of the size of the output): bit for bit the converted copy of ``as_quantity``."""
+    import substruct
+    from substruct.analysis.frf_quantity import as_quantity
+
+    grid = "analysis.frf.omega={start: 0.5, stop: 3, num: 9}"
+    case = ROOT / "cases" / "three_dof_frf.yaml"
+    ref = substruct.run_case(substruct.load_case(str(case), [grid])).frf
+    got = substruct.run_case(substruct.load_case(
+        str(case), [grid, f"analysis.frf.quantity={quantity}"])).frf
+    expected = as_quantity(ref, quantity)
+    assert got.quantity == quantity and expected.H is not ref.H
+    assert np.array_equal(got.H, expected.H)
+    assert np.abs(got.H).max() > 0

@@ -28,7 +28,8 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from substruct.cli.files import check_out_dir, check_targets, input_files, optional_module
+from substruct.cli.files import (check_out_dir, check_targets, collector_paused, input_files,
+                                 optional_module)
 from substruct.cli.isolated import call_isolated
 from substruct.cli.progress import PhaseLog, ProgressBar, phases_wanted
 from substruct.cli.summary import print_summary, summary_json
@@ -41,7 +42,8 @@ __all__ = ["run_command", "picture_paths", "write_pictures", "compute", "stage_s
 
 def compute(case: Any, quiet: bool) -> Result:
     """Build and analyse ``case`` (in the child process of :func:`run_command`)."""
-    import substruct.run.runner as runner
+    with collector_paused():  # loading the builder and the analyses
+        import substruct.run.runner as runner
 
     bar = ProgressBar(sys.stderr) if not quiet else None
     events = PhaseLog(sys.stderr, phases_wanted(sys.stderr, quiet), warn=not quiet)
@@ -57,14 +59,15 @@ def run_command(args: argparse.Namespace) -> int:
     has passed, together with its pictures and animation, and the set is committed only once
     its report is ready: an error before the commit leaves no file of the set.
     """
-    from substruct.case.loader import load_case
-    from substruct.io.file_set import OutputDir
+    with collector_paused():
+        from substruct.case.loader import load_case
+        from substruct.io.file_set import OutputDir
 
-    case = load_case(args.case, args.set)
-    pictures = case.output.pictures and not getattr(args, "no_pictures", False)
-    h5_name = f"{case.name}.h5"
-    candidates = [p.name for p in picture_paths(case, Path("."))]
-    out = check_out_dir(args.out, "--out", [h5_name, *candidates])
+        case = load_case(args.case, args.set)
+        pictures = case.output.pictures and not getattr(args, "no_pictures", False)
+        h5_name = f"{case.name}.h5"
+        candidates = [p.name for p in picture_paths(case, Path("."))]
+        out = check_out_dir(args.out, "--out", [h5_name, *candidates])
     with OutputDir(out) as target:  # BusyError on entering: nothing was computed
         report = _run_locked(case, args, target, out, h5_name, candidates, pictures)
     sys.stdout.write(report)
@@ -74,9 +77,10 @@ def run_command(args: argparse.Namespace) -> int:
 def _run_locked(case: Any, args: argparse.Namespace, target: Any, out: Path, h5_name: str,
                 candidates: list[str], pictures: bool) -> str:
     """Check the targets, stage the set in a child (:func:`stage_set`), commit; the report."""
-    results = optional_module("io.hdf5")
     check_targets(out, [h5_name, *(candidates if pictures else [])], input_files(case),
                   args.force)
+    with collector_paused():
+        results = optional_module("io.hdf5")
     old = results.listed_pictures(out / h5_name) if (out / h5_name).exists() else []
     staging = target.stage(case.name)
     new, report = call_isolated(lambda: stage_set(case, args, staging, out, pictures))
