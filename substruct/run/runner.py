@@ -26,8 +26,6 @@ from substruct.run.analyses import (
     model_info,
     modes_result,
 )
-from substruct.run.frf_route import coupled_frf_result
-from substruct.run.transient_run import transient_result
 from substruct.run.result import Result
 from substruct.substructure import Substructure
 
@@ -116,11 +114,17 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
             n_omega = len(frf.omega.grid())
             events("sweep", f"receptances: {n_omega} frequencies, {len(frf.outputs)} output(s) "
                    f"x {len(frf.inputs)} input(s), {asm.n_dof} coordinates", n_omega)
-        result.frf = coupled_frf_result(case, model, progress) if has_frf_parts(case) else \
-            frf_result(case, model, progress)
+        if has_frf_parts(case):
+            from substruct.run.frf_route import coupled_frf_result  # only for FRF parts
+
+            result.frf = coupled_frf_result(case, model, progress)
+        else:
+            result.frf = frf_result(case, model, progress)
     if case.analysis.transient is not None:
         if events is not None:
             events("sweep", f"transient: {case.analysis.transient.steps} steps, "
                    f"{asm.n_dof} coordinates", case.analysis.transient.steps)
+        from substruct.run.transient_run import transient_result  # only for a transient
+
         result.transient = transient_result(case, model)
     return result
