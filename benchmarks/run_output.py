@@ -169,6 +169,8 @@ def big_output(opts: argparse.Namespace, env: dict, work: Path) -> None:
     print(f"{'(d) peak of (b) - result file size (target <= 1 GB)':58s} {'':8s} {'':8s} "
           f"{(peak - size) / 1e9:8.2f}")
     print(f"(b)'s receptances equal to (a)'s, bit for bit: {'yes' if equal else 'NO'}")
+    print("each run, CPU s (a sweep + write | b): " + ", ".join(
+        f"{a['sweep_cpu'] + a['write_cpu']:.2f} | {b['cpu']:.2f}" for a, b in zip(a_rows, b_rows)))
 
 
 def startup(opts: argparse.Namespace, env: dict, work: Path) -> None:
