@@ -161,19 +161,20 @@ def test_sigkill_during_the_commit_is_completed_by_the_next_writer(tmp_path, ear
 
 
 def test_sigterm_while_writing_removes_the_partial_file(tmp_path, capsys, monkeypatch):
-    """SIGTERM in the middle of the HDF5 write (in this process): the staging folder goes,
-    the old result stays, the handler is restored."""
+    """SIGTERM in the middle of the HDF5 write (in the process that writes it, the run's
+    child): the staging folder goes, the old result stays, the handler is restored."""
     from substruct.io import hdf5 as results
 
     out = tmp_path / "out"
     args = ["run", str(CASE), "--out", str(out), "--quiet", "--no-pictures"]
     assert cli.main(args) == 0
     before = (out / f"{NAME}.h5").read_bytes()
-    parts = []
+    seen = tmp_path / "parts.txt"  # written by the writing process, read here
     write_model = results._write_model
 
     def interrupted(group, model):
-        parts.extend(p.name for p in out.iterdir() if p.name.endswith(".part"))
+        seen.write_text("".join(f"{p.name}\n" for p in out.iterdir()
+                                if p.name.endswith(".part")))
         write_model(group, model)
         os.kill(os.getpid(), signal.SIGTERM)  # delivered here, in the middle of save()
         time.sleep(1)  # not reached: the handler raises first
@@ -183,7 +184,7 @@ def test_sigterm_while_writing_removes_the_partial_file(tmp_path, capsys, monkey
     handler = signal.getsignal(signal.SIGTERM)
     code = cli.main([*args, "--force", *NEW])
     assert code == 143 and capsys.readouterr().err == "substruct: terminated\n"
-    assert len(parts) == 1  # the staging folder existed while writing ...
+    assert len(seen.read_text().split()) == 1  # the staging folder existed while writing ...
     assert sorted(p.name for p in out.iterdir()) == [f"{NAME}.h5"]  # ... and is gone
     assert (out / f"{NAME}.h5").read_bytes() == before
     assert signal.getsignal(signal.SIGTERM) == handler  # cli.main restored the handler

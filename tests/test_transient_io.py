@@ -66,6 +66,15 @@ def test_round_trip_is_exact_to_the_last_bit(tmp_path):
     assert back.steps == 40
 
 
+def test_snapshots_written_in_blocks_read_back_identical(tmp_path):
+    """The snapshots of the field written two instants (a chunk) at a time: the same bits."""
+    r = _with_transient()
+    path = results.save(r, tmp_path / "r.h5", block_bytes=2 * 21 * 8, chunk_bytes=2 * 21 * 8)
+    with h5py.File(path, "r") as f:
+        assert f["transient/snapshots"].chunks == (2, 21)
+    _same(results.load(path).transient.snapshots, r.transient.snapshots)
+
+
 def test_round_trip_without_forces_or_snapshots(tmp_path):
     r = make_result()
     full = _tied_transient(21)

@@ -28,7 +28,6 @@ from __future__ import annotations
 from typing import Any, Mapping, Sequence
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from substruct.assembly.stack import Connection, PointRef
 from substruct.models.selection import (
@@ -143,6 +142,8 @@ def tie_nodes(a: Substructure, b: Substructure,
         InterfaceError: some selected node of either side has no partner within ``tol`` (the
             message gives how many and the worst distance), or nothing is selected.
     """
+    from scipy.spatial import cKDTree  # here, not at import: scipy.spatial is 0.1 s
+
     pa, pb = _points(a), _points(b)
     t = tol if tol is not None else max(node_tolerance(pa), node_tolerance(pb))
     ia = interface_nodes(a, selector, t)
@@ -208,6 +209,8 @@ def tie_nonmatching(master: Substructure, slave: Substructure,
     Raises:
         InterfaceError: no slave node selected, or a slave node off the master's mesh.
     """
+    from scipy.spatial import cKDTree
+
     ps, pm = _points(slave), _points(master)
     t = 100 * node_tolerance(np.vstack([ps, pm])) if tol is None else float(tol)
     idx = interface_nodes(slave, selector, t)

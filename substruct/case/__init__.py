@@ -1,11 +1,27 @@
 """Case files: YAML loading, the validated schema, safe expressions and one-line errors.
 
 Nothing numerical happens here; the layers below :mod:`substruct.builder` turn a case into
-matrices."""
+matrices.
 
-from substruct.case.errors import CaseError
-from substruct.case.loader import Case, load_case, parse_case
-from substruct.case.yaml_io import apply_overrides
-from substruct.case.fields import parse_point
+The names below are imported on first use: importing one module of the layer (the text
+escapes of :mod:`substruct.case.text`) does not import the schema (pydantic)."""
+
+from __future__ import annotations
+
+from importlib import import_module
+from typing import Any
+
+#: Public name -> the module that defines it.
+_LAZY = {"Case": "loader", "CaseError": "errors", "apply_overrides": "yaml_io",
+         "load_case": "loader", "parse_case": "loader", "parse_point": "fields"}
 
 __all__ = ["Case", "CaseError", "apply_overrides", "load_case", "parse_case", "parse_point"]
+
+
+def __getattr__(name: str) -> Any:
+    """A public name of the layer, its module imported on first use."""
+    if name not in _LAZY:
+        raise AttributeError(f"module 'substruct.case' has no attribute {name!r}")
+    value = getattr(import_module(f"substruct.case.{_LAZY[name]}"), name)
+    globals()[name] = value
+    return value

@@ -30,6 +30,7 @@ from pydantic import BaseModel, ValidationError
 
 from substruct.case.fields import NAME_PATTERN
 from substruct.case.numbers import MAX_DIGITS, BigNumber
+from substruct.case.text import printable
 
 __all__ = ["CaseError", "FieldError", "MISSING", "show_value", "field_path", "translate",
            "printable"]
@@ -78,24 +79,6 @@ def _shorten(value: Any) -> Any:
     if isinstance(value, (list, tuple)):
         return [_shorten(v) for v in value]
     return value
-
-
-def printable(text: str) -> str:
-    """``text`` on one line with control and format characters escaped (``\\x1b``,
-    ``\\u202e``), so that a value shown cannot move the cursor, retitle or clear the user's
-    terminal, or reorder what it shows."""
-    text = " ".join(text.splitlines())
-    if text.isprintable():
-        return text
-    out = []
-    for c in text:
-        if c.isprintable():
-            out.append(c)
-        else:
-            code = ord(c)
-            out.append(f"\\x{code:02x}" if code < 0x100 else
-                       f"\\u{code:04x}" if code < 0x10000 else f"\\U{code:08x}")
-    return "".join(out)
 
 
 def show_value(value: Any) -> str:

@@ -5,11 +5,11 @@ line, exit code 2) instead of argparse's exit."""
 from __future__ import annotations
 
 import argparse
-from typing import NoReturn
+from typing import Any, NoReturn
 
 from substruct.cli.errors import InputError
 
-__all__ = ["COMMANDS", "build_parser"]
+__all__ = ["COMMANDS", "build_parser", "add_compare_parser", "add_study_parser"]
 
 #: The commands, in the order ``--help`` lists them.
 COMMANDS = ("run", "converge", "info", "export", "compare", "study")
@@ -100,10 +100,46 @@ def build_parser() -> argparse.ArgumentParser:
                         help="output directory (default: beside the result)")
     export.add_argument("--force", action="store_true",
                         help="replace files of the same names (never the result itself)")
-    from substruct.cli.compare_command import add_compare_parser
-
     add_compare_parser(sub)
-    from substruct.cli.study_command import add_study_parser
-
     add_study_parser(sub)
     return parser
+
+
+def add_compare_parser(sub: Any) -> None:
+    """Add ``compare`` to the sub-parsers ``sub`` of the ``substruct`` parser (here, so that
+    building the parser imports no command's module)."""
+    p = sub.add_parser("compare", help="compare the modes of two results: frequencies, MAC")
+    p.add_argument("first", metavar="A.h5")
+    p.add_argument("second", metavar="B.h5")
+    p.add_argument("--variant-a", default=None, help="the modes of this variant of A")
+    p.add_argument("--variant-b", default=None, help="the modes of this variant of B")
+    p.add_argument("--image", default=None, metavar="PNG",
+                   help="draw the MAC matrix into this file (.png, .svg or .pdf)")
+    p.add_argument("--force", action="store_true", help="replace an existing --image file")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+
+
+def add_study_parser(sub: Any) -> None:
+    """Register ``study`` on the subparsers ``sub`` of :func:`build_parser`."""
+    study = sub.add_parser("study", help="run the parameter study of a case file",
+                           description="Run every sample of the case's study: block (a grid "
+                           "or random samples of its parameters); write DIR/<name>_study.h5 "
+                           "and pictures; print a summary.")
+    study.add_argument("case", metavar="CASE.yaml", help="the case file (with a study: block)")
+    study.add_argument("--out", default="results", metavar="DIR",
+                       help="output directory (default: results)")
+    study.add_argument("--set", action="append", default=[], metavar="KEY.PATH=VALUE",
+                       help="override a case value (repeatable), as for run")
+    where = study.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, default=None, metavar="N",
+                       help="start a Dask LocalCluster of N worker processes (1 thread each)")
+    where.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
+                       help="run on an existing Dask cluster (tcp:// only)")
+    study.add_argument("--connect-timeout", type=float, default=None, metavar="SECONDS",
+                       help="with --scheduler: seconds to reach the scheduler and receive its "
+                       "handshake (default: 5)")
+    study.add_argument("--force", action="store_true", help="overwrite an existing study file")
+    study.add_argument("--no-pictures", action="store_true", help="write the study file only")
+    study.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
+    study.add_argument("--json", action="store_true",
+                       help="print a machine-readable summary instead of the table")

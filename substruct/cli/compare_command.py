@@ -29,20 +29,7 @@ from substruct.analysis.modes.mac import mac_matrix, pair_modes
 from substruct.cli.errors import InputError
 from substruct.cli.files import check_out_file, check_targets, load_result, optional_module
 
-__all__ = ["add_compare_parser", "compare_command", "compare_modes"]
-
-
-def add_compare_parser(sub: Any) -> None:
-    """Add ``compare`` to the sub-parsers ``sub`` of the ``substruct`` parser."""
-    p = sub.add_parser("compare", help="compare the modes of two results: frequencies, MAC")
-    p.add_argument("first", metavar="A.h5")
-    p.add_argument("second", metavar="B.h5")
-    p.add_argument("--variant-a", default=None, help="the modes of this variant of A")
-    p.add_argument("--variant-b", default=None, help="the modes of this variant of B")
-    p.add_argument("--image", default=None, metavar="PNG",
-                   help="draw the MAC matrix into this file (.png, .svg or .pdf)")
-    p.add_argument("--force", action="store_true", help="replace an existing --image file")
-    p.add_argument("--json", action="store_true", help="machine-readable output")
+__all__ = ["compare_command", "compare_modes"]
 
 
 def _modes(path: str, variant: str | None) -> tuple[Any, Any]:

@@ -21,12 +21,14 @@ follows the one path policy of :mod:`substruct.io.paths`:
 
 from __future__ import annotations
 
+import contextlib
+import gc
 import importlib
 import os
 import tempfile
 from pathlib import Path
 from types import ModuleType
-from typing import Any, Iterable, Sequence
+from typing import Any, Iterable, Iterator, Sequence
 
 from substruct.cli.errors import InputError
 from substruct.io.paths import plain_name, resolved_dir, same_file
@@ -194,6 +196,23 @@ def writable_dir(out: Path, what: str) -> None:
             pass
     except OSError as err:
         raise InputError(f"{what} {out} is not writable ({err.strerror or err})") from None
+
+
+@contextlib.contextmanager
+def collector_paused() -> Iterator[None]:
+    """Pause Python's cyclic garbage collector while the block runs (reading the case, loading
+    the layers a command computes with), and let it run again after.
+
+    Loading modules makes many objects and no garbage: the collections it triggers are about
+    8 % of the start-up of ``substruct run`` (0.04 s of a 0.55 s import of its layers).  The
+    computations themselves run with the collector as usual."""
+    was = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if was:
+            gc.enable()
 
 
 def optional_module(name: str) -> ModuleType:

@@ -12,8 +12,11 @@ The child writes where the parent would: to the same file descriptors, or, when 
 into them.  Its answer (the return value, or the exception with its traceback) comes back
 pickled; the large arrays of a value (a receptance of 1,000 x 400 x 400 is 2.6 GB) as
 out-of-band buffers (pickle protocol 5) written to an unnamed temporary file that the parent
-maps into memory, so they are neither copied through the pipe nor unpickled.  Without ``os.fork`` (not POSIX) the function runs in-process, and so it does in a
-process that has loaded CHOLMOD (scikit-sparse): a forked child of a process whose CHOLMOD has
+maps into memory, so they are neither copied through the pipe nor unpickled.  (``substruct
+run`` sends back no arrays at all: its child writes the result file itself and returns the
+names of the files and the report, :func:`substruct.cli.run_command.stage_set`.)
+Without ``os.fork`` (not POSIX) the function runs in-process, and so it does in a process
+that has loaded CHOLMOD (scikit-sparse): a forked child of a process whose CHOLMOD has
 run hangs in its next factorization (its thread pool does not survive the fork).  The command
 line never loads it before forking; a program (or a test session) that has used CHOLMOD and
 then calls the command in-process loses only the prompt reaction to signals.

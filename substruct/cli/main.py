@@ -25,6 +25,7 @@ code   meaning
 from __future__ import annotations
 
 import argparse
+import importlib
 import signal
 import sys
 import threading
@@ -32,15 +33,9 @@ import traceback
 from typing import Any, Callable, Sequence
 
 from substruct.cli.arguments import COMMANDS, build_parser
-from substruct.cli.compare_command import compare_command
-from substruct.cli.converge_command import converge_command
 from substruct.cli.errors import InputError
-from substruct.cli.result_commands import info_command
-from substruct.cli.run_command import run_command
-from substruct.cli.signals import (TERMINATED_LINE, Terminated, silence_stdout,
-                                   terminate_on_sigterm, terminate_until_exit)
-from substruct.cli.study_command import study_command
-from substruct.cli.uff_export import export_dispatch
+from substruct.cli.signals import (TERMINATED_LINE, Terminated, exit_without_teardown,
+                                   silence_stdout, terminate_on_sigterm, terminate_until_exit)
 
 __all__ = ["main", "BAD_INPUT", "FAILED"]
 
@@ -51,13 +46,23 @@ BAD_INPUT = 2
 #: Exit code of a failed cross-check or an internal error.
 FAILED = 1
 
-_RUN: dict[str, Callable[[argparse.Namespace], int]] = {
-    "run": run_command, "converge": converge_command, "info": info_command,
-    "export": export_dispatch, "compare": compare_command, "study": study_command}
+#: Each command's module and function, imported only when that command runs (``info`` loads
+#: no case layer, ``run`` no comparison or study code).
+_RUN: dict[str, tuple[str, str]] = {
+    "run": ("run_command", "run_command"), "converge": ("converge_command", "converge_command"),
+    "info": ("result_commands", "info_command"), "export": ("uff_export", "export_dispatch"),
+    "compare": ("compare_command", "compare_command"),
+    "study": ("study_command", "study_command")}
+
+
+def _command(name: str) -> Callable[[argparse.Namespace], int]:
+    """The function of command ``name``, its module imported now."""
+    module, function = _RUN[name]
+    return getattr(importlib.import_module(f"substruct.cli.{module}"), function)
 
 
 def _one_line(text: object) -> str:
-    from substruct.case.errors import printable
+    from substruct.case.text import printable
 
     return printable(" ".join(str(text).split()))
 
@@ -80,8 +85,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``substruct`` command line; return the exit code (see the module docstring).
 
     Args:
-        argv: the arguments; ``None`` (the ``substruct`` program) reads ``sys.argv`` and keeps
-            SIGTERM's answer (``substruct: terminated``, 143) until the process ends.
+        argv: the arguments; ``None`` (the ``substruct`` program) reads ``sys.argv``, keeps
+            SIGTERM's answer (``substruct: terminated``, 143) until the process ends, and ends
+            it with the returned code once the exit handlers have run, without the
+            interpreter's teardown (:func:`~substruct.cli.signals.exit_without_teardown`).
     """
     restore = terminate_on_sigterm()
     block = hasattr(signal, "pthread_sigmask") and \
@@ -107,6 +114,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             code = 143
         if argv is None:
             terminate_until_exit()
+            exit_without_teardown(code)
     finally:
         if held is not None:
             signal.pthread_sigmask(signal.SIG_SETMASK, held)
@@ -124,17 +132,8 @@ def _main(argv: Sequence[str] | None) -> int:
     if args.command not in _RUN:
         return _error(f"choose a command: {', '.join(COMMANDS[:-1])} or {COMMANDS[-1]} "
                       "(see substruct --help)", BAD_INPUT)
-    from substruct.analysis.errors import CheckError
-    from substruct.case.errors import CaseError
-    from substruct.io.file_set import BusyError
-    from substruct.io.paths import WriteError
-
     try:
-        return int(_RUN[args.command](args))
-    except (InputError, CaseError, BusyError, WriteError) as err:
-        return _error(err, BAD_INPUT)
-    except CheckError as err:  # computed, but not to be trusted: nothing was written
-        return _error(err, FAILED)
+        return int(_command(args.command)(args))
     except KeyboardInterrupt:
         sys.stderr.write(INTERRUPTED_LINE)
         return 130
@@ -144,5 +143,26 @@ def _main(argv: Sequence[str] | None) -> int:
     except BrokenPipeError:  # the reader went away (substruct info ... | head)
         silence_stdout()
         return 0
-    except Exception as err:  # an internal error: show everything, then say so in one line
-        return _internal(err)
+    except Exception as err:
+        if isinstance(err, (InputError, *_loaded(_BAD_INPUT))):
+            return _error(err, BAD_INPUT)
+        if isinstance(err, _loaded(_FAILED_CHECK)):  # computed, but not to be trusted
+            return _error(err, FAILED)
+        return _internal(err)  # an internal error: show everything, then say so in one line
+
+
+#: The exceptions that are bad input (besides InputError), and a failed cross-check, by module.
+_BAD_INPUT = (("substruct.case.errors", "CaseError"), ("substruct.io.file_set", "BusyError"),
+              ("substruct.io.paths", "WriteError"))
+_FAILED_CHECK = (("substruct.analysis.errors", "CheckError"),)
+
+
+def _loaded(classes: tuple[tuple[str, str], ...]) -> tuple[type, ...]:
+    """The exception classes of ``classes`` whose modules are imported: an exception of a
+    class whose module was never imported cannot have been raised, so a command need not
+    import the case layer (pydantic) or the analysis layer only to be told apart from them."""
+    found = []
+    for module, name in classes:
+        if module in sys.modules:
+            found.append(getattr(sys.modules[module], name))
+    return tuple(found)

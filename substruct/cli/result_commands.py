@@ -37,7 +37,7 @@ class EscapedText:
 
     def write(self, text: str) -> int:
         """Write ``text`` with every non-printable character but ``\\n`` and ``\\t`` escaped."""
-        from substruct.case.errors import printable
+        from substruct.case.text import printable
 
         lines = text.split("\n")
         self.stream.write("\n".join("\t".join(printable(part) for part in line.split("\t"))

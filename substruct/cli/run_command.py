@@ -6,15 +6,17 @@ The order of a run:
 1. the case and the output paths are checked (:func:`~substruct.cli.files.check_out_dir`);
 2. the output directory is locked (:class:`~substruct.io.file_set.OutputDir`: a second run
    into it fails with "another run is writing DIR"; leftovers of killed runs are removed);
-3. the model is built and analysed in a child process (:func:`~substruct.cli.isolated.
-   call_isolated`), so that SIGTERM and Ctrl-C act at once even inside a long dense solve;
-4. the pictures (optional: ``--no-pictures``, ``output: {pictures: false}``) are drawn, also
-   in a child, into a staging folder, then the result file beside them, then the transient
-   animation;
-5. the report (table or ``--json``) is rendered, then the set is committed: the new files
-   move into place together and the previous set's pictures that the new set does not have
-   are removed.  Interrupted or failed at any point before, the directory holds the previous
-   set; after, the new one; never a mix.
+3. a staging folder is made in it, and a child process (:func:`~substruct.cli.isolated.
+   call_isolated`: SIGTERM and Ctrl-C act at once even inside a long dense solve) builds and
+   analyses the model, draws the pictures (optional: ``--no-pictures``,
+   ``output: {pictures: false}``) into the staging folder, writes the result file beside them
+   (large arrays a block at a time), then the transient animation, and renders the report
+   (table or ``--json``) (:func:`stage_set`).  The result never leaves the child: only the
+   names of the files and the report come back, so a 2.6 GB receptance is neither copied nor
+   sent between the processes;
+4. the set is committed: the new files move into place together and the previous set's
+   pictures that the new set does not have are removed.  Interrupted or failed at any point
+   before, the directory holds the previous set; after, the new one; never a mix.
 """
 
 from __future__ import annotations
@@ -26,7 +28,8 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from substruct.cli.files import check_out_dir, check_targets, input_files, optional_module
+from substruct.cli.files import (check_out_dir, check_targets, collector_paused, input_files,
+                                 optional_module)
 from substruct.cli.isolated import call_isolated
 from substruct.cli.progress import PhaseLog, ProgressBar, phases_wanted
 from substruct.cli.summary import print_summary, summary_json
@@ -34,12 +37,13 @@ from substruct.cli.summary import print_summary, summary_json
 if TYPE_CHECKING:
     from substruct.run.result import Result
 
-__all__ = ["run_command", "picture_paths", "write_pictures", "compute"]
+__all__ = ["run_command", "picture_paths", "write_pictures", "compute", "stage_set"]
 
 
 def compute(case: Any, quiet: bool) -> Result:
     """Build and analyse ``case`` (in the child process of :func:`run_command`)."""
-    import substruct.run.runner as runner
+    with collector_paused():  # loading the builder and the analyses
+        import substruct.run.runner as runner
 
     bar = ProgressBar(sys.stderr) if not quiet else None
     events = PhaseLog(sys.stderr, phases_wanted(sys.stderr, quiet), warn=not quiet)
@@ -55,14 +59,15 @@ def run_command(args: argparse.Namespace) -> int:
     has passed, together with its pictures and animation, and the set is committed only once
     its report is ready: an error before the commit leaves no file of the set.
     """
-    from substruct.case.loader import load_case
-    from substruct.io.file_set import OutputDir
+    with collector_paused():
+        from substruct.case.loader import load_case
+        from substruct.io.file_set import OutputDir
 
-    case = load_case(args.case, args.set)
-    pictures = case.output.pictures and not getattr(args, "no_pictures", False)
-    h5_name = f"{case.name}.h5"
-    candidates = [p.name for p in picture_paths(case, Path("."))]
-    out = check_out_dir(args.out, "--out", [h5_name, *candidates])
+        case = load_case(args.case, args.set)
+        pictures = case.output.pictures and not getattr(args, "no_pictures", False)
+        h5_name = f"{case.name}.h5"
+        candidates = [p.name for p in picture_paths(case, Path("."))]
+        out = check_out_dir(args.out, "--out", [h5_name, *candidates])
     with OutputDir(out) as target:  # BusyError on entering: nothing was computed
         report = _run_locked(case, args, target, out, h5_name, candidates, pictures)
     sys.stdout.write(report)
@@ -71,37 +76,53 @@ def run_command(args: argparse.Namespace) -> int:
 
 def _run_locked(case: Any, args: argparse.Namespace, target: Any, out: Path, h5_name: str,
                 candidates: list[str], pictures: bool) -> str:
-    """Check the targets, compute, stage the set, render the report, commit; the report."""
-    from substruct.io.paths import write_errors
-
-    results = optional_module("io.hdf5")
+    """Check the targets, stage the set in a child (:func:`stage_set`), commit; the report."""
     check_targets(out, [h5_name, *(candidates if pictures else [])], input_files(case),
                   args.force)
+    with collector_paused():
+        results = optional_module("io.hdf5")
     old = results.listed_pictures(out / h5_name) if (out / h5_name).exists() else []
-    result = call_isolated(lambda: compute(case, args.quiet))
     staging = target.stage(case.name)
+    new, report = call_isolated(lambda: stage_set(case, args, staging, out, pictures))
+    staged = sorted(p.name for p in staging.iterdir())
+    if staged != sorted(new):
+        raise RuntimeError(f"the run staged {staged}, expected {sorted(new)}")
+    gone = [n for n in {*candidates, *old} if n not in new and n.startswith(f"{case.name}_")
+            and (out / n).is_file()]
+    target.commit(staging, remove=gone)
+    return report
+
+
+def stage_set(case: Any, args: argparse.Namespace, staging: Path, out: Path,
+              pictures: bool) -> tuple[list[str], str]:
+    """Compute the case, then write its set into ``staging``: the pictures, the result file
+    (with the names of the pictures), the transient animation; render the report.  Return
+    the names written and the report (in the child process of :func:`run_command`).
+
+    The result stays in this process: its arrays are drawn from (a selection of the
+    receptances, never a copy of the whole) and written to the result file a block at a time
+    (:func:`substruct.io.blocks.write_blocks`); only the names and the report go back to the
+    parent.
+    """
+    from substruct.io.paths import write_errors
+
+    result = compute(case, args.quiet)
+    results = optional_module("io.hdf5")
+    h5_name = f"{case.name}.h5"
     drawn: list[Path] = []
     with write_errors(out):
         if pictures:
-            drawn = call_isolated(lambda: write_pictures(result, staging, case.name))
+            drawn = write_pictures(result, staging, case.name)
         result.attrs["pictures"] = "\n".join(p.name for p in drawn)
         results.save(result, staging / h5_name)
         tr = result.transient
         if pictures and tr is not None and len(tr.snapshot_t) and result.model.drawings:
             movie = optional_module("viz.transient_animation")
             gif = staging / f"{case.name}_transient.gif"
-            call_isolated(lambda: movie.write_transient_gif(result, gif))
+            movie.write_transient_gif(result, gif)
             drawn.append(gif)
     new = [h5_name, *(p.name for p in drawn)]
-    staged = sorted(p.name for p in staging.iterdir())
-    if staged != sorted(new):
-        raise RuntimeError(f"the run staged {staged}, expected {sorted(new)}")
-    order = [out / name for name in new]
-    report = _report(args, case, result, order)  # before the commit: a failure leaves nothing
-    gone = [n for n in {*candidates, *old} if n not in new and n.startswith(f"{case.name}_")
-            and (out / n).is_file()]
-    target.commit(staging, remove=gone)
-    return report
+    return new, _report(args, case, result, [out / name for name in new])
 
 
 def _report(args: argparse.Namespace, case: Any, result: Result, files: list[Path]) -> str:

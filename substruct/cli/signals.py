@@ -18,11 +18,12 @@ from types import FrameType
 from typing import Callable
 
 __all__ = ["Terminated", "terminate_on_sigterm", "terminate_until_exit", "silence_stdout",
-           "TERMINATED_LINE"]
+           "exit_without_teardown", "TERMINATED_LINE"]
 
 #: What a terminated command writes on stderr (its exit code is 143).
 TERMINATED_LINE = "substruct: terminated\n"
 _armed = False
+_exit_code: int | None = None
 
 
 class Terminated(BaseException):
@@ -85,12 +86,31 @@ def terminate_until_exit() -> None:
     _armed = True
 
 
+def exit_without_teardown(code: int) -> None:
+    """End the process with ``code`` once its exit handlers have run, without the
+    interpreter's teardown (freeing every module and object of NumPy, SciPy, h5py and the
+    case layer: about 0.08 s of CPU, a tenth of a small run).  The command's files are closed
+    and committed by then; the streams are flushed here.  Only for the ``substruct`` process
+    itself, from its main thread, and only when no other thread runs (a study's workers end
+    through the usual shutdown)."""
+    global _exit_code
+    if threading.current_thread() is threading.main_thread() and \
+            threading.active_count() == 1:
+        _exit_code = int(code)
+
+
 def _at_exit() -> None:
-    if not _armed or not hasattr(signal, "pthread_sigmask"):
-        return
-    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGTERM})
-    if signal.SIGTERM in signal.sigpending():
-        _exit_terminated()
+    if _armed and hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGTERM})
+        if signal.SIGTERM in signal.sigpending():
+            _exit_terminated()
+    if _exit_code is not None and threading.active_count() == 1:
+        for stream in (sys.stdout, sys.stderr):
+            try:
+                stream.flush()
+            except Exception:  # noqa: BLE001 - a closed pipe: nothing more to say there
+                pass
+        os._exit(_exit_code)
 
 
 atexit.register(_at_exit)  # registered at import, before the libraries: it runs last

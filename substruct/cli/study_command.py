@@ -28,34 +28,7 @@ from substruct.cli.errors import InputError
 from substruct.cli.progress import CountBar
 from substruct.cli.files import check_out_dir, check_targets, input_files
 
-__all__ = ["study_command", "add_study_parser"]
-
-
-def add_study_parser(sub: Any) -> None:
-    """Register ``study`` on the subparsers ``sub`` of :func:`substruct.cli.arguments.
-    build_parser`."""
-    study = sub.add_parser("study", help="run the parameter study of a case file",
-                           description="Run every sample of the case's study: block (a grid "
-                           "or random samples of its parameters); write DIR/<name>_study.h5 "
-                           "and pictures; print a summary.")
-    study.add_argument("case", metavar="CASE.yaml", help="the case file (with a study: block)")
-    study.add_argument("--out", default="results", metavar="DIR",
-                       help="output directory (default: results)")
-    study.add_argument("--set", action="append", default=[], metavar="KEY.PATH=VALUE",
-                       help="override a case value (repeatable), as for run")
-    where = study.add_mutually_exclusive_group()
-    where.add_argument("--workers", type=int, default=None, metavar="N",
-                       help="start a Dask LocalCluster of N worker processes (1 thread each)")
-    where.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
-                       help="run on an existing Dask cluster (tcp:// only)")
-    study.add_argument("--connect-timeout", type=float, default=None, metavar="SECONDS",
-                       help="with --scheduler: seconds to reach the scheduler and receive its "
-                       "handshake (default: 5)")
-    study.add_argument("--force", action="store_true", help="overwrite an existing study file")
-    study.add_argument("--no-pictures", action="store_true", help="write the study file only")
-    study.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
-    study.add_argument("--json", action="store_true",
-                       help="print a machine-readable summary instead of the table")
+__all__ = ["study_command"]
 
 
 def _summary(result: Any, seconds: float) -> dict[str, Any]:

@@ -8,9 +8,9 @@ The layout is documented in ``docs/results.md``; in short::
                            spurious_eigenvalues, spurious_reason; attrs method, agreement_<m>,
                            solver, tolerance
     /variants/<name>/      same as /modes (attr ``name`` holds the name verbatim)
-    /frf/                  omega, H, inputs, outputs; attrs method, agreement_<m>,
-                           constraint_residual, tolerance, quantity (receptance, mobility
-                           or accelerance; receptance if absent)
+    /frf/                  omega, H (chunked by frequency), inputs, outputs; attrs method,
+                           agreement_<m>, constraint_residual, tolerance, quantity
+                           (receptance, mobility or accelerance; receptance if absent)
     /model/                dof_labels, substructure_names, substructure_kinds, offsets,
                            A (CSR group), b, R (CSR group), constraint_labels
     /model/drawings/<i>/   points, interp (CSR group), cells/<k> (attr cell_type),
@@ -39,6 +39,7 @@ import scipy.sparse as sp
 
 from substruct import __version__
 from substruct.analysis.results import Modes, Receptance
+from substruct.io.blocks import BLOCK_BYTES, CHUNK_BYTES, write_blocks
 from substruct.io.file_set import TEMP_PREFIX
 from substruct.io.recovery_hdf5 import write_recovery
 from substruct.io.spec_hdf5 import write_random, write_srs
@@ -60,12 +61,18 @@ _STR = h5py.string_dtype("utf-8")
 # ----------------------------------------------------------------------------- writing
 
 
-def save(result: Result, path: str | os.PathLike) -> Path:
+def save(result: Result, path: str | os.PathLike, *, block_bytes: int = BLOCK_BYTES,
+         chunk_bytes: int = CHUNK_BYTES, compression: str | None = None) -> Path:
     """Write ``result`` to the HDF5 file ``path`` atomically; return the path.
 
     The file is written under a temporary name (``*.h5.part``) in the target directory and
     renamed over ``path`` only once complete.  On any error the temporary file is removed and
     an existing file at ``path`` is left untouched.  Missing parent directories are created.
+
+    The receptances ``/frf/H`` and the transient snapshots are chunked datasets written
+    ``block_bytes`` at a time from views of the arrays, in chunks of about ``chunk_bytes``
+    (whole frequencies or instants), optionally compressed (``"gzip"``, ``"lzf"``; off by
+    default: :mod:`substruct.io.blocks` gives the measured cost).
     """
     path = Path(path)
     with atomic_path(path, suffix=".h5.part") as tmp:
@@ -82,9 +89,12 @@ def save(result: Result, path: str | os.PathLike) -> Path:
                     g.attrs["name"] = str(name)
                     _write_modes(g, modes)
             if result.frf is not None:
-                _write_frf(f.create_group("frf", track_order=True), result.frf)
+                _write_frf(f.create_group("frf", track_order=True), result.frf, block_bytes,
+                           chunk_bytes, compression)
             if result.transient is not None:
-                write_transient(f.create_group("transient", track_order=True), result.transient)
+                write_transient(f.create_group("transient", track_order=True),
+                                result.transient, block_bytes=block_bytes,
+                                chunk_bytes=chunk_bytes, compression=compression)
             if result.recovery:
                 write_recovery(f.create_group("recovery", track_order=True), result.recovery)
             if result.random is not None:
@@ -204,14 +214,16 @@ def _write_modes(g: h5py.Group, modes: Modes) -> None:
     _strings(g, "spurious_reason", list(modes.spurious_reason))
 
 
-def _write_frf(g: h5py.Group, frf: Receptance) -> None:
+def _write_frf(g: h5py.Group, frf: Receptance, block_bytes: int = BLOCK_BYTES,
+               chunk_bytes: int = CHUNK_BYTES, compression: str | None = None) -> None:
     g.attrs["method"] = str(frf.method)
     g.attrs["constraint_residual"] = float(frf.constraint_residual)
     g.attrs["tolerance"] = float(frf.tolerance)
     g.attrs["quantity"] = str(frf.quantity)
     _write_agreement(g, frf.agreement)
     _array(g, "omega", np.asarray(frf.omega, dtype=float), "rad/s")
-    _array(g, "H", np.asarray(frf.H))
+    write_blocks(g, "H", np.asarray(frf.H), block_bytes=block_bytes, chunk_bytes=chunk_bytes,
+                 compression=compression)
     _strings(g, "inputs", list(frf.inputs))
     _strings(g, "outputs", list(frf.outputs))
 

@@ -38,6 +38,7 @@ import numpy as np
 
 from substruct.analysis.results import DEFAULT_TOLERANCE
 from substruct.analysis.transient.results import ENERGY_LABELS, Transient
+from substruct.io.blocks import BLOCK_BYTES, CHUNK_BYTES, write_blocks
 
 __all__ = ["write_transient", "read_transient", "ArrayReader"]
 
@@ -46,8 +47,11 @@ def _strings(g: h5py.Group, name: str, values: list[str]) -> None:
     g.create_dataset(name, data=np.array([str(v) for v in values], dtype=h5py.string_dtype()))
 
 
-def write_transient(g: h5py.Group, tr: Transient) -> None:
-    """Write ``tr`` into the group ``g`` (module docstring)."""
+def write_transient(g: h5py.Group, tr: Transient, *, block_bytes: int = BLOCK_BYTES,
+                    chunk_bytes: int = CHUNK_BYTES, compression: str | None = None) -> None:
+    """Write ``tr`` into the group ``g`` (module docstring); the snapshots of the whole field
+    as a chunked dataset written ``block_bytes`` at a time
+    (:func:`substruct.io.blocks.write_blocks`)."""
     for key in ("method", "integrator", "solver"):
         g.attrs[key] = str(getattr(tr, key))
     for key in ("rho_inf", "dt", "drift", "tolerance"):
@@ -65,7 +69,8 @@ def write_transient(g: h5py.Group, tr: Transient) -> None:
     _strings(g, "constraint_labels", tr.constraint_labels)
     _strings(g, "energy_labels", list(ENERGY_LABELS))
     g.create_dataset("snapshot_t", data=np.asarray(tr.snapshot_t, dtype=float))
-    g.create_dataset("snapshots", data=np.asarray(tr.snapshots, dtype=float))
+    write_blocks(g, "snapshots", np.asarray(tr.snapshots, dtype=float), block_bytes=block_bytes,
+                 chunk_bytes=chunk_bytes, compression=compression)
     if tr.base_motion.size:
         d = g.create_dataset("base_motion", data=np.asarray(tr.base_motion, dtype=float))
         d.attrs["units"] = "length, length/time, length/time^2"

@@ -29,7 +29,6 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.spatial import cKDTree
 
 from substruct.models.beam import MASSES, THEORIES, Material, Section, beam_matrices
 from substruct.models.selection import node_tolerance
@@ -260,6 +259,8 @@ def frame(name: str, nodes: Mapping[int, Sequence[float]], beams: Sequence[Beam]
     n = int(free.size)
     labels = [f"{i}:{c}" for i in ids for c in FRAME_COMPONENTS]
     tol = node_tolerance(all_xyz)
+    from scipy.spatial import cKDTree  # here, not at import: scipy.spatial is 0.1 s
+
     tree = cKDTree(all_xyz)
 
     def parse(where: Any) -> tuple[int, int | None]:

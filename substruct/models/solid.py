@@ -31,7 +31,6 @@ from typing import Any, ClassVar, Mapping, Sequence
 import meshio
 import numpy as np
 import scipy.sparse as sp
-from scipy.spatial import cKDTree
 from skfem import Mesh, MeshHex, MeshQuad, MeshTet, MeshTri
 from skfem.io.meshio import to_meshio
 
@@ -73,6 +72,8 @@ def _build(name: str, mesh: Mesh, sets: Mapping[str, np.ndarray], E: float, nu: 
     labels = np.empty(n_full, dtype=object)
     for c in range(dim):
         labels[nodes.dofs[:, c]] = [f"n{k}.u{COMPONENTS[c]}" for k in range(len(nodes.xyz))]
+    from scipy.spatial import cKDTree  # here, not at import: scipy.spatial is 0.1 s
+
     tree = cKDTree(nodes.xyz)
 
     def unit(dof: int) -> sp.csr_array:

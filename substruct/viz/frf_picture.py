@@ -114,12 +114,14 @@ def plot_frf(result: Result, png_path: str | os.PathLike, *,
 
 def _frf_curves(fig: Figure, result: Result, frf: Any, H: np.ndarray, omega: np.ndarray,
                 max_curves: int, label: str, db: bool) -> None:
-    pairs = [(i, j) for i in range(H.shape[1]) for j in range(H.shape[2])]
-    shown = pairs[:max(1, int(max_curves))]
+    n_pairs = H.shape[1] * H.shape[2]
+    shown = [divmod(p, H.shape[2]) for p in range(min(n_pairs, max(1, int(max_curves))))]
+    # the curves drawn, a selection (n_omega x shown): never a copy of the whole array
+    curves = H[:, [i for i, _ in shown], [j for _, j in shown]]
     ax_mag, ax_ph = fig.subplots(2, 1, sharex=True, height_ratios=[2, 1])
     colors = [f"C{c}" for c in range(10)]
     for c, (i, j) in enumerate(shown):
-        h = H[:, i, j]
+        h = curves[:, c]
         mag = decibels(h) if db else np.where(abs(h) > 0, abs(h), np.nan)
         name = f"{frf.outputs[i]} \u2190 {frf.inputs[j]}"
         marker = "o" if omega.size <= SPARSE_GRID else None  # a sparse grid shows its points
@@ -128,7 +130,7 @@ def _frf_curves(fig: Figure, result: Result, frf: Any, H: np.ndarray, omega: np.
         phase = np.degrees(np.angle(h))
         phase[phase < -179.9999] = 180.0  # one side for real negative values (+-0 imaginary)
         ax_ph.plot(omega, phase, color=colors[c % 10], lw=1.2)
-    if not db and np.any(abs(H[:, [i for i, _ in shown], [j for _, j in shown]]) > 0):
+    if not db and np.any(abs(curves) > 0):
         ax_mag.set_yscale("log")
     steps = np.diff(np.log(omega)) if omega.min() > 0 else np.zeros(0)
     geometric = steps.size > 1 and np.allclose(steps, steps[0], rtol=1e-6)  # a log grid
@@ -153,7 +155,7 @@ def _frf_curves(fig: Figure, result: Result, frf: Any, H: np.ndarray, omega: np.
     secondary = ax_mag.secondary_xaxis("top", functions=(lambda w: w / (2 * np.pi),
                                                          lambda f: f * 2 * np.pi))
     secondary.set_xlabel("frequency (Hz)")
-    more = len(pairs) - len(shown)
+    more = n_pairs - len(shown)
     ax_mag.legend(fontsize=8.5, loc="best", ncols=1 if len(shown) < 5 else 2,
                   title=f"output \u2190 input (+{more} pairs not shown)" if more else
                   "output \u2190 input", title_fontsize=8.5)
