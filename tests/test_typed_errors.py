@@ -158,12 +158,12 @@ def test_a_main_formulation_off_zero_beyond_the_scale_still_fails(monkeypatch):
     E, O = np.eye(2), np.eye(2)
     h0 = compliance_scale(K, M, None, w, E, O)
     assert h0 == pytest.approx(1.0 / (20.0 + 2.0))  # |K|_inf + w^2 |M|_inf at the lowest w
-    real = api.receptance
+    real = api.receptance_of
 
-    def off(K, M, C, A, w, R, method, **kw):
-        H = real(K, M, C, A, w, R, method=method, **kw)
+    def off(system, w, method, *args, **kw):
+        H = real(system, w, method, *args, **kw)
         return H + 1e-3 * h0 if method == "generalized-inverse" else H
-    monkeypatch.setattr(api, "receptance", off)
+    monkeypatch.setattr(api, "receptance_of", off)
     with pytest.raises(CheckError, match=r"frf: .* disagrees with generalized-inverse by "
                                          r"1\.0e-03"):
         api.receptance_sweep(K, M, None, A, w, E, O, method="generalized-inverse",

@@ -5,7 +5,26 @@ The layers above see what the builder makes through this package: a
 :class:`~substruct.substructure.Substructure` (a part, made and perhaps reduced) and an
 :class:`~substruct.assembly.stack.Assembly` (the stacked parts and ``A q = b + R F``)."""
 
-from substruct.assembly.stack import Assembly
-from substruct.substructure import Substructure
+from __future__ import annotations
+
+from importlib import import_module
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from substruct.assembly.stack import Assembly
+    from substruct.substructure import Substructure
 
 __all__ = ["Assembly", "Substructure"]
+
+#: Public name -> the module that defines it (imported on first use: a module of the builder,
+#: such as the drawings a result reader needs, does not import the assembly).
+_LAZY = {"Assembly": "substruct.assembly.stack", "Substructure": "substruct.substructure"}
+
+
+def __getattr__(name: str) -> Any:
+    """Import the defining module on first use."""
+    if name not in _LAZY:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(import_module(_LAZY[name]), name)
+    globals()[name] = value
+    return value

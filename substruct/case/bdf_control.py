@@ -88,6 +88,7 @@ def read_control(text: BdfText) -> dict[str, Any]:
 
 
 def param(params: dict[str, tuple[RawCard, str]], key: str, kind: str, default: Any) -> Any:
+    """The value of ``PARAM,key`` read as ``kind`` (``default`` when the deck has none)."""
     if key not in params:
         return default
     card, text = params[key]

@@ -38,7 +38,6 @@ from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from substruct.case.errors import CaseError
 from substruct.case.fields import MAX_NAME_LENGTH, NAME_PATTERN
@@ -195,6 +194,7 @@ def _check_copies(channels: list[Channel], paths: list[str], source: str) -> Non
     extent = float(np.ptp(xyz, axis=0).max()) if len(channels) > 1 else 0.0
     e = np.array([c.direction for c in channels])
     kinds = np.array([c.kind for c in channels])
+    from scipy.spatial import cKDTree  # imported where used (start-up time)
     for i, j in sorted(cKDTree(xyz).query_pairs(SAME_PLACE * extent)):
         if kinds[i] == kinds[j] and np.abs(e[i] - e[j]).max() < SAME_PLACE:
             c = channels[j]

@@ -9,7 +9,6 @@ from typing import TYPE_CHECKING, Any, Sequence, TextIO
 
 import numpy as np
 
-from substruct.builder.superelements import rigid_body_lines
 from substruct.cli.recovery_summary import print_recovery, recovery_json
 from substruct.cli.spec_summary import print_random, print_srs, random_json, srs_json
 from substruct.cli.transient_summary import print_transient, transient_json
@@ -188,8 +187,11 @@ def print_summary(result: Result, out: TextIO, requested: int | None = None,
     out.write(f"{result.case_name}: {int(model.offsets[-1])} coordinates in {len(names)} "
               f"substructure(s) ({', '.join(names)}), {len(model.constraint_labels)} "
               f"constraint row(s)\n")
-    for line in rigid_body_lines(result.attrs):
-        out.write(line + "\n")
+    if any(str(k).startswith("rigid_body:") for k in result.attrs):  # superelements only
+        from substruct.builder.superelements import rigid_body_lines
+
+        for line in rigid_body_lines(result.attrs):
+            out.write(line + "\n")
     if result.modes is not None:
         out.write("modes\n")
         print_modes(result.modes, out, requested)

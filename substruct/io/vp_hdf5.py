@@ -17,10 +17,13 @@ One numbered group per part, ``/virtual_points/<i>/``, attribute ``part``, and t
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import h5py
 import numpy as np
 
-from substruct.analysis.frf.virtual_point import VptResult
+if TYPE_CHECKING:  # the writer is imported by every result write: the analysis only when used
+    from substruct.analysis.frf.virtual_point import VptResult
 
 __all__ = ["write_virtual_points"]
 

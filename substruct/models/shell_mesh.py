@@ -18,7 +18,6 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from substruct.models.beam import Material
 from substruct.models.shell import shell_matrices
@@ -132,6 +131,7 @@ def shell_mesh(shells: list[Shell], points: list[np.ndarray], ids: list[int],
             j = int(np.argmin(np.linalg.norm(local - X[c], axis=1)))
             node_of[j] = index[corner]
             known.add(j)
+        from scipy.spatial import cKDTree  # imported where used (start-up time)
         tree = cKDTree(np.asarray(points)) if len(local) > n else None
         next_id = max(ids) + 1
         for j, x in enumerate(local):

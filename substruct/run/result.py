@@ -10,17 +10,19 @@ read back from a file is the same object as the one computed.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import scipy.sparse as sp
 
-from substruct.analysis.frf.virtual_point import VptResult
 from substruct.analysis.results import Modes, Receptance
 from substruct.analysis.transient.results import Transient
 from substruct.builder.drawing import Drawing
 from substruct.run.recovered import Recovered
 from substruct.run.spec_results import RandomResponse, ShockSpectra
+
+if TYPE_CHECKING:  # the test-lab analysis (and its case layer) only where it is used
+    from substruct.analysis.frf.virtual_point import VptResult
 
 __all__ = ["ModelInfo", "Result"]
 

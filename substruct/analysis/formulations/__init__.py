@@ -20,27 +20,28 @@ The names of the formulations are :data:`substruct.vocabulary.FORMULATIONS`; the
 as checks, so that each result is checked by a formulation that shares no code with it.
 """
 
-from substruct.analysis.formulations.coupling import (
-    FORMULATIONS,
-    paper_G_D,
-    receptance,
-    receptance_agreement,
-    receptance_unconstrained,
-)
-from substruct.analysis.formulations.forms import (
-    GENERALIZED_INVERSE_FORM,
-    KKT_FORM,
-    NULL_SPACE_FORM,
-    Formulation,
-    formulation,
-)
-from substruct.analysis.formulations.projection import (
-    MassSplit,
-    constrained_acceleration,
-    constraint_gain,
-    projected_inverse,
-    split_mass,
-)
+from importlib import import_module
+from typing import Any
+
+#: Public name -> the module that defines it (imported on first use, so that importing one
+#: module of the package does not import them all).
+_LAZY = {
+    "FORMULATIONS": "substruct.analysis.formulations.coupling",
+    "Formulation": "substruct.analysis.formulations.forms",
+    "GENERALIZED_INVERSE_FORM": "substruct.analysis.formulations.forms",
+    "KKT_FORM": "substruct.analysis.formulations.forms",
+    "MassSplit": "substruct.analysis.formulations.projection",
+    "NULL_SPACE_FORM": "substruct.analysis.formulations.forms",
+    "constrained_acceleration": "substruct.analysis.formulations.projection",
+    "constraint_gain": "substruct.analysis.formulations.projection",
+    "formulation": "substruct.analysis.formulations.forms",
+    "paper_G_D": "substruct.analysis.formulations.coupling",
+    "projected_inverse": "substruct.analysis.formulations.projection",
+    "receptance": "substruct.analysis.formulations.coupling",
+    "receptance_agreement": "substruct.analysis.formulations.coupling",
+    "receptance_unconstrained": "substruct.analysis.formulations.coupling",
+    "split_mass": "substruct.analysis.formulations.projection",
+}
 
 __all__ = [
     "FORMULATIONS",
@@ -59,3 +60,12 @@ __all__ = [
     "receptance_unconstrained",
     "split_mass",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """Import the defining module on first use."""
+    if name not in _LAZY:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(import_module(_LAZY[name]), name)
+    globals()[name] = value
+    return value

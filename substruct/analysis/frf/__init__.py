@@ -12,9 +12,31 @@ per frequency (the paper's eqs 11-15):
 The front door of a receptance sweep is :func:`substruct.analysis.api.receptance_sweep`.
 """
 
-from substruct.analysis.frf.coupling import FrfPart, couple, decouple, lm_fbs
-from substruct.analysis.frf.modal import ModalOptions, frf_method, modal_receptance_sweep
-from substruct.analysis.frf.quantity import as_quantity, quantity_factor
+from importlib import import_module
+from typing import Any
+
+#: Public name -> the module that defines it (imported on first use, so that importing one
+#: module of the package does not import them all).
+_LAZY = {
+    "FrfPart": "substruct.analysis.frf.coupling",
+    "ModalOptions": "substruct.analysis.frf.modal",
+    "as_quantity": "substruct.analysis.frf.quantity",
+    "couple": "substruct.analysis.frf.coupling",
+    "decouple": "substruct.analysis.frf.coupling",
+    "frf_method": "substruct.analysis.frf.modal",
+    "lm_fbs": "substruct.analysis.frf.coupling",
+    "modal_receptance_sweep": "substruct.analysis.frf.modal",
+    "quantity_factor": "substruct.analysis.frf.quantity",
+}
 
 __all__ = ["FrfPart", "ModalOptions", "as_quantity", "couple", "decouple", "frf_method",
            "lm_fbs", "modal_receptance_sweep", "quantity_factor"]
+
+
+def __getattr__(name: str) -> Any:
+    """Import the defining module on first use."""
+    if name not in _LAZY:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(import_module(_LAZY[name]), name)
+    globals()[name] = value
+    return value

@@ -12,14 +12,29 @@ r"""Coupled modes of a constrained system (the paper's eqs 23-34): the one entry
 * the modal assurance criterion (:mod:`~substruct.analysis.modes.mac`).
 """
 
-from substruct.analysis.modes.eigen import (
-    SOLVERS,
-    SPARSE_ABOVE,
-    SolverChoice,
-    choose_solver,
-    modes,
-)
-from substruct.analysis.modes.mac import mac_matrix, pair_modes
+from importlib import import_module
+from typing import Any
+
+#: Public name -> the module that defines it (imported on first use, so that importing one
+#: module of the package does not import them all).
+_LAZY = {
+    "SOLVERS": "substruct.analysis.modes.eigen",
+    "SPARSE_ABOVE": "substruct.analysis.modes.eigen",
+    "SolverChoice": "substruct.analysis.modes.eigen",
+    "choose_solver": "substruct.analysis.modes.eigen",
+    "mac_matrix": "substruct.analysis.modes.mac",
+    "modes": "substruct.analysis.modes.eigen",
+    "pair_modes": "substruct.analysis.modes.mac",
+}
 
 __all__ = ["SOLVERS", "SPARSE_ABOVE", "SolverChoice", "choose_solver", "mac_matrix", "modes",
            "pair_modes"]
+
+
+def __getattr__(name: str) -> Any:
+    """Import the defining module on first use."""
+    if name not in _LAZY:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(import_module(_LAZY[name]), name)
+    globals()[name] = value
+    return value

@@ -13,14 +13,29 @@ null-space or modal form, each checked by the others.
   what is recorded and returned.
 """
 
-from substruct.analysis.transient.options import (
-    InitialConditions,
-    LoadHistory,
-    TransientOptions,
-    TransientOutputs,
-)
-from substruct.analysis.transient.response import TRANSIENT_FORMS, transient
-from substruct.analysis.transient.results import Transient
+from importlib import import_module
+from typing import Any
+
+#: Public name -> the module that defines it (imported on first use, so that importing one
+#: module of the package does not import them all).
+_LAZY = {
+    "InitialConditions": "substruct.analysis.transient.options",
+    "LoadHistory": "substruct.analysis.transient.options",
+    "TRANSIENT_FORMS": "substruct.analysis.transient.response",
+    "Transient": "substruct.analysis.transient.results",
+    "TransientOptions": "substruct.analysis.transient.options",
+    "TransientOutputs": "substruct.analysis.transient.options",
+    "transient": "substruct.analysis.transient.response",
+}
 
 __all__ = ["TRANSIENT_FORMS", "InitialConditions", "LoadHistory", "Transient",
            "TransientOptions", "TransientOutputs", "transient"]
+
+
+def __getattr__(name: str) -> Any:
+    """Import the defining module on first use."""
+    if name not in _LAZY:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(import_module(_LAZY[name]), name)
+    globals()[name] = value
+    return value
