@@ -36,7 +36,7 @@ def _start(module: str, *args: str, pause: float = 60.0) -> tuple[subprocess.Pop
 
 @pytest.mark.parametrize("module", [
     "substruct.cli.arguments",  # while `from substruct.cli import main` loads the command
-    "substruct.analysis.errors",  # inside main(), before the command's own try
+    "substruct.cli.summary",  # inside main(): the command module loading, before its own try
 ])
 def test_ctrl_c_while_the_command_starts_is_one_line_and_130(tmp_path, module):
     proc, first = _start(module, "info", str(tmp_path / "missing.h5"))
@@ -50,9 +50,9 @@ def test_ctrl_c_while_the_command_starts_is_one_line_and_130(tmp_path, module):
 
 def test_without_the_interrupt_the_paused_start_runs_to_its_end(tmp_path):
     """The same start, left alone: the command runs (here: bad input, exit 2, one line)."""
-    proc, first = _start("substruct.analysis.errors", "info", str(tmp_path / "missing.h5"),
+    proc, first = _start("substruct.cli.summary", "info", str(tmp_path / "missing.h5"),
                          pause=0.5)
-    assert first.startswith("PAUSED substruct.analysis.errors "), first
+    assert first.startswith("PAUSED substruct.cli.summary "), first
     out, err = proc.communicate(timeout=180)
     assert proc.returncode == 2, err
     assert err.startswith("substruct: error: ") and err.count("\n") == 1, err
