@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Protocol, Sequence
+from typing import TYPE_CHECKING, Any, Protocol, Sequence
 
 from substruct.linalg.system import ConstrainedSystem
 from substruct.vocabulary import (
@@ -37,8 +37,6 @@ from substruct.vocabulary import (
 
 if TYPE_CHECKING:  # at run time only attributes are read: no import of the analyses here
     from substruct.analysis.events import Phase
-    from substruct.analysis.frf.modal import ModalOptions
-    from substruct.analysis.modes.amls import AmlsOptions
 
 __all__ = ["ConstrainedSystem", "ModesOptions", "Progress", "SweepOptions"]
 
@@ -89,7 +87,7 @@ class ModesOptions:
     what: str = "modes"
     full_checks: bool = False
     events: Phase | None = None
-    amls: AmlsOptions | None = None
+    amls: Any = None  # AmlsOptions (of the strategy that reads it: no import cycle)
 
     def __post_init__(self) -> None:
         for name in (self.method, *self.checks):
@@ -125,7 +123,7 @@ class SweepOptions:
     output_names: Sequence[str] | None = None
     progress: Progress | None = None
     what: str = "frf"
-    modal: ModalOptions | None = None
+    modal: Any = None  # ModalOptions (of the modal sweep that reads it: no import cycle)
 
     def __post_init__(self) -> None:
         _one_of("method", self.method, FRF_METHODS)

@@ -42,10 +42,10 @@ from typing import Callable
 
 import scipy.sparse as sp
 
-from substruct.linalg import cholmod as _cholmod
-from substruct.linalg import metis as _metis
-from substruct.linalg import pardiso as _pardiso
-from substruct.linalg import superlu as _slu
+import substruct.linalg.cholmod as _cholmod
+import substruct.linalg.metis as _metis
+import substruct.linalg.pardiso as _pardiso
+import substruct.linalg.superlu as _slu
 from substruct.linalg.solve_type import Factorize, Solve
 
 __all__ = [

@@ -33,13 +33,12 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from substruct.analysis.formulations.coupling import (
+from substruct.analysis.formulations.projection import (
     MassSplit,
     constraint_gain,
     projected_inverse,
     split_mass,
 )
-from substruct.analysis.formulations.forms import formulation
 from substruct.analysis.modes.pencil import (
     Refine,
     fan_lin_van_dooren,
@@ -215,7 +214,10 @@ def coupled_modes(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
     if Ad.shape[0]:  # D A u = 0, rows of unit norm: rank decided whatever a row's scale (the
         # rows of a ConstrainedSystem are so already: powers of two, no bit changes)
         Ad = np.asarray(equilibrate(Ad).A)
-    modes = formulation(method).dense_modes(Md, Cd, Kd, Ad)
+    if method not in FORMULATIONS:
+        raise ValueError(f"unknown method {method!r}; expected one of {', '.join(FORMULATIONS)}")
+    modes = {GENERALIZED_INVERSE: dense_generalized_inverse_modes,  # each formulation on its own
+             NULL_SPACE: dense_null_space_modes, KKT: kkt_modes}[method](Md, Cd, Kd, Ad)
     modes.solver = "dense"
     return modes.lowest(n_modes)
 
