@@ -18,7 +18,7 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import BinaryIO
+from typing import BinaryIO, Iterator
 
 import numpy as np
 
@@ -99,6 +99,17 @@ class _Lines:
     def left(self) -> int:
         return self.size - self.fh.tell()
 
+    def until_delimiter(self, what: str) -> Iterator[bytes]:
+        """The lines up to the closing ``-1`` of a dataset (not included); ``what`` names the
+        dataset (or record) in the error when the file ends before it."""
+        while True:
+            line = self.next()
+            if line is None:
+                raise ValueError(f"{what} ends without the closing -1")
+            if _is_delimiter(line):
+                return
+            yield line
+
 
 def _is_delimiter(line: bytes) -> bool:
     return line.strip() == b"-1" and line[:6] == b"    -1"
@@ -131,12 +142,7 @@ _WIDTHS = {(2, 1): [13] * 6, (2, 0): [13] * 6, (5, 1): [13] * 6, (5, 0): [13] * 
 def _ascii_data(lines: _Lines, where: str, count: int, widths: list[int]) -> np.ndarray:
     values = np.empty(count, dtype=float)
     k = 0
-    while True:
-        line = lines.next()
-        if line is None:
-            raise ValueError(f"{where}: record 12 ends without the closing -1")
-        if _is_delimiter(line):
-            break
+    for line in lines.until_delimiter(f"{where}: record 12"):
         text = line.decode("latin-1")
         at = 0
         for w in widths:
@@ -251,26 +257,15 @@ def _function(lines: _Lines, where: str, kind: str, budget: list[float]) -> Uff5
 
 def _nodes(lines: _Lines, kind: int, into: set[int], where: str) -> None:
     """The node numbers of a 15 (one node a line) or 2411 (two lines a node) dataset."""
-    k = 0
-    while True:
-        line = lines.next()
-        if line is None:
-            raise ValueError(f"{where}: ends without the closing -1")
-        if _is_delimiter(line):
-            return
+    for k, line in enumerate(lines.until_delimiter(f"{where}:")):
         if kind == 15 or k % 2 == 0:
             into.add(int(_field(line.decode("latin-1"), 0, 10, int,
                                 f"{where}: line {lines.number} (node label)")))
-        k += 1
 
 
 def _skip(lines: _Lines, where: str) -> None:
-    while True:
-        line = lines.next()
-        if line is None:
-            raise ValueError(f"{where}: ends without the closing -1")
-        if _is_delimiter(line):
-            return
+    for _ in lines.until_delimiter(f"{where}:"):
+        pass
 
 
 def read_uff_records(path: str | os.PathLike) -> UffFile:
