@@ -19,8 +19,7 @@ lists them.
 
 from __future__ import annotations
 
-from importlib import import_module
-from typing import Any
+from substruct.lazy import lazy_getattr
 
 __version__ = "0.1.0"
 
@@ -49,13 +48,7 @@ _ATTRIBUTE = {"load_result": "load", "save_result": "save"}
 __all__ = ["__version__", *_LAZY]
 
 
-def __getattr__(name: str) -> Any:
-    """Import the defining layer on first use, so ``import substruct`` stays light."""
-    if name not in _LAZY:
-        raise AttributeError(f"module 'substruct' has no attribute {name!r}")
-    value = getattr(import_module(_LAZY[name]), _ATTRIBUTE.get(name, name))
-    globals()[name] = value
-    return value
+__getattr__ = lazy_getattr(__name__, _LAZY, attributes=_ATTRIBUTE)
 
 
 def __dir__() -> list[str]:

@@ -7,8 +7,9 @@ The layers above see what the builder makes through this package: a
 
 from __future__ import annotations
 
-from importlib import import_module
 from typing import TYPE_CHECKING, Any
+
+from substruct.lazy import lazy_getattr
 
 if TYPE_CHECKING:
     from substruct.assembly.stack import Assembly
@@ -21,10 +22,4 @@ __all__ = ["Assembly", "Substructure"]
 _LAZY = {"Assembly": "substruct.assembly.stack", "Substructure": "substruct.substructure"}
 
 
-def __getattr__(name: str) -> Any:
-    """Import the defining module on first use."""
-    if name not in _LAZY:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(import_module(_LAZY[name]), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_getattr(__name__, _LAZY)

@@ -8,8 +8,7 @@ escapes of :mod:`substruct.case.text`) does not import the schema (pydantic)."""
 
 from __future__ import annotations
 
-from importlib import import_module
-from typing import Any
+from substruct.lazy import lazy_getattr
 
 #: Public name -> the module that defines it.
 _LAZY = {"Case": "loader", "CaseError": "errors", "apply_overrides": "yaml_io",
@@ -18,10 +17,4 @@ _LAZY = {"Case": "loader", "CaseError": "errors", "apply_overrides": "yaml_io",
 __all__ = ["Case", "CaseError", "apply_overrides", "load_case", "parse_case", "parse_point"]
 
 
-def __getattr__(name: str) -> Any:
-    """A public name of the layer, its module imported on first use."""
-    if name not in _LAZY:
-        raise AttributeError(f"module 'substruct.case' has no attribute {name!r}")
-    value = getattr(import_module(f"substruct.case.{_LAZY[name]}"), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_getattr(__name__, _LAZY, prefix="substruct.case.")

@@ -7,8 +7,9 @@ loads the mesh readers and the solid meshers (meshio, scikit-fem's 3D elements, 
 
 from __future__ import annotations
 
-from importlib import import_module
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from substruct.lazy import lazy_getattr
 
 if TYPE_CHECKING:
     from substruct.models.discrete import fixed_free, free_free, point_mass, spring
@@ -55,13 +56,7 @@ _LAZY = {
 __all__ = sorted(_LAZY)
 
 
-def __getattr__(name: str) -> Any:
-    """Import the defining module on first use."""
-    if name not in _LAZY:
-        raise AttributeError(f"module 'substruct.models' has no attribute {name!r}")
-    value = getattr(import_module(f"substruct.models.{_LAZY[name]}"), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_getattr(__name__, _LAZY, prefix="substruct.models.")
 
 
 def __dir__() -> list[str]:

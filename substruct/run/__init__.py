@@ -7,17 +7,9 @@ layer, the builder and the analyses."""
 
 from __future__ import annotations
 
-from importlib import import_module
-from typing import Any
+from substruct.lazy import lazy_getattr
 
 __all__ = ["Model", "Progress", "build_model", "run_case"]
 
 
-def __getattr__(name: str) -> Any:
-    """``Model``, ``Progress``, ``build_model``, ``run_case`` from
-    :mod:`substruct.run.runner`, imported on first use."""
-    if name not in __all__:
-        raise AttributeError(f"module 'substruct.run' has no attribute {name!r}")
-    value = getattr(import_module("substruct.run.runner"), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_getattr(__name__, dict.fromkeys(__all__, "substruct.run.runner"))

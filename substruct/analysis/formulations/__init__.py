@@ -20,8 +20,7 @@ The names of the formulations are :data:`substruct.vocabulary.FORMULATIONS`; the
 as checks, so that each result is checked by a formulation that shares no code with it.
 """
 
-from importlib import import_module
-from typing import Any
+from substruct.lazy import lazy_getattr
 
 #: Public name -> the module that defines it (imported on first use, so that importing one
 #: module of the package does not import them all).
@@ -62,10 +61,4 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str) -> Any:
-    """Import the defining module on first use."""
-    if name not in _LAZY:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(import_module(_LAZY[name]), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_getattr(__name__, _LAZY)

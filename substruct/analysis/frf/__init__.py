@@ -12,8 +12,7 @@ per frequency (the paper's eqs 11-15):
 The front door of a receptance sweep is :func:`substruct.analysis.api.receptance_sweep`.
 """
 
-from importlib import import_module
-from typing import Any
+from substruct.lazy import lazy_getattr
 
 #: Public name -> the module that defines it (imported on first use, so that importing one
 #: module of the package does not import them all).
@@ -33,10 +32,4 @@ __all__ = ["FrfPart", "ModalOptions", "as_quantity", "couple", "decouple", "frf_
            "lm_fbs", "modal_receptance_sweep", "quantity_factor"]
 
 
-def __getattr__(name: str) -> Any:
-    """Import the defining module on first use."""
-    if name not in _LAZY:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(import_module(_LAZY[name]), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_getattr(__name__, _LAZY)

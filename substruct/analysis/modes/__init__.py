@@ -12,8 +12,7 @@ r"""Coupled modes of a constrained system (the paper's eqs 23-34): the one entry
 * the modal assurance criterion (:mod:`~substruct.analysis.modes.mac`).
 """
 
-from importlib import import_module
-from typing import Any
+from substruct.lazy import lazy_getattr
 
 #: Public name -> the module that defines it (imported on first use, so that importing one
 #: module of the package does not import them all).
@@ -31,10 +30,4 @@ __all__ = ["SOLVERS", "SPARSE_ABOVE", "SolverChoice", "choose_solver", "mac_matr
            "pair_modes"]
 
 
-def __getattr__(name: str) -> Any:
-    """Import the defining module on first use."""
-    if name not in _LAZY:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(import_module(_LAZY[name]), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_getattr(__name__, _LAZY)

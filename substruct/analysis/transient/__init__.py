@@ -13,8 +13,7 @@ null-space or modal form, each checked by the others.
   what is recorded and returned.
 """
 
-from importlib import import_module
-from typing import Any
+from substruct.lazy import lazy_getattr
 
 #: Public name -> the module that defines it (imported on first use, so that importing one
 #: module of the package does not import them all).
@@ -32,10 +31,4 @@ __all__ = ["TRANSIENT_FORMS", "InitialConditions", "LoadHistory", "Transient",
            "TransientOptions", "TransientOutputs", "transient"]
 
 
-def __getattr__(name: str) -> Any:
-    """Import the defining module on first use."""
-    if name not in _LAZY:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(import_module(_LAZY[name]), name)
-    globals()[name] = value
-    return value
+__getattr__ = lazy_getattr(__name__, _LAZY)
