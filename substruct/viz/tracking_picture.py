@@ -45,7 +45,8 @@ def tracking_figure(t: TrackedStudy, case_name: str) -> "Figure":
                 label="veering" if n == 0 else None)
     ax.set_ylabel("natural frequency (rad/s)")
     ax.set_title(f"{case_name}: modes tracked by MAC against {t.parameter}"
-                 + (" (ticks: d omega/d p from the formulation)" if slope is not None else ""))
+                 + ("\n(black ticks: d omega / d p from the formulation)" if slope is not None
+                    else ""), fontsize=11)
     ax.legend(fontsize=8)
     ax.grid(True, alpha=0.3)
     if damping is not None:
