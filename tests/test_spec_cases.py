@@ -71,3 +71,12 @@ def test_absorber_sweep_tracked(capsys, tmp_path):
         assert abs(fine - change) <= 5 * abs(fine - coarse) + 1e-9 * t.frequency[:, k].max(), \
             (k, fine, change, coarse)
     assert d[:, 0].min() > 0 and d[:, 1].min() > 0
+
+
+def test_random_picture(capsys, tmp_path):
+    """cases/random_base.yaml with pictures: the response PSDs are drawn and listed."""
+    code, out, err = run(capsys, "run", CASES / "random_base.yaml", "--out", tmp_path,
+                         "--set", "output.pictures=true")
+    assert code == 0, err
+    assert results.listed_pictures(tmp_path / "random_base.h5") == ["random_base_random.png"]
+    assert (tmp_path / "random_base_random.png").stat().st_size > 10_000
