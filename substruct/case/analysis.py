@@ -27,6 +27,7 @@ from substruct.case.fields import (
     memory_limit,
 )
 from substruct.case.numbers import MAX_MAGNITUDE, RANGE
+from substruct.case.random_cross import CrossPsd, check_cross
 from substruct.case.transient import TransientAnalysis
 from substruct.vocabulary import (
     DEFAULT_TOLERANCE,
@@ -337,10 +338,13 @@ class BasePsd(StrictModel):
 
 class RandomAnalysis(StrictModel):
     """Response PSDs ``S_y = H S_f H^H`` and RMS values at ``outputs`` over ``frequencies``
-    (Hz) for uncorrelated force PSDs ``forces`` or one base acceleration PSD ``base``."""
+    (Hz) for force PSDs ``forces`` (uncorrelated, or pairs correlated by ``cross``) or one
+    base acceleration PSD ``base``."""
 
     frequencies: Omega
     forces: list[ForcePsd] = Field(default_factory=list)
+    #: correlated pairs of forces (:mod:`substruct.case.random_cross`)
+    cross: list[CrossPsd] = Field(default_factory=list)
     base: BasePsd | None = None
     outputs: Annotated[list[Point], Field(min_length=1)]
     #: what the outputs' PSDs are of (absolute motion)
@@ -356,6 +360,7 @@ class RandomAnalysis(StrictModel):
         if (not self.forces) == (self.base is None):
             raise FieldError("forces", "give force PSDs (forces) or a base acceleration PSD "
                              "(base), one of the two")
+        check_cross([ld.at for ld in self.forces], self.cross)
         f = self.frequencies.grid()
         if np.any(f <= 0):
             raise FieldError("frequencies", "must be > 0 Hz", float(f[f <= 0][0]))

@@ -185,6 +185,10 @@ class Collect(StrictModel):
     frf_peaks: list[Annotated[PeakSpec, BeforeValidator(_peak)]] = Field(default_factory=list)
     frf: list[Annotated[PeakSpec, BeforeValidator(_peak)]] = Field(default_factory=list)
     mac: bool = False
+    #: follow the modes from sample to sample by MAC (a grid of one parameter, or a zip)
+    track: bool = False
+    #: d omega / d parameter of each mode from the formulation (a grid of one parameter)
+    derivatives: bool = False
 
 
 class StudySpec(StrictModel):
@@ -239,6 +243,17 @@ class StudySpec(StrictModel):
             raise FieldError(("study", "collect", "frequencies"), f"more than the "
                              f"{modes.count} modes of analysis.modes.count",
                              collect.frequencies)
+        for key in ("track", "derivatives"):
+            if not getattr(collect, key):
+                continue
+            if not collect.frequencies:
+                raise FieldError(("study", "collect", key), "needs collect.frequencies (the "
+                                 "modes to follow)", True)
+            one = self.grid is not None and (len(self.grid.parameters) == 1 or (
+                key == "track" and self.grid.combine == "zip"))
+            if not one:
+                raise FieldError(("study", "collect", key), "needs a grid of one parameter"
+                                 + (" (or a zip)" if key == "track" else ""), True)
         frf = case.analysis.frf
         n_omega = len(frf.omega.grid()) if frf is not None and collect.frf else 0
         need = self.memory(n_omega)

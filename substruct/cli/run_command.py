@@ -154,12 +154,17 @@ def picture_paths(case: Any, out: Path) -> list[Path]:
         paths.append(out / f"{name}_transient.png")
         if case.analysis.transient.field_every:
             paths.append(out / f"{name}_transient.gif")
+    if case.analysis.random is not None:
+        paths.append(out / f"{name}_random.png")
+    if case.analysis.srs is not None:
+        paths.append(out / f"{name}_srs.png")
     return paths
 
 
 def write_pictures(result: Result, out: Path, name: str) -> list[Path]:
-    """The mode pictures (main modes and each variant), the receptance picture and the
-    transient histories; the plotting modules are imported here, only when a picture is
+    """The mode pictures (main modes and each variant), the receptance picture, the
+    transient histories and the random response's PSDs and shock response spectra
+    (:mod:`substruct.viz.spec_picture`); the plotting modules are imported here, only when a picture is
     drawn."""
     plotting = optional_module("viz.plotting")
     files = []
@@ -175,4 +180,11 @@ def write_pictures(result: Result, out: Path, name: str) -> list[Path]:
     if tr is not None and tr.t.size and (tr.outputs or tr.constraint_forces.size):
         picture = optional_module("viz.transient_picture")
         files.append(Path(picture.plot_transient(result, out / f"{name}_transient.png")))
+    if result.random is not None or result.srs is not None:
+        spec = optional_module("viz.spec_picture")
+        if result.random is not None:
+            files.append(spec.plot_random(result.random, result.case_name,
+                                          out / f"{name}_random.png"))
+        if result.srs is not None:
+            files.append(spec.plot_srs(result.srs, result.case_name, out / f"{name}_srs.png"))
     return files

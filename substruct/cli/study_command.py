@@ -98,7 +98,7 @@ def study_command(args: argparse.Namespace) -> int:
 
 
 #: The pictures a study may draw (:func:`substruct.viz.study_picture.study_pictures`).
-_PICTURES = ("frequencies", "histogram", "tuning")
+_PICTURES = ("frequencies", "histogram", "tuning", "tracked")
 
 
 def _study_locked(args: argparse.Namespace, case: Any, backend: Any, out: Path, held: Any,
@@ -157,6 +157,14 @@ def _report(args: argparse.Namespace, result: Any, seconds: float, tuning: Any, 
         summary["den_hartog"] = {"absorber": tuning[0], "mu": tuning[1].mu,
                                  result.parameters[0]: tuning[1].k_opt,
                                  result.parameters[1]: tuning[1].c_opt}
+    tracking = result.tracking
+    if isinstance(tracking, str):
+        summary["tracking"] = tracking
+    elif tracking is not None:
+        marks = (lambda rows, key: [{key: float(tracking.values[s]),
+                                     "tracks": [a + 1, b + 1]} for s, a, b in rows])
+        summary["tracking"] = {"crossings": marks(tracking.crossings, "after"),
+                               "veerings": marks(tracking.veerings, "at")}
     summary["files"] = [str(p) for p in (target, *pictures)]
     if args.json:
         print(json.dumps(summary, indent=1))
@@ -172,6 +180,15 @@ def _report(args: argparse.Namespace, result: Any, seconds: float, tuning: Any, 
             dh = summary["den_hartog"]
             print(f"Den Hartog's tuning of absorber {dh['absorber']} (mu = {dh['mu']:.4g}): "
                   + ", ".join(f"{p} = {dh[p]:.6g}" for p in result.parameters))
+        if isinstance(tracking, str):
+            print(f"modes {tracking}")
+        elif tracking is not None:
+            for kind, rows in (("crossing", tracking.crossings),
+                               ("veering", tracking.veerings)):
+                for s, a, b in rows:
+                    print(f"{kind} of tracks {a + 1} and {b + 1} "
+                          f"{'after' if kind == 'crossing' else 'at'} "
+                          f"{tracking.parameter} = {float(tracking.values[s]):.6g}")
         for fail in summary["failures"]:
             print(f"sample {fail['sample']} failed: {fail['error']}")
         for f in summary["files"]:

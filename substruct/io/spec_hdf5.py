@@ -1,6 +1,7 @@
 """HDF5 groups of the specification analyses (:mod:`substruct.run.spec_results`)::
 
-    /random    f (Hz), outputs, inputs, input_psd (n_f x p), psd (n_f x q x q, complex),
+    /random    f (Hz), outputs, inputs, input_psd (n_f x p), input_csd (n_f x p x p, complex,
+               only with correlated inputs), psd (n_f x q x q, complex),
                rms (q); attrs quantity, method, tolerance, three_sigma_exceedance;
                agreement/ (attrs: check -> relative difference)
     /srs       fn (Hz), outputs, pos, neg, maxabs, pv (n_outputs x n_fn); attrs zeta, Q, dt
@@ -27,6 +28,8 @@ def write_random(g: h5py.Group, r: RandomResponse) -> None:
     _strings(g, "outputs", r.outputs)
     _strings(g, "inputs", r.inputs)
     g.create_dataset("input_psd", data=r.input_psd)
+    if r.input_csd is not None:
+        g.create_dataset("input_csd", data=r.input_csd)
     g.create_dataset("psd", data=r.psd)
     g.create_dataset("rms", data=r.rms)
     g.attrs.update({"quantity": r.quantity, "method": r.method, "tolerance": r.tolerance,

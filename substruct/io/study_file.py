@@ -14,6 +14,8 @@ Layout::
                        seconds (time of each sample), error (one string per sample, "" if run)
     /failures/         index, message: the samples that failed and why
     /reference/<name>  the same arrays for the case as written (when the MAC is collected)
+    /tracking          the modes followed through the samples (collect: track;
+                       :mod:`substruct.io.tracking_file`)
 
 The file is written to a temporary name beside the target and renamed over it
 (:func:`substruct.io.hdf5.atomic_path`): an interrupted study never leaves half a file.
@@ -30,6 +32,7 @@ import numpy as np
 
 from substruct import __version__
 from substruct.io.hdf5 import atomic_path
+from substruct.io.tracking_file import read_tracking, write_tracking
 from substruct.studies.study_run import StudyResult
 
 __all__ = ["STUDY_FORMAT", "STUDY_FORMAT_VERSION", "save_study", "load_study"]
@@ -73,6 +76,10 @@ def save_study(result: StudyResult, path: str | os.PathLike) -> Path:
             ref = f.create_group("reference")
             for name, values in result.reference.items():
                 ref.create_dataset(name, data=values)
+            if isinstance(result.tracking, str):
+                f.attrs["tracking"] = result.tracking
+            elif result.tracking is not None:
+                write_tracking(f.create_group("tracking"), result.tracking)
     return path
 
 
@@ -92,6 +99,8 @@ def load_study(path: str | os.PathLike) -> StudyResult:
         s = f["samples"]
         values = {k: np.asarray(s[k][()]) for k in s if k not in ("seconds", "error")}
         peaks = [p.decode() if isinstance(p, bytes) else str(p) for p in s.attrs["peaks"]]
+        tracking = read_tracking(f["tracking"]) if "tracking" in f else (
+            str(f.attrs["tracking"]) if "tracking" in f.attrs else None)
         return StudyResult(case_name=str(f.attrs["case_name"]), kind=str(f.attrs["kind"]),
                            parameters=_strings(f["parameters/names"]),
                            table=np.asarray(f["parameters/table"][()]), values=values,
@@ -103,4 +112,5 @@ def load_study(path: str | os.PathLike) -> StudyResult:
                                    for p in s.attrs.get("curves", [])],
                            shared=[p.decode() if isinstance(p, bytes) else str(p)
                                    for p in f.attrs.get("shared", [])],
-                           shared_seconds=float(f.attrs.get("shared_seconds", 0.0)))
+                           shared_seconds=float(f.attrs.get("shared_seconds", 0.0)),
+                           tracking=tracking)

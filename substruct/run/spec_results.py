@@ -20,7 +20,9 @@ class RandomResponse:
         f: the frequency grid (Hz).
         outputs, inputs: the output points and the input names (force points, or ``base``).
         quantity: ``displacement``, ``velocity`` or ``acceleration`` (absolute).
-        input_psd: ``n_f x p``, the (uncorrelated) input PSDs interpolated on the grid.
+        input_psd: ``n_f x p``, the input PSDs interpolated on the grid.
+        input_csd: ``n_f x p x p``, the input cross-spectral matrix when inputs are correlated
+            (``analysis.random.cross``), else ``None`` (diagonal: ``input_psd``).
         psd: ``n_f x q x q``, the response cross-spectral matrix (auto-PSDs on the diagonal).
         rms: ``q``, :math:`\sqrt{\int S_{ii}\, df}` (trapezoid rule on the grid).
         method, agreement, tolerance: of the receptance sweep behind it.
@@ -36,6 +38,7 @@ class RandomResponse:
     method: str = ""
     agreement: dict[str, float] = field(default_factory=dict)
     tolerance: float = 0.0
+    input_csd: np.ndarray | None = None
 
 
 @dataclass

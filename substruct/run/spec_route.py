@@ -11,7 +11,9 @@ loss factors of ``analysis.frf``, a thin adapter to :mod:`substruct.analysis.frf
   (:func:`~substruct.analysis.frf.base_drive.base_drive_sweep`, ``A q = E g``), times
   :math:`(i \omega)^p` for velocity (``p = 1``) or acceleration (``p = 2``); the input PSDs are
   log-log interpolated (:func:`~substruct.analysis.frf.random.interpolate_psd`), several
-  forces uncorrelated (a diagonal :math:`S_f`);
+  forces uncorrelated (a diagonal :math:`S_f`) or correlated pair by pair by ``cross``
+  (:func:`~substruct.case.random_cross.cross_matrix`, checked Hermitian positive semidefinite
+  at every frequency);
 * srs: Smallwood's filter on each output's absolute acceleration, sampled every recorded step.
 
 Input the analyses cannot take becomes a :class:`~substruct.case.loader.CaseError` naming the
@@ -30,7 +32,12 @@ from substruct.analysis.api import Progress, SweepOptions
 from substruct.analysis.errors import INPUT_ERRORS, CheckError
 from substruct.analysis.frf.base_drive import base_drive_sweep
 from substruct.analysis.frf.quantity import as_quantity
-from substruct.analysis.frf.random import interpolate_psd, response_psd, rms
+from substruct.analysis.frf.random import (
+    check_spectral_matrix,
+    interpolate_psd,
+    response_psd,
+    rms,
+)
 from substruct.analysis.frf.structural import LossFactor, hysteretic_sweep
 from substruct.analysis.results import Receptance
 from substruct.analysis.transient.results import Transient
@@ -39,6 +46,7 @@ from substruct.builder.frf_parts import has_frf_parts
 from substruct.builder.model import Model
 from substruct.case.analysis import LossFactorSpec
 from substruct.case.loader import Case
+from substruct.case.random_cross import cross_matrix
 from substruct.run.spec_results import RandomResponse, ShockSpectra
 
 __all__ = ["loss_parts", "loss_frf_result", "grounding_column", "random_result",
@@ -137,7 +145,8 @@ def random_result(case: Case, model: Model) -> RandomResponse:
 
     Raises:
         CaseError: an unknown substructure of ``loss_factor``, a base point not grounded,
-            input the sweep cannot take (a mechanism with the supports held).
+            input the sweep cannot take (a mechanism with the supports held), correlations
+            ``cross`` whose cross-spectral matrix is not positive semidefinite.
         CheckError: a check beyond ``analysis.random.tolerance``.
     """
     spec = case.analysis.random
@@ -154,6 +163,14 @@ def random_result(case: Case, model: Model) -> RandomResponse:
     names = ["base"] if spec.base is not None else [ld.at for ld in spec.forces]
     columns = [t.columns() for t in tables]
     S_in = np.column_stack([interpolate_psd(list(ft), list(st), f) for ft, st in columns])
+    S = cross_matrix(names, spec.cross, S_in)
+    if spec.cross:
+        try:
+            check_spectral_matrix(S, f=f)
+        except ValueError as err:
+            raise case.error((*loc, "cross"), str(err).replace(
+                "a cross-spectral", "the input cross-spectral"),
+                [list(c.between) for c in spec.cross]) from None
     try:
         if spec.base is not None:
             E = grounding_column(case, model, spec.base.at, (*loc, "base", "at"))
@@ -170,11 +187,11 @@ def random_result(case: Case, model: Model) -> RandomResponse:
     except CheckError as err:
         raise CheckError(f"{err}; to accept it, raise analysis.random.tolerance") from None
     H = rec.H * ((1j * w) ** POWER[spec.quantity])[:, None, None]
-    S = np.einsum("kp,pq->kpq", S_in, np.eye(len(names)))
     Sy = response_psd(H, S)
     auto = np.real(np.einsum("kii->ki", Sy))
     return RandomResponse(f=f, outputs=list(spec.outputs), inputs=list(names),
                           quantity=spec.quantity, input_psd=S_in, psd=Sy, rms=rms(f, auto),
+                          input_csd=S if spec.cross else None,
                           method=rec.method, agreement=dict(rec.agreement),
                           tolerance=spec.tolerance)
 

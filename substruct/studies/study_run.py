@@ -21,6 +21,7 @@ from substruct.run.runner import build_model, run_case
 from substruct.studies.study_backend import Backend, Session, Tick
 from substruct.studies.study_plan import overrides_of, samples
 from substruct.studies.study_shared import shared_parts
+from substruct.studies.study_tracking import TrackedStudy, track_study
 from substruct.studies.study_task import (
     PartJob,
     SampleRecord,
@@ -53,6 +54,8 @@ class StudyResult:
         curves: ``"output<-input"`` names of the full FRF curves (``values["frf"][s, :, c]``).
         shared: the reduced parts made once and shared by every sample.
         shared_seconds: the time it took to make them.
+        tracking: the modes followed through the samples (``collect: track``), or a note
+            saying why they could not be.
     """
 
     case_name: str
@@ -69,6 +72,7 @@ class StudyResult:
     curves: list[str] = field(default_factory=list)
     shared: list[str] = field(default_factory=list)
     shared_seconds: float = 0.0
+    tracking: TrackedStudy | str | None = None
 
     @property
     def failed(self) -> list[int]:
@@ -94,7 +98,9 @@ def study_tasks(case: Case, reference: np.ndarray | None = None) -> tuple[list[s
     names, table = samples(spec)
     tasks = [SampleTask(index=k, case_text=case.text, source=case.source,
                         base_dir=str(case.base_dir), overrides=tuple(overrides_of(names, row)),
-                        collect=spec.collect, reference=reference)
+                        collect=spec.collect, reference=reference,
+                        derivative=(names[0], float(row[0])) if spec.collect.derivatives
+                        else None)
              for k, row in enumerate(table)]
     return names, table, tasks
 
@@ -169,8 +175,14 @@ def run_study(case: Case, backend: Backend = Backend(), tick: Tick | None = None
     curves = [f"{p.output}<-{p.input or first}" for p in spec.collect.frf]
     if "frf" in reference:
         reference["frf"] = reference["frf"].reshape(len(curves), -1).T
+    tracking: TrackedStudy | str | None = None
+    if spec.collect.track:
+        others: dict[str, np.ndarray] = {
+            k: values[k] for k in ("damping_ratio", "frequency_derivative") if k in values}
+        tracking = track_study(names[0], table[:, 0], values["frequency"],
+                               [r.shapes for r in records], others)
     return StudyResult(case_name=case.name, kind="grid" if spec.grid is not None else "random",
                        parameters=names, table=table, values=values, errors=errors,
                        seconds=seconds, reference=reference, backend=backend.describe(),
                        case_yaml=case.text, peaks=peaks, curves=curves, shared=names_shared,
-                       shared_seconds=made)
+                       shared_seconds=made, tracking=tracking)

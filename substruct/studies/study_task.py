@@ -31,6 +31,7 @@ from substruct.case.loader import parse_case
 from substruct.case.study import Collect
 from substruct.run.result import Result
 from substruct.run.runner import build_model, run_case
+from substruct.studies.study_derivative import frequency_derivative
 
 __all__ = ["SampleTask", "SampleRecord", "PartJob", "make_part", "run_sample", "collect",
            "mac_diagonal", "record_fields", "COMPLEX_FIELDS"]
@@ -47,6 +48,8 @@ class SampleTask:
         overrides: ``key.path=value`` strings, those of the command line then the sample's.
         collect: what to keep of the run.
         reference: the reference mode shapes (``n x k``) for the MAC, or ``None``.
+        derivative: ``(parameter, value)`` of the sample when ``collect.derivatives`` asks for
+            the frequencies' derivatives with respect to it.
     """
 
     index: int
@@ -56,6 +59,7 @@ class SampleTask:
     overrides: tuple[str, ...]
     collect: Collect
     reference: np.ndarray | None = None
+    derivative: tuple[str, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -77,12 +81,14 @@ def make_part(job: PartJob) -> Substructure:
 
 @dataclass
 class SampleRecord:
-    """What one sample produced: named small arrays, or the one-line error that stopped it."""
+    """What one sample produced: named small arrays, or the one-line error that stopped it;
+    with ``collect.track``, the shapes of its collected modes (``n x k``)."""
 
     index: int
     values: dict[str, np.ndarray] = field(default_factory=dict)
     error: str = ""
     seconds: float = 0.0
+    shapes: np.ndarray | None = None
 
 
 def record_fields(spec: Collect, n_omega: int = 0) -> dict[str, int]:
@@ -97,6 +103,8 @@ def record_fields(spec: Collect, n_omega: int = 0) -> dict[str, int]:
         out["damping_ratio"] = spec.frequencies
     if spec.mac and spec.frequencies:
         out["mac"] = spec.frequencies
+    if spec.derivatives and spec.frequencies:
+        out["frequency_derivative"] = spec.frequencies
     if spec.frf_peaks:
         out["frf_peak"] = out["frf_peak_omega"] = len(spec.frf_peaks)
     if spec.frf:
@@ -178,7 +186,15 @@ def run_sample(task: SampleTask, shared: Mapping[str, Substructure] | None = Non
     try:
         case = parse_case(task.case_text, task.source, task.base_dir, list(task.overrides))
         model = build_model(case, prebuilt=shared) if shared else None
-        record.values = collect(run_case(case, model=model), task.collect, task.reference)
+        result = run_case(case, model=model)
+        record.values = collect(result, task.collect, task.reference)
+        n = task.collect.frequencies
+        if task.collect.track and result.modes is not None:
+            record.shapes = np.asarray(result.modes.shapes[:, :n])
+        if task.derivative is not None and result.modes is not None:
+            record.values["frequency_derivative"] = frequency_derivative(
+                result.modes, n, task.case_text, task.source, task.base_dir,
+                list(task.overrides), *task.derivative, shared=shared)
     except Exception as err:  # a failed sample is a result of the study, not its end
         text = " ".join(str(err).split())
         name = type(err).__name__

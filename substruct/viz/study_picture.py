@@ -5,7 +5,9 @@
 * ``<name>_study_histogram.png``: random samples, a histogram of each collected frequency;
 * ``<name>_study_tuning.png``: a two-parameter grid with an FRF peak, the peak as a colour map
   over the two parameters (an absorber's stiffness and damping), the smallest marked, and
-  optionally a closed-form optimum (Den Hartog's) marked beside it.
+  optionally a closed-form optimum (Den Hartog's) marked beside it;
+* ``<name>_study_tracked.png``: the modes followed through a one-parameter study
+  (:mod:`substruct.viz.tracking_picture`).
 """
 
 from __future__ import annotations
@@ -18,6 +20,8 @@ import numpy as np
 
 from substruct.io.hdf5 import atomic_path
 from substruct.studies.study_run import StudyResult
+from substruct.studies.study_tracking import TrackedStudy
+from substruct.viz.tracking_picture import tracking_figure
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
@@ -123,4 +127,7 @@ def study_pictures(result: StudyResult, folder: str | os.PathLike,
     if (result.kind == "grid" and result.table.shape[1] == 2 and "frf_peak" in result.values
             and np.isfinite(result.values["frf_peak"]).any()):
         out.append(_save(tuning_figure(result, marked=marked), folder / f"{stem}_tuning.png"))
+    if isinstance(result.tracking, TrackedStudy):
+        out.append(_save(tracking_figure(result.tracking, result.case_name),
+                         folder / f"{stem}_tracked.png"))
     return out

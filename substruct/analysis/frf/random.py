@@ -72,13 +72,16 @@ def check_psd_table(freq: Sequence[float], level: Sequence[float], what: str = "
         raise ValueError(f"{what}: levels must be finite and >= 0")
 
 
-def check_spectral_matrix(S: np.ndarray, rtol: float = 1e-10) -> None:
+def check_spectral_matrix(S: np.ndarray, rtol: float = 1e-10,
+                          f: np.ndarray | None = None) -> None:
     r"""Refuse a cross-spectral matrix (``p x p`` or ``(k, p, p)``) that is not Hermitian
     positive semidefinite: :math:`|S - S^H| \le` ``rtol`` :math:`\max|S|` and every eigenvalue
-    :math:`\ge -` ``rtol`` :math:`\max|S|`.
+    :math:`\ge -` ``rtol`` :math:`\max|S|` (at each frequency; the scale is the largest term
+    of all frequencies).  ``f``: the frequencies of the stack, named in the message.
 
     Raises:
-        ValueError: not finite, not Hermitian or not semidefinite.
+        ValueError: not finite, not Hermitian or not semidefinite (naming the first frequency
+            where it fails and the smallest eigenvalue there).
     """
     S = np.asarray(S, dtype=complex)
     S3 = S.reshape(-1, S.shape[-2], S.shape[-1])
@@ -87,14 +90,17 @@ def check_spectral_matrix(S: np.ndarray, rtol: float = 1e-10) -> None:
     if not np.all(np.isfinite(S3)):
         raise ValueError("a cross-spectral matrix must be finite")
     scale = max(float(np.abs(S3).max(initial=0.0)), 1e-300)
-    asym = float(np.abs(S3 - S3.conj().transpose(0, 2, 1)).max(initial=0.0))
-    if asym > rtol * scale:
-        raise ValueError(f"a cross-spectral matrix must be Hermitian (|S - S^H| = "
-                         f"{asym:.3g})")
-    low = float(np.linalg.eigvalsh(S3).min(initial=0.0))
-    if low < -rtol * scale:
-        raise ValueError(f"a cross-spectral matrix must be positive semidefinite (an "
-                         f"eigenvalue {low:.3g})")
+    gap = np.abs(S3 - S3.conj().transpose(0, 2, 1)).max(axis=(1, 2), initial=0.0)
+    at = (lambda k: "" if f is None else f" at {float(np.asarray(f)[k]):g} Hz")
+    if gap.max(initial=0.0) > rtol * scale:
+        k = int(np.argmax(gap > rtol * scale))
+        raise ValueError(f"a cross-spectral matrix is not Hermitian{at(k)} (|S - S^H| = "
+                         f"{gap[k]:.3g})")
+    low = np.linalg.eigvalsh(S3).min(axis=1)
+    if low.min(initial=0.0) < -rtol * scale:
+        k = int(np.argmax(low < -rtol * scale))
+        raise ValueError(f"a cross-spectral matrix is not positive semidefinite{at(k)} "
+                         f"(smallest eigenvalue {low[k]:.4g})")
 
 
 def interpolate_psd(freq: Sequence[float], level: Sequence[float], f: np.ndarray
