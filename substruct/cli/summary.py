@@ -11,6 +11,7 @@ import numpy as np
 
 from substruct.cli.recovery_summary import print_recovery, recovery_json
 from substruct.cli.spec_summary import print_random, print_srs, random_json, srs_json
+from substruct.cli.testlab_summary import testlab_lines
 from substruct.cli.transient_summary import print_transient, transient_json
 from substruct.io.blocks import max_abs
 
@@ -203,6 +204,8 @@ def print_summary(result: Result, out: TextIO, requested: int | None = None,
         print_frf(result.frf, out)
     for part, ind in result.virtual_points.items():
         out.write(f"  virtual points of {part}: " + vp_minima(ind) + "\n")
+    for line in testlab_lines(result):
+        out.write(line + "\n")
     if result.transient is not None:
         print_transient(result.transient, out, str(result.attrs.get("units", "")))
     if result.random is not None:
