@@ -9,9 +9,11 @@ their largest entry (docs/testlab.md); 1e-8 leaves a margin of about 30.
 
 from __future__ import annotations
 
+import shutil
 import sys
 from pathlib import Path
 
+import h5py
 import numpy as np
 import pytest
 import scipy.sparse as sp
@@ -83,6 +85,16 @@ def test_shipped_example_finds_the_blocked_forces_of_the_source(tmp_path, truth,
     out = capsys.readouterr().out
     assert "transfer paths (in_situ): blocked forces at 6 interface coordinate(s) from 9" in out
     assert "virtual points of B: min consistency" in out
+    # a corrupt /tpa or /virtual_points is refused by the reader, naming the dataset
+    for name, value in (("tpa/error", np.nan), ("virtual_points/1/specific_u", 3.0)):
+        bad = tmp_path / "bad.h5"
+        shutil.copy(path, bad)
+        with h5py.File(bad, "r+") as f:
+            data = f[name][()]
+            data.flat[0] = value
+            f[name][...] = data
+        with pytest.raises(ValueError, match=f"not a substruct result: /{name} holds"):
+            load(bad)
 
 
 def test_matrix_inverse_and_regularised_in_situ(tmp_path, truth):
