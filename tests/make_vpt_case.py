@@ -83,6 +83,7 @@ if __name__ == "__main__":
     write_part("A", A, 11, out, [node_rows("A4x", A, 4, (1, 0, 0), "sensor")])
     write_part("B", B, 21, out, [node_rows("B14x", B, 14, (1, 0, 0), "impact")])
     write_bad(ROOT / "tests" / "bad_cases" / "data")
+    write_bad_testlab(ROOT / "tests" / "bad_cases" / "data")
     tpa = ROOT / "cases" / "vpt_coupling_tpa"
     tpa.mkdir(exist_ok=True)
     write_tpa(tpa)
@@ -125,3 +126,17 @@ def write_tpa(out: Path) -> None:
     labels = [f"B@ch:{n}" for n in names] + [f"A@vp:J:{c}" for c in
                                               ("ux", "uy", "uz", "rx", "ry", "rz")]
     np.savez(out / "operating.npz", omega=OMEGA, labels=np.array(labels), u=u)
+
+
+def write_bad_testlab(out: Path) -> None:
+    """``tests/bad_cases/data/tpa_*.npz``, ``semm_*.npz``: operating responses (one of them
+    not finite) and a measured receptance on a three-mass model's points."""
+    w = np.array([1.0, 2.0, 3.0])
+    labels = np.array(["P@q1", "P@q2", "P@q3"])
+    u = np.arange(9.0).reshape(3, 3) + 1j
+    np.savez(out / "tpa_responses.npz", omega=w, labels=labels, u=u)
+    u = u.copy()
+    u[1, 2] = np.nan
+    np.savez(out / "tpa_responses_nan.npz", omega=w, labels=labels, u=u)
+    np.savez(out / "semm_measured.npz", omega=w, outputs=labels[:2], inputs=labels[:1],
+             H=np.ones((3, 2, 1), dtype=complex))

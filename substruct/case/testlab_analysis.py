@@ -226,11 +226,11 @@ class SemmAnalysis(StrictModel):
         return self._omega, self._outputs, self._inputs, self._H
 
 
-def _grid(key: tuple[str, str], w: np.ndarray, grid: np.ndarray) -> None:
+def _grid(key: tuple[str, str], w: np.ndarray, grid: np.ndarray, file: str) -> None:
     if w.shape != grid.shape or not np.allclose(w, grid, rtol=GRID_DIGITS_RTOL, atol=0):
         raise FieldError(key, f"the measured frequencies ({len(w)}, {w.min():g} to "
                          f"{w.max():g} rad/s) are not those of analysis.frf.omega "
-                         f"({len(grid)}, {grid.min():g} to {grid.max():g})", len(w))
+                         f"({len(grid)}, {grid.min():g} to {grid.max():g})", file)
 
 
 def check_against_frf(tpa: TpaAnalysis | None, semm: SemmAnalysis | None,
@@ -252,7 +252,7 @@ def check_against_frf(tpa: TpaAnalysis | None, semm: SemmAnalysis | None,
             for i, p in enumerate(getattr(tpa, key)):
                 if p not in frf.outputs:
                     raise FieldError(("tpa", key, i), "not an output of analysis.frf", p)
-        _grid(("tpa", "responses"), tpa.omega(), grid)
+        _grid(("tpa", "responses"), tpa.omega(), grid, tpa.responses)
     if semm is not None:
         w, outs, ins, _ = semm.data()
         for key, have, want in (("outputs", outs, frf.outputs), ("inputs", ins, frf.inputs)):
@@ -260,4 +260,4 @@ def check_against_frf(tpa: TpaAnalysis | None, semm: SemmAnalysis | None,
                 if p not in want:
                     raise FieldError(("semm", "measured"), f"measured {key[:-1]} {p!r} is "
                                      f"not among the {key} of analysis.frf", semm.measured)
-        _grid(("semm", "measured"), w, grid)
+        _grid(("semm", "measured"), w, grid, semm.measured)
