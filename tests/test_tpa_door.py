@@ -9,6 +9,7 @@ their largest entry (docs/testlab.md); 1e-8 leaves a margin of about 30.
 
 from __future__ import annotations
 
+import json
 import shutil
 import sys
 from pathlib import Path
@@ -85,6 +86,15 @@ def test_shipped_example_finds_the_blocked_forces_of_the_source(tmp_path, truth,
     out = capsys.readouterr().out
     assert "transfer paths (in_situ): blocked forces at 6 interface coordinate(s) from 9" in out
     assert "virtual points of B: min consistency" in out
+    assert cli.main(["info", "--json", str(path)]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["tpa"]["targets"] == tpa.targets
+    assert data["tpa"]["error_max"] == pytest.approx(float(tpa.error.max()), rel=1e-12)
+    assert abs(data["virtual_points"]["A"]["specific_u"] - 1) < 1e-8
+    # export reads the result (with its /tpa) and writes the receptances
+    assert cli.main(["export", str(path), "--format", "uff", "--out",
+                     str(tmp_path / "exp")]) == 0
+    assert (tmp_path / "exp" / "vpt_coupling_tpa.uff").is_file()
     # a corrupt /tpa or /virtual_points is refused by the reader, naming the dataset
     for name, value in (("tpa/error", np.nan), ("virtual_points/1/specific_u", 3.0)):
         bad = tmp_path / "bad.h5"

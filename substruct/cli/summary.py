@@ -11,7 +11,7 @@ import numpy as np
 
 from substruct.cli.recovery_summary import print_recovery, recovery_json
 from substruct.cli.spec_summary import print_random, print_srs, random_json, srs_json
-from substruct.cli.testlab_summary import testlab_lines
+from substruct.cli.testlab_summary import testlab_json, testlab_lines
 from substruct.cli.transient_summary import print_transient, transient_json
 from substruct.io.blocks import max_abs
 
@@ -99,6 +99,7 @@ def summary_json(result: Result, files: Sequence[Path] = ()) -> dict[str, Any]:
         out["srs"] = srs_json(result.srs)
     if result.recovery:
         out["recovery"] = recovery_json(result.recovery)
+    out.update(testlab_json(result))
     return out
 
 
