@@ -83,3 +83,60 @@ if __name__ == "__main__":
     write_part("A", A, 11, out, [node_rows("A4x", A, 4, (1, 0, 0), "sensor")])
     write_part("B", B, 21, out, [node_rows("B14x", B, 14, (1, 0, 0), "impact")])
     write_bad(ROOT / "tests" / "bad_cases" / "data")
+    write_bad_testlab(ROOT / "tests" / "bad_cases" / "data")
+    tpa = ROOT / "cases" / "vpt_coupling_tpa"
+    tpa.mkdir(exist_ok=True)
+    write_tpa(tpa)
+
+
+#: the source of cases/vpt_coupling_tpa.yaml: forces at A's nodes 3 (z) and 4 (x)
+TPA_SOURCE = [("3:uz", 1.0), ("4:ux", 0.4 - 0.3j)]
+#: its indicators on B (translations of three nodes) and validation targets (B's node ids)
+TPA_INDICATORS = [(f"I{3 * k + a + 1}", node, axis) for k, node in enumerate((15, 12, 14))
+                  for a, axis in enumerate(((1, 0, 0), (0, 1, 0), (0, 0, 1)))]
+TPA_TARGETS = [("T1", 20, (0, 0, 1)), ("T2", 17, (0, 1, 0)), ("T3", 16, (0, 0, 1))]
+
+
+def node_at(sub, xyz) -> int:
+    """The node of ``sub`` at ``xyz``."""
+    for label in sub.dof_labels:
+        if label.endswith(":ux") and np.allclose(sub.position(label), xyz, atol=1e-12):
+            return int(label.split(":")[0])
+    raise KeyError(xyz)
+
+
+def write_tpa(out: Path) -> None:
+    """``cases/vpt_coupling_tpa/``: B with the adapter and the indicator and target sensors
+    (``b.npz``, ``b_channels.csv``), and the operating responses of the assembly with the
+    source running (``operating.npz``: at the indicators, the targets and the joint)."""
+    import scipy.sparse as sp
+
+    from testlab_models import assembly, channel_matrix, node_dofs, receptance
+
+    B, AB = part_b(), assembly()
+    extra = [node_rows(n, B, node, d, "sensor") for n, node, d in TPA_INDICATORS + TPA_TARGETS]
+    write_part("B", B, 21, out, extra)
+    table = parse_channels(extra, "B")
+    names = [c.name for c in table.channels]
+    on_ab = {n: node_at(AB, B.position(f"{node}:ux")) for n, node, _ in
+             TPA_INDICATORS + TPA_TARGETS}
+    S = sp.vstack([channel_matrix(AB, table, names, on_ab), node_dofs(AB, 1)])
+    src = sp.vstack([AB.locate(d) for d, _ in TPA_SOURCE])
+    u = receptance(AB, sp.csr_array(S), sp.csr_array(src)) @ np.array([a for _, a in TPA_SOURCE])
+    labels = [f"B@ch:{n}" for n in names] + [f"A@vp:J:{c}" for c in
+                                              ("ux", "uy", "uz", "rx", "ry", "rz")]
+    np.savez(out / "operating.npz", omega=OMEGA, labels=np.array(labels), u=u)
+
+
+def write_bad_testlab(out: Path) -> None:
+    """``tests/bad_cases/data/tpa_*.npz``, ``semm_*.npz``: operating responses (one of them
+    not finite) and a measured receptance on a three-mass model's points."""
+    w = np.array([1.0, 2.0, 3.0])
+    labels = np.array(["P@q1", "P@q2", "P@q3"])
+    u = np.arange(9.0).reshape(3, 3) + 1j
+    np.savez(out / "tpa_responses.npz", omega=w, labels=labels, u=u)
+    u = u.copy()
+    u[1, 2] = np.nan
+    np.savez(out / "tpa_responses_nan.npz", omega=w, labels=labels, u=u)
+    np.savez(out / "semm_measured.npz", omega=w, outputs=labels[:2], inputs=labels[:1],
+             H=np.ones((3, 2, 1), dtype=complex))

@@ -71,7 +71,7 @@ def test_bad_rows_are_refused_in_one_line(tmp_path, text, message):
 
 
 def test_bad_files(tmp_path):
-    with pytest.raises(CaseError, match="ch.txt: a channel file is .csv, .yaml or .yml"):
+    with pytest.raises(CaseError, match="ch.txt: a channel file is .csv, .yaml, .yml, .uff or .unv"):
         read_channels(_write(tmp_path, GOOD, "ch.txt"))
     with pytest.raises(CaseError, match="ch.yaml: a YAML channel file is a mapping with one "
                        "key, channels"):

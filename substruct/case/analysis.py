@@ -28,6 +28,7 @@ from substruct.case.fields import (
 )
 from substruct.case.numbers import MAX_MAGNITUDE, RANGE
 from substruct.case.random_cross import CrossPsd, check_cross
+from substruct.case.testlab_analysis import SemmAnalysis, TpaAnalysis, check_against_frf
 from substruct.case.transient import TransientAnalysis
 from substruct.vocabulary import (
     DEFAULT_TOLERANCE,
@@ -258,6 +259,10 @@ class Analysis(StrictModel):
     random: "RandomAnalysis | None" = None
     #: shock response spectra of the transient's output accelerations
     srs: "SrsAnalysis | None" = None
+    #: transfer path analysis and model mixing on the receptances of frf
+    #: (substruct.case.testlab_analysis)
+    tpa: TpaAnalysis | None = None
+    semm: SemmAnalysis | None = None
 
     @model_validator(mode="after")
     def _something(self) -> "Analysis":
@@ -272,6 +277,7 @@ class Analysis(StrictModel):
                 if p not in self.transient.outputs:
                     raise FieldError(("srs", "outputs", i), "not an output of "
                                      "analysis.transient", p)
+        check_against_frf(self.tpa, self.semm, self.frf)
         return self
 
 

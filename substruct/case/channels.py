@@ -216,7 +216,9 @@ def _check_file(path: Path) -> None:
 
 
 def read_channels(path: str | os.PathLike) -> ChannelTable:
-    """A channel table from a ``.csv`` or a ``.yaml``/``.yml`` file (module docstring).
+    """A channel table from a ``.csv`` or a ``.yaml``/``.yml`` file (module docstring), or
+    from the nodes, coordinate systems and 58 functions of a Universal File (``.uff``,
+    ``.unv``: :mod:`substruct.case.uff_geometry`).
 
     Raises:
         CaseError: an unreadable file, an unknown suffix, or a problem with a row.
@@ -224,6 +226,17 @@ def read_channels(path: str | os.PathLike) -> ChannelTable:
     p = Path(path)
     _check_file(p)
     source = p.name
+    if p.suffix.lower() in (".uff", ".unv"):
+        from substruct.case.uff_geometry import channels_from_uff  # it builds on this module
+
+        try:
+            return channels_from_uff(p)
+        except CaseError:
+            raise
+        except ValueError as err:
+            text = str(err)
+            raise CaseError(source, "", text[len(source) + 2:] if text.startswith(
+                f"{source}: ") else text) from None
     try:
         text = p.read_text(encoding="utf-8")
     except UnicodeDecodeError:
@@ -237,7 +250,8 @@ def read_channels(path: str | os.PathLike) -> ChannelTable:
                             "channels: a list of channels")
         return parse_channels(data["channels"], source)
     if suffix != ".csv":
-        raise CaseError(source, "", "a channel file is .csv, .yaml or .yml", p.suffix)
+        raise CaseError(source, "", "a channel file is .csv, .yaml, .yml, .uff or .unv",
+                        p.suffix)
     reader = csv.reader(io.StringIO(text))
     lines = [(reader.line_num, r) for r in reader if any(c.strip() for c in r)]
     if not lines:

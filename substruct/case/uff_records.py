@@ -1,5 +1,5 @@
 r"""The records of a Universal File: the functions of dataset 58 (ASCII and binary ``58b``) and
-the node numbers of datasets 15 and 2411, read in one pass with every size checked first.
+the nodes of datasets 15 and 2411 and the coordinate systems of 18 and 2420, read in one pass with every size checked first.
 
 The file is read line by line (no line longer than :data:`MAX_UFF_LINE` bytes), never whole.  A
 58 dataset is parsed by the fixed columns of its specification (records 6-11:
@@ -16,7 +16,7 @@ count ``pyuff`` writes there, one value a point: ``num_pts * 8`` for doubles).  
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import BinaryIO, Iterator
 
@@ -24,7 +24,7 @@ import numpy as np
 
 from substruct.case.fields import MEMORY_LIMIT
 
-__all__ = ["Uff58", "UffFile", "read_uff_records", "MAX_UFF_LINE", "MAX_POINTS"]
+__all__ = ["Uff58", "UffNode", "UffSystem", "UffFile", "read_uff_records", "MAX_UFF_LINE", "MAX_POINTS"]
 
 #: Longest line read (the specification's records are 80 columns).
 MAX_UFF_LINE = 1024
@@ -72,12 +72,42 @@ class Uff58:
 
 
 @dataclass(frozen=True)
+class UffNode:
+    """A node of dataset 15 or 2411: its coordinates ``xyz`` in its definition coordinate
+    system ``def_cs`` (15: record 1 field 2; 2411: the export system, record 1 field 2) and
+    the system ``disp_cs`` its directions refer to (field 3)."""
+
+    label: int
+    def_cs: int
+    disp_cs: int
+    xyz: tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class UffSystem:
+    """A coordinate system of dataset 2420 (``matrix``: records 5-8, the three axes then the
+    origin, one row each) or 18 (``matrix``: the origin, a point on +x and a point in the
+    +xz plane, one row each, in the system ``ref``; ``method`` of definition, record 1 field
+    5); ``kind``: 0 cartesian, 1 cylindrical, 2 spherical; ``where``: the dataset."""
+
+    label: int
+    kind: int
+    dataset: int
+    ref: int
+    method: int
+    matrix: tuple[tuple[float, ...], ...]
+    where: str
+
+
+@dataclass(frozen=True)
 class UffFile:
-    """The functions (58) of a file and the node numbers its datasets 15 and 2411 define
-    (``None`` if it has neither)."""
+    """The functions (58) of a file, the node numbers its datasets 15 and 2411 define
+    (``None`` if it has neither), those nodes and the coordinate systems of 18 and 2420."""
 
     functions: list[Uff58]
     nodes: set[int] | None
+    node_table: dict[int, UffNode] = field(default_factory=dict)
+    systems: list[UffSystem] = field(default_factory=list)
 
 
 class _Lines:
@@ -255,12 +285,62 @@ def _function(lines: _Lines, where: str, kind: str, budget: list[float]) -> Uff5
                  x_min, x_inc, types[0], units, types[1], types[2], x, y)
 
 
-def _nodes(lines: _Lines, kind: int, into: set[int], where: str) -> None:
-    """The node numbers of a 15 (one node a line) or 2411 (two lines a node) dataset."""
-    for k, line in enumerate(lines.until_delimiter(f"{where}:")):
-        if kind == 15 or k % 2 == 0:
-            into.add(int(_field(line.decode("latin-1"), 0, 10, int,
-                                f"{where}: line {lines.number} (node label)")))
+def _ints(text: str, n: int, what: str) -> list[int]:
+    return [int(_field(text, 10 * i, 10 * i + 10, int, f"{what} field {i + 1}"))
+            for i in range(n)]
+
+
+def _floats(text: str, n: int, width: int, what: str) -> tuple[float, ...]:
+    return tuple(float(_field(text, width * i, width * i + width, float,
+                              f"{what} field {i + 1}")) for i in range(n))
+
+
+def _nodes(lines: _Lines, kind: int, into: set[int], table: dict[int, UffNode],
+           where: str) -> None:
+    """The nodes of a 15 (``4I10,3E13.5``, one a line) or 2411 (``4I10`` then ``3D25.16``,
+    two lines a node) dataset."""
+    head: list[int] = []
+    count = 0
+    for k, raw in enumerate(lines.until_delimiter(f"{where}:")):
+        count = k + 1
+        line = raw.decode("latin-1")
+        what = f"{where}: line {lines.number}"
+        if kind == 2411 and k % 2 == 1:
+            xyz = _floats(line, 3, 25, f"{what} (record 2)")
+        else:
+            head = _ints(line, 3, f"{what} (record 1)")
+            into.add(head[0])
+            if kind == 2411 or not line[40:].strip():  # 15 without coordinates: a label
+                continue
+            xyz = _floats(line[40:], 3, 13, f"{what} (coordinates)")
+        if head[0] in table:
+            raise ValueError(f"{what}: node {head[0]} is defined twice")
+        table[head[0]] = UffNode(head[0], head[1], head[2], (xyz[0], xyz[1], xyz[2]))
+    if kind == 2411 and count % 2:
+        raise ValueError(f"{where}: node {head[0]} has no coordinates record")
+
+
+def _systems(lines: _Lines, kind: int, into: list[UffSystem], where: str) -> None:
+    """The coordinate systems of a 2420 (part records 1-2, then records 3-8 per system) or
+    an 18 (records 1-4 per system) dataset."""
+    rows = [raw.decode("latin-1") for raw in lines.until_delimiter(f"{where}:")]
+    body, per = (rows[2:], 6) if kind == 2420 else (rows, 4)
+    if (kind == 2420 and len(rows) < 2) or len(body) % per:
+        raise ValueError(f"{where}: {len(rows)} lines do not make whole coordinate systems "
+                         f"({per} records each)")
+    for i in range(0, len(body), per):
+        what = f"{where}: coordinate system {i // per + 1}"
+        if kind == 2420:
+            label, cs_type, _ = _ints(body[i], 3, f"{what} (record 3)")
+            matrix = tuple(_floats(body[i + 2 + r], 3, 25, f"{what} (record {5 + r})")
+                           for r in range(4))
+            into.append(UffSystem(label, cs_type, 2420, 0, 0, matrix, what))
+        else:
+            label, cs_type, ref, _, method = _ints(body[i], 5, f"{what} (record 1)")
+            six = _floats(body[i + 2], 6, 13, f"{what} (record 3)")
+            xz = _floats(body[i + 3], 3, 13, f"{what} (record 4)")
+            into.append(UffSystem(label, cs_type, 18, ref, method,
+                                  (six[:3], six[3:], xz), what))
 
 
 def _skip(lines: _Lines, where: str) -> None:
@@ -279,6 +359,8 @@ def read_uff_records(path: str | os.PathLike) -> UffFile:
     size = p.stat().st_size
     functions: list[Uff58] = []
     nodes: set[int] | None = None
+    table: dict[int, UffNode] = {}
+    systems: list[UffSystem] = []
     budget = [0.0]
     with open(p, "rb") as fh:
         lines = _Lines(fh, p.name, size)
@@ -308,7 +390,9 @@ def read_uff_records(path: str | os.PathLike) -> UffFile:
                 functions.append(_function(lines, where, kind, budget))
             elif number in (15, 2411):
                 nodes = set() if nodes is None else nodes
-                _nodes(lines, number, nodes, where)
+                _nodes(lines, number, nodes, table, where)
+            elif number in (18, 2420):
+                _systems(lines, number, systems, where)
             else:
                 _skip(lines, where)
-    return UffFile(functions, nodes)
+    return UffFile(functions, nodes, table, systems)

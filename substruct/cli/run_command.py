@@ -150,6 +150,11 @@ def picture_paths(case: Any, out: Path) -> list[Path]:
         paths += [out / f"{name}_modes_{v.name}.png" for v in modes.variants]
     if case.analysis.frf is not None:
         paths.append(out / f"{name}_frf.png")
+    if case.analysis.frf is not None and any(
+            getattr(s, "virtual_points", None) is not None for s in case.substructures):
+        paths.append(out / f"{name}_consistency.png")
+    if case.analysis.tpa is not None:
+        paths += [out / f"{name}_paths.png", out / f"{name}_validation.png"]
     if case.analysis.transient is not None:
         paths.append(out / f"{name}_transient.png")
         if case.analysis.transient.field_every:
@@ -176,6 +181,13 @@ def write_pictures(result: Result, out: Path, name: str) -> list[Path]:
                     result, out / f"{name}_modes_{variant}.png", variant=variant)))
     if result.frf is not None:
         files.append(Path(plotting.plot_frf(result, out / f"{name}_frf.png")))
+    if result.virtual_points or result.tpa is not None:
+        lab = optional_module("viz.testlab_picture")
+        if result.virtual_points:
+            files.append(Path(lab.plot_consistency(result, out / f"{name}_consistency.png")))
+        if result.tpa is not None:
+            files.append(Path(lab.plot_paths(result, out / f"{name}_paths.png")))
+            files.append(Path(lab.plot_validation(result, out / f"{name}_validation.png")))
     tr = result.transient
     if tr is not None and tr.t.size and (tr.outputs or tr.constraint_forces.size):
         picture = optional_module("viz.transient_picture")

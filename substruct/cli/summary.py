@@ -11,6 +11,7 @@ import numpy as np
 
 from substruct.cli.recovery_summary import print_recovery, recovery_json
 from substruct.cli.spec_summary import print_random, print_srs, random_json, srs_json
+from substruct.cli.testlab_summary import testlab_json, testlab_lines
 from substruct.cli.transient_summary import print_transient, transient_json
 from substruct.io.blocks import max_abs
 
@@ -98,6 +99,7 @@ def summary_json(result: Result, files: Sequence[Path] = ()) -> dict[str, Any]:
         out["srs"] = srs_json(result.srs)
     if result.recovery:
         out["recovery"] = recovery_json(result.recovery)
+    out.update(testlab_json(result))
     return out
 
 
@@ -203,6 +205,8 @@ def print_summary(result: Result, out: TextIO, requested: int | None = None,
         print_frf(result.frf, out)
     for part, ind in result.virtual_points.items():
         out.write(f"  virtual points of {part}: " + vp_minima(ind) + "\n")
+    for line in testlab_lines(result):
+        out.write(line + "\n")
     if result.transient is not None:
         print_transient(result.transient, out, str(result.attrs.get("units", "")))
     if result.random is not None:

@@ -43,6 +43,7 @@ from substruct.io.blocks import BLOCK_BYTES, CHUNK_BYTES, write_blocks
 from substruct.io.file_set import TEMP_PREFIX
 from substruct.io.recovery_hdf5 import write_recovery
 from substruct.io.spec_hdf5 import write_random, write_srs
+from substruct.io.tpa_hdf5 import write_semm, write_tpa
 from substruct.io.vp_hdf5 import write_virtual_points
 from substruct.io.transient_hdf5 import write_transient
 from substruct.io.result_reader import FORMAT, FORMAT_VERSION, RESERVED_ATTRS, load
@@ -104,6 +105,10 @@ def save(result: Result, path: str | os.PathLike, *, block_bytes: int = BLOCK_BY
             if result.virtual_points:
                 write_virtual_points(f.create_group("virtual_points", track_order=True),
                                      result.virtual_points)
+            if result.tpa is not None:
+                write_tpa(f.create_group("tpa", track_order=True), result.tpa)
+            if result.semm is not None:
+                write_semm(f.create_group("semm", track_order=True), result.semm)
     return path
 
 

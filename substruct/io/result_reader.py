@@ -31,7 +31,9 @@ import scipy.sparse as sp
 from substruct.analysis.results import DEFAULT_TOLERANCE, Modes, Receptance
 from substruct.builder.drawing import Drawing
 from substruct.io.recovery_hdf5 import read_recovery
+from substruct.io.tpa_hdf5 import read_semm, read_tpa
 from substruct.io.transient_hdf5 import read_transient
+from substruct.io.vp_hdf5 import read_virtual_points
 from substruct.run.result import ModelInfo, Result
 
 __all__ = ["load", "FORMAT", "FORMAT_VERSION", "RESERVED_ATTRS", "MAX_RESULT_BYTES",
@@ -297,10 +299,33 @@ def _read(f: h5py.File) -> Result:
                                      None if transient is None else transient.t)
         except ValueError as exc:
             raise _Bad(str(exc)) from None
-    return Result(case_name=_text(root["case_name"]), case_yaml=_text(root["case_yaml"]),
-                  model=model, modes=modes, frf=frf, transient=transient, variants=variants,
-                  recovery=recovery,
-                  attrs={k: v for k, v in root.items() if k not in RESERVED_ATTRS})
+    result = Result(case_name=_text(root["case_name"]), case_yaml=_text(root["case_yaml"]),
+                    model=model, modes=modes, frf=frf, transient=transient, variants=variants,
+                    recovery=recovery,
+                    attrs={k: v for k, v in root.items() if k not in RESERVED_ATTRS})
+    _testlab(rd, f, result)
+    return result
+
+
+def _testlab(rd: _Reader, f: h5py.File, result: Result) -> None:
+    """``/virtual_points``, ``/tpa`` and ``/semm``, frequency functions on ``/frf/omega``."""
+    groups = [name for name in ("virtual_points", "tpa", "semm")
+              if f.get(name, getlink=True) is not None]
+    if not groups:
+        return
+    if result.frf is None:
+        raise _Bad(f"/{groups[0]} without /frf (its frequencies)")
+    k = len(result.frf.omega)
+    try:
+        if "virtual_points" in groups:
+            result.virtual_points = read_virtual_points(
+                rd, _numbered(rd.members(f, "virtual_points"), "/virtual_points"), k)
+        if "tpa" in groups:
+            result.tpa = read_tpa(rd, rd.node(f, "tpa", h5py.Group), k)
+        if "semm" in groups:
+            result.semm = read_semm(rd, rd.node(f, "semm", h5py.Group), k)
+    except ValueError as exc:
+        raise _Bad(str(exc)) from None
 
 
 def load(path: str | os.PathLike) -> Result:

@@ -22,10 +22,12 @@ from typing import TYPE_CHECKING
 import h5py
 import numpy as np
 
+from substruct.io.transient_hdf5 import ArrayReader
+
 if TYPE_CHECKING:  # the writer is imported by every result write: the analysis only when used
     from substruct.analysis.frf.virtual_point import VptResult
 
-__all__ = ["write_virtual_points"]
+__all__ = ["write_virtual_points", "read_virtual_points"]
 
 _STR = h5py.string_dtype("utf-8")
 
@@ -51,3 +53,37 @@ def write_virtual_points(group: h5py.Group, parts: dict[str, VptResult]) -> None
             [np.asarray(ind.overall_f[n], dtype=float) for n in ind.overall_u]))
         _table(g, "sensors", "specific_u", ind.specific_u)
         _table(g, "impacts", "specific_f", ind.specific_f)
+
+
+def read_virtual_points(rd: ArrayReader, groups: list[h5py.Group], k: int
+                        ) -> dict[str, VptResult]:
+    """The indicators written by :func:`write_virtual_points` in the numbered ``groups`` (in
+    order), checked: one row per name, ``k`` frequencies (those of ``/frf``), values finite
+    and in ``[0, 1]`` up to round-off.
+
+    Raises:
+        ValueError: a dataset of the wrong shape, values outside that range or not finite, a
+            part named twice.
+    """
+    from substruct.analysis.frf.virtual_point import VptResult
+
+    out: dict[str, VptResult] = {}
+    for g in groups:
+        part = g.attrs.get("part")
+        if not isinstance(part, (str, bytes)):
+            raise ValueError(f"{g.name} has no attribute part")
+        name = part.decode("utf-8", "replace") if isinstance(part, bytes) else part
+        if name in out:
+            raise ValueError(f"{g.name}: part {name!r} twice in /virtual_points")
+        tables = []
+        for names_key, keys in (("points", ("overall_u", "overall_f")),
+                                ("sensors", ("specific_u",)), ("impacts", ("specific_f",))):
+            names = rd.strings(g, names_key)
+            for key in keys:
+                v = rd.array(g, key, "f", 2, (len(names), k if names else None))
+                if not np.all(np.isfinite(v)) or np.any(v < -1e-9) or np.any(v > 1 + 1e-9):
+                    raise ValueError(f"{g.name}/{key} holds values that are not consistency "
+                                     f"indicators (finite, in [0, 1])")
+                tables.append(dict(zip(names, v)))
+        out[name] = VptResult(*tables)
+    return out

@@ -137,6 +137,12 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
         else:
             result.frf = coupled_frf_result(case, model, progress) if has_frf_parts(case) \
                 else frf_result(case, model, progress)
+        if case.analysis.tpa is not None or case.analysis.semm is not None:
+            from substruct.run.testlab_route import semm_result, tpa_result  # when used
+            if case.analysis.tpa is not None:
+                result.tpa = tpa_result(case, result.frf)
+            if case.analysis.semm is not None:
+                result.semm = semm_result(case, result.frf)
     plan = recovery_plan(case, asm)
     result.recovery = plan.empty()
     if plan and result.modes is not None:

@@ -1,0 +1,263 @@
+r"""The test-lab analyses of a case, read from the receptances ``analysis.frf`` computes:
+``analysis.tpa`` (transfer path analysis with blocked forces) and ``analysis.semm`` (system
+equivalent model mixing).  Both name coordinates among ``analysis.frf``'s inputs and outputs
+and a measurement file on the same frequency grid.
+
+.. code-block:: yaml
+
+    analysis:
+      frf: {omega: ..., inputs: [A@vp:J:ux, ...], outputs: [B@ch:I1, ..., B@ch:T1, ...]}
+      tpa:
+        responses: operating.npz   # omega (rad/s) or freq_hz, labels (points), u (freq x labels)
+        interface: [A@vp:J:ux, A@vp:J:uy, ...]   # the paths c: inputs of analysis.frf
+        method: in_situ            # or matrix_inverse (the responses at the interface itself)
+        indicators: [B@ch:I1, ...] # in_situ: at least as many as interface coordinates
+        targets: [B@ch:T1, ...]    # on-board validation and path contributions
+        regularization: {method: tsvd, rtol: 1.0e-2, length: 0.3}   # in_situ only
+      semm:
+        measured: measured.npz     # omega or freq_hz, outputs, inputs, H (freq x out x in)
+        boundary: {outputs: [...], inputs: [...]}   # optional: default every measured one
+
+The responses of ``tpa`` are operating responses of the assembly in the quantity of
+``analysis.frf`` (a receptance's displacements by default); in situ,
+:math:`f^{bl} = (Y_{bc})^{+} u_b`; by matrix inverse, :math:`f^{bl} = Y_{cc}^{-1} u_c`
+(:mod:`substruct.analysis.frf.tpa`).  SEMM mixes ``analysis.frf``'s receptance (the numerical
+model) with the measured one (:mod:`substruct.analysis.frf.semm`).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import TYPE_CHECKING, Literal, Sequence
+
+import numpy as np
+from pydantic import Field, PrivateAttr, ValidationInfo, model_validator
+
+from substruct.case.errors import FieldError
+from substruct.case.fields import Point, StrictModel
+from substruct.case.frf_files import GRID_DIGITS_RTOL, MAX_FRF_FILE
+from substruct.case.npz_files import npz_members, read_npz
+from substruct.case.virtual_points import VpRegularization
+
+if TYPE_CHECKING:
+    from substruct.case.analysis import FrfAnalysis
+
+__all__ = ["TpaAnalysis", "SemmBoundary", "SemmAnalysis", "check_against_frf"]
+
+
+def _path(name: str, info: ValidationInfo) -> Path:
+    base = Path((info.context or {}).get("base_dir", "."))
+    p = Path(name)
+    return p if p.is_absolute() else base / p
+
+
+def _read(path: Path, arrays: dict[str, str]) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """The grid (rad/s) and the ``arrays`` (name -> ``"c"`` complex or ``"U"`` strings) of an
+    ``.npz`` file, every size checked before it is read."""
+    if path.suffix.lower() != ".npz":
+        raise ValueError(f"{path.name}: a measurement file is .npz")
+    if not path.is_file():
+        raise ValueError(f"no file {path.name}")
+    if path.stat().st_size > MAX_FRF_FILE:
+        raise ValueError(f"{path.name} has more than the {MAX_FRF_FILE} bytes accepted")
+    names = npz_members(path)
+    grid = "omega" if "omega" in names else "freq_hz"
+    missing = [k for k in [*arrays, grid] if k not in names]
+    if missing:
+        raise ValueError(f"{path.name} needs arrays {', '.join(arrays)} and omega (or "
+                         f"freq_hz); it has {', '.join(sorted(names)) or 'none'}")
+    for key, kind in [*arrays.items(), (grid, "f")]:
+        ok = "U" if kind == "U" else "biuf" + ("c" if kind == "c" else "")
+        if names[key].dtype.kind not in ok:
+            raise ValueError(f"{path.name}: {key} holds {names[key].dtype} entries, not "
+                             f"{'strings' if kind == 'U' else 'numbers'}")
+    conv = {k: np.complex128 for k, v in arrays.items() if v == "c"}
+    z = read_npz(path, [*arrays, grid], {**conv, grid: np.float64})
+    w = z[grid] if grid == "omega" else 2 * np.pi * z[grid]
+    if w.ndim != 1 or w.size == 0 or not np.all(np.isfinite(w)) or np.any(w <= 0) \
+            or np.any(np.diff(w) <= 0):
+        raise ValueError(f"{path.name}: {grid} must be positive, ascending and finite")
+    return w, z
+
+
+def _labels(path: Path, z: dict[str, np.ndarray], key: str) -> list[str]:
+    arr = z[key]
+    if arr.ndim != 1:
+        raise ValueError(f"{path.name}: {key} must be a 1-D array, got shape {list(arr.shape)}")
+    out = [str(s) for s in arr]
+    if len(set(out)) != len(out):
+        raise ValueError(f"{path.name}: {key} repeat a name")
+    return out
+
+
+def _finite(path: Path, name: str, values: np.ndarray, labels: Sequence[Sequence[str]]
+            ) -> None:
+    bad = ~np.isfinite(values)
+    if bad.any():
+        at = [int(v) for v in np.argwhere(bad)[0]]
+        where = "/".join(lab[i] for lab, i in zip(labels, at[1:]))
+        raise ValueError(f"{path.name}: {name} at {where} is {values[tuple(at)]} at "
+                         f"frequency index {at[0]}")
+
+
+def _distinct(key: str, names: Sequence[str]) -> None:
+    seen: set[str] = set()
+    for i, n in enumerate(names):
+        if n in seen:
+            raise FieldError((key, i), "repeated", n)
+        seen.add(n)
+
+
+class TpaAnalysis(StrictModel):
+    """Blocked forces at the interface, their on-board validation and path contributions
+    (module docstring)."""
+
+    responses: str
+    interface: list[Point] = Field(min_length=1)
+    method: Literal["in_situ", "matrix_inverse"] = "in_situ"
+    indicators: list[Point] = Field(default_factory=list)
+    targets: list[Point] = Field(min_length=1)
+    #: in situ only: the pseudo-inverse of Y_bc; ``length`` scales the moment unknowns
+    regularization: VpRegularization | None = None
+    _omega: np.ndarray | None = PrivateAttr(default=None)
+    _u: dict[str, np.ndarray] = PrivateAttr(default_factory=dict)
+
+    @model_validator(mode="after")
+    def _load(self, info: ValidationInfo) -> "TpaAnalysis":
+        for key in ("interface", "indicators", "targets"):
+            _distinct(key, getattr(self, key))
+        if self.method == "matrix_inverse":
+            if self.indicators:
+                raise FieldError("indicators", "matrix_inverse uses the responses at the "
+                                 "interface itself: give no indicators (or method: in_situ)",
+                                 list(self.indicators))
+            if self.regularization is not None:
+                raise FieldError("regularization", "matrix_inverse is a solve; "
+                                 "regularization belongs to in_situ", self.regularization.method)
+        elif len(self.indicators) < len(self.interface):
+            raise FieldError("indicators", f"in situ needs at least as many indicators as "
+                             f"interface coordinates ({len(self.interface)})",
+                             list(self.indicators))
+        for i, t in enumerate(self.targets):
+            if t in self.indicators or t in self.interface:
+                raise FieldError(("targets", i), "a validation target must not be used to "
+                                 "find the forces", t)
+        path = _path(self.responses, info)
+        try:
+            w, z = _read(path, {"labels": "U", "u": "c"})
+            labels = _labels(path, z, "labels")
+            u = z["u"]
+            if u.shape != (len(w), len(labels)):
+                raise ValueError(f"{path.name}: u has shape {list(u.shape)}, expected "
+                                 f"[{len(w)}, {len(labels)}] (frequencies, labels)")
+            _finite(path, "the response", u, [labels])
+        except ValueError as err:
+            raise FieldError("responses", " ".join(str(err).split()), self.responses) from None
+        for key in ("interface" if self.method == "matrix_inverse" else "indicators",
+                    "targets"):
+            for i, p in enumerate(getattr(self, key)):
+                if p not in labels:
+                    raise FieldError((key, i), f"no response at it in {path.name}", p)
+        self._omega = w
+        self._u = {lab: u[:, j] for j, lab in enumerate(labels)}
+        return self
+
+    def omega(self) -> np.ndarray:
+        """The responses' grid (rad/s)."""
+        if self._omega is None:
+            raise ValueError("responses not loaded")
+        return self._omega
+
+    def responses_at(self, points: Sequence[str]) -> np.ndarray:
+        """``(n_omega, len(points))`` operating responses."""
+        return np.stack([self._u[p] for p in points], axis=1)
+
+    def measured_points(self) -> list[str]:
+        """The points whose responses find the forces."""
+        return list(self.interface if self.method == "matrix_inverse" else self.indicators)
+
+
+class SemmBoundary(StrictModel):
+    """The measured coordinates the mix is imposed at (the rest validate it)."""
+
+    outputs: list[Point] = Field(min_length=1)
+    inputs: list[Point] = Field(min_length=1)
+
+
+class SemmAnalysis(StrictModel):
+    """System equivalent model mixing of ``analysis.frf``'s receptance with a measured one
+    (module docstring)."""
+
+    measured: str
+    boundary: SemmBoundary | None = None
+    _omega: np.ndarray | None = PrivateAttr(default=None)
+    _H: np.ndarray | None = PrivateAttr(default=None)
+    _outputs: list[str] = PrivateAttr(default_factory=list)
+    _inputs: list[str] = PrivateAttr(default_factory=list)
+
+    @model_validator(mode="after")
+    def _load(self, info: ValidationInfo) -> "SemmAnalysis":
+        path = _path(self.measured, info)
+        try:
+            w, z = _read(path, {"outputs": "U", "inputs": "U", "H": "c"})
+            outs, ins = _labels(path, z, "outputs"), _labels(path, z, "inputs")
+            H = z["H"]
+            if H.shape != (len(w), len(outs), len(ins)):
+                raise ValueError(f"{path.name}: H has shape {list(H.shape)}, expected "
+                                 f"[{len(w)}, {len(outs)}, {len(ins)}]")
+            _finite(path, "the receptance", H, [outs, ins])
+        except ValueError as err:
+            raise FieldError("measured", " ".join(str(err).split()), self.measured) from None
+        if self.boundary is not None:
+            for key, have in (("outputs", outs), ("inputs", ins)):
+                names = getattr(self.boundary, key)
+                _distinct(key, names)
+                for i, p in enumerate(names):
+                    if p not in have:
+                        raise FieldError(("boundary", key, i), f"not measured (not among the "
+                                         f"{key} of {path.name})", p)
+        self._omega, self._H, self._outputs, self._inputs = w, H, outs, ins
+        return self
+
+    def data(self) -> tuple[np.ndarray, list[str], list[str], np.ndarray]:
+        """``(omega, outputs, inputs, H)`` as measured."""
+        if self._omega is None or self._H is None:
+            raise ValueError("measurement not loaded")
+        return self._omega, self._outputs, self._inputs, self._H
+
+
+def _grid(key: tuple[str, str], w: np.ndarray, grid: np.ndarray, file: str) -> None:
+    if w.shape != grid.shape or not np.allclose(w, grid, rtol=GRID_DIGITS_RTOL, atol=0):
+        raise FieldError(key, f"the measured frequencies ({len(w)}, {w.min():g} to "
+                         f"{w.max():g} rad/s) are not those of analysis.frf.omega "
+                         f"({len(grid)}, {grid.min():g} to {grid.max():g})", file)
+
+
+def check_against_frf(tpa: TpaAnalysis | None, semm: SemmAnalysis | None,
+                      frf: FrfAnalysis | None) -> None:
+    """Refuse (:class:`FieldError` relative to ``analysis``) a test-lab analysis whose
+    coordinates are not computed by ``frf`` or whose grid is not ``frf``'s."""
+    if tpa is None and semm is None:
+        return
+    if frf is None:
+        raise FieldError("tpa" if tpa is not None else "semm", "reads the receptances of "
+                         "analysis.frf: add analysis.frf")
+    grid = frf.omegas()
+    if tpa is not None:
+        for i, p in enumerate(tpa.interface):
+            if p not in frf.inputs:
+                raise FieldError(("tpa", "interface", i), "not an input of analysis.frf", p)
+        for key in ("interface", "indicators", "targets") if tpa.method == "matrix_inverse" \
+                else ("indicators", "targets"):
+            for i, p in enumerate(getattr(tpa, key)):
+                if p not in frf.outputs:
+                    raise FieldError(("tpa", key, i), "not an output of analysis.frf", p)
+        _grid(("tpa", "responses"), tpa.omega(), grid, tpa.responses)
+    if semm is not None:
+        w, outs, ins, _ = semm.data()
+        for key, have, want in (("outputs", outs, frf.outputs), ("inputs", ins, frf.inputs)):
+            for p in have:
+                if p not in want:
+                    raise FieldError(("semm", "measured"), f"measured {key[:-1]} {p!r} is "
+                                     f"not among the {key} of analysis.frf", semm.measured)
+        _grid(("semm", "measured"), w, grid, semm.measured)

@@ -1,0 +1,177 @@
+r"""The test-lab pictures (matplotlib), drawn from a result's ``virtual_points``, ``tpa``:
+
+* :func:`draw_consistency`: the consistency indicators of every transformed part against
+  :math:`\omega` (overall sensor and impact consistency per virtual point, solid and dashed;
+  the specific sensor and impact consistency of each channel, thin), 1 for a rigid adapter and
+  a right channel table;
+* :func:`draw_paths`: per validation target, the magnitudes of the path contributions
+  :math:`|Y_{tc_j} f^{bl}_j|` stacked (filled bands; the top of each band a curve, the
+  cumulative sum), with the magnitude of the prediction :math:`|\hat u_t|` (black), which is
+  below the stack's top where paths cancel;
+* :func:`draw_validation`: measured :math:`|u_t|` and predicted :math:`|\hat u_t|` at every
+  target, and the relative error per frequency.
+
+``plot_*`` write the figure as PNG (atomically) and return the path.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from substruct.io.hdf5 import atomic_path
+from substruct.run.result import Result
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure
+
+__all__ = ["draw_consistency", "draw_paths", "draw_validation", "plot_consistency",
+           "plot_paths", "plot_validation", "MAX_TARGETS"]
+
+#: Targets drawn in the path-contribution picture (the first ones).
+MAX_TARGETS = 6
+
+
+def _omega(result: Result) -> np.ndarray:
+    if result.frf is None:
+        raise ValueError(f"result {result.case_name!r} holds no receptances (no frequencies)")
+    return np.asarray(result.frf.omega, dtype=float)
+
+
+def _save(fig: Figure, png_path: str | os.PathLike) -> Path:
+    path = Path(png_path)
+    with atomic_path(path, suffix=".png.part") as tmp:
+        fig.savefig(tmp, format="png")
+    return path
+
+
+def draw_consistency(result: Result) -> Figure:
+    """One axis per transformed part: the overall indicators per virtual point (sensors
+    solid, impacts dashed) and each channel's specific indicator (thin), against omega.
+
+    Raises:
+        ValueError: the result holds no virtual points.
+    """
+    from matplotlib.figure import Figure
+
+    if not result.virtual_points:
+        raise ValueError(f"result {result.case_name!r} holds no virtual points")
+    w = _omega(result)
+    parts = list(result.virtual_points.items())
+    fig = Figure(figsize=(10, 3.2 * len(parts) + 0.8), dpi=110, layout="constrained")
+    axes = fig.subplots(len(parts), 1, sharex=True, squeeze=False)[:, 0]
+    for ax, (part, ind) in zip(axes, parts):
+        for c, (point, v) in enumerate(ind.overall_u.items()):
+            ax.plot(w, v, color=f"C{c}", lw=2, label=f"{point}: sensors (overall)")
+            ax.plot(w, ind.overall_f[point], color=f"C{c}", lw=2, ls="--",
+                    label=f"{point}: impacts (overall)")
+        for name, v in ind.specific_u.items():
+            ax.plot(w, v, color="0.45", lw=0.7, label=f"_sensor {name}")
+        for name, v in ind.specific_f.items():
+            ax.plot(w, v, color="0.7", lw=0.7, ls=":", label=f"_impact {name}")
+        ax.set_title(f"consistency of the virtual points of {part} (thin: each channel)")
+        ax.set_ylabel("consistency")
+        ax.set_ylim(-0.02, 1.05)
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize="small", loc="lower left")
+    axes[-1].set_xlabel("\u03c9 (rad/s)")
+    return fig
+
+
+def plot_consistency(result: Result, png_path: str | os.PathLike) -> Path:
+    """:func:`draw_consistency` written as PNG; return the path."""
+    return _save(draw_consistency(result), png_path)
+
+
+def _tpa(result: Result):  # noqa: ANN202 - the TpaResult of the result
+    if result.tpa is None:
+        raise ValueError(f"result {result.case_name!r} holds no transfer path analysis")
+    return result.tpa
+
+
+def _positive(v: np.ndarray) -> np.ndarray:
+    return np.where(v > 0, v, np.nan)
+
+
+def draw_paths(result: Result, max_targets: int = MAX_TARGETS) -> Figure:
+    """Per target (the first ``max_targets``), the path contributions' magnitudes stacked
+    over omega and the prediction's magnitude (module docstring).
+
+    Raises:
+        ValueError: the result holds no transfer path analysis.
+    """
+    from matplotlib.figure import Figure
+
+    tpa = _tpa(result)
+    w = _omega(result)
+    n = min(len(tpa.targets), max(1, int(max_targets)))
+    fig = Figure(figsize=(10, 2.8 * n + 0.8), dpi=110, layout="constrained")
+    axes = fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
+    for t, ax in enumerate(axes):
+        mags = np.abs(tpa.contributions[:, t, :])          # n_omega x n_c
+        top = np.cumsum(mags, axis=1)
+        below = np.zeros(len(w))
+        for j, path in enumerate(tpa.interface):
+            ax.fill_between(w, below, top[:, j], color=f"C{j % 10}", alpha=0.55, lw=0)
+            ax.plot(w, top[:, j], color=f"C{j % 10}", lw=0.8, label=path)
+            below = top[:, j]
+        ax.plot(w, np.abs(tpa.predicted[:, t]), color="k", lw=1.5,
+                label="|prediction| (sum with phases)")
+        ax.set_yscale("log")
+        first = top[:, 0][top[:, 0] > 0]
+        if first.size:  # the smallest path would otherwise stretch the log axis
+            ax.set_ylim(bottom=float(first.min()) / 3)
+        ax.set_title(f"path contributions at {tpa.targets[t]} (stacked magnitudes)")
+        ax.set_ylabel("|response|")
+        ax.grid(True, alpha=0.3, which="both")
+    axes[0].legend(fontsize="small", ncol=2, loc="upper right")
+    if len(tpa.targets) > n:
+        axes[-1].text(0.01, 0.02, f"{len(tpa.targets) - n} more target(s) not drawn",
+                      transform=axes[-1].transAxes, fontsize="small")
+    axes[-1].set_xlabel("\u03c9 (rad/s)")
+    return fig
+
+
+def plot_paths(result: Result, png_path: str | os.PathLike) -> Path:
+    """:func:`draw_paths` written as PNG; return the path."""
+    return _save(draw_paths(result), png_path)
+
+
+def draw_validation(result: Result) -> Figure:
+    """Measured (solid) and predicted (dashed) response magnitudes at every target, and the
+    relative validation error, against omega.
+
+    Raises:
+        ValueError: the result holds no transfer path analysis.
+    """
+    from matplotlib.figure import Figure
+
+    tpa = _tpa(result)
+    w = _omega(result)
+    fig = Figure(figsize=(10, 7), dpi=110, layout="constrained")
+    ax, ax_err = fig.subplots(2, 1, sharex=True, height_ratios=[2, 1])
+    for t, name in enumerate(tpa.targets):
+        ax.plot(w, _positive(np.abs(tpa.measured[:, t])), color=f"C{t % 10}", lw=1.6,
+                label=f"{name} measured")
+        ax.plot(w, _positive(np.abs(tpa.predicted[:, t])), color=f"C{t % 10}", lw=1.2,
+                ls="--", label=f"{name} predicted")
+    ax.set_yscale("log")
+    ax.set_ylabel("|response|")
+    ax.set_title(f"on-board validation: blocked forces ({tpa.method}) at "
+                 f"{len(tpa.interface)} interface coordinate(s)")
+    ax.grid(True, alpha=0.3, which="both")
+    ax.legend(fontsize="small", ncol=2)
+    ax_err.plot(w, _positive(tpa.error), color="k", lw=1.2, label="relative error")
+    ax_err.set_yscale("log")
+    ax_err.set_ylabel("|u\u0302 - u| / |u|")
+    ax_err.grid(True, alpha=0.3, which="both")
+    ax_err.set_xlabel("\u03c9 (rad/s)")
+    return fig
+
+
+def plot_validation(result: Result, png_path: str | os.PathLike) -> Path:
+    """:func:`draw_validation` written as PNG; return the path."""
+    return _save(draw_validation(result), png_path)
