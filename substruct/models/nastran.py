@@ -23,6 +23,8 @@ offsets of its ends (:math:`u_{end} = u_{grid} + \theta \times w`).
 * **CONM2**: mass ``m`` with offset ``r`` and inertia ``J`` about its centre of gravity,
   :math:`M_c = E^T \mathrm{diag}(m I, J) E`, :math:`E = [I, -[r]_\times; 0, I]`.
 * **CELAS1/2**: a spring on one coordinate, or between two, or grounded.
+* **CHEXA / CPENTA / CTETRA**: linear solids on the translations
+  (:mod:`substruct.models.nastran_solids`).
 
 **Supports**: the SPC set and GRID ``PS`` are removed (a point on them has an all-zero row);
 with AUTOSPC (Nastran's default) so are the coordinates that no element, spring or mass
@@ -45,6 +47,7 @@ from substruct.case.bdf_fields import BdfError
 from substruct.models.beam import bending_matrices, release, rotation
 from substruct.models.frame import frame_component
 from substruct.models.nastran_shells import bush_matrices, plate_matrices
+from substruct.models.nastran_solids import solid_blocks
 from substruct.models.selection import node_tolerance
 from substruct.substructure import Geometry, PointError, Substructure, as_csr
 
@@ -186,6 +189,12 @@ def nastran_matrices(bulk: BulkData) -> NastranMatrices:
     for kind, nodes, Ke, Me in plate_matrices(bulk, index):
         add((6 * np.asarray(nodes)[:, None] + np.arange(6)).ravel(), Ke, Me)
         faces.setdefault(kind, []).append(nodes)
+    for kind, conn, Ks, Ms in solid_blocks(bulk, index):
+        rows += [Ks.row, Ms.row]
+        cols += [Ks.col, Ms.col]
+        kv += [Ks.data, np.zeros_like(Ms.data)]
+        mv += [np.zeros_like(Ks.data), Ms.data]
+        faces.setdefault(kind, []).extend(tuple(int(i) for i in c) for c in conn)
     for bush in bulk.bushes:
         grids, Kb = bush_matrices(bulk, bush)
         dofs = (6 * np.array([index[g] for g in grids])[:, None] + np.arange(6)).ravel()
