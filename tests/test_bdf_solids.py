@@ -9,7 +9,7 @@
 * lumped mass (no COUPMASS) is diagonal, ``rho V_e / n`` on each corner's translations;
 * a mixed file (a CHEXA block, a CBAR beam joined to its face by an RBE3) run with
   ``substruct run X.bdf`` has the modes of the same joint assembled from a frame beam and an
-  interpolation link;
+  interpolation link, and as a case whose RBE3 takes the face of the Nastran block by a box;
 * mid-side grids, reduced integration, fluids, a missing PSOLID: one line, exit 2.
 """
 
@@ -23,8 +23,10 @@ from substruct import cli
 from substruct.analysis.api import modes
 from substruct.assembly import assemble
 from substruct.assembly.links import NodeRef, interpolation_link, link_constraints
+from substruct.builder.model import assemble_case
 from substruct.case.bdf import parse_bulk
 from substruct.case.bdf_fields import BdfError
+from substruct.case.loader import load_case
 from substruct.io.result_reader import load
 from substruct.models.beam import Material, Section
 from substruct.models.frame import Beam, frame
@@ -210,6 +212,21 @@ def test_mixed_solid_and_beam_file_runs_and_is_the_linked_assembly(tmp_path):
     asm = assemble([block, beam], (), link_constraints([link]))
     ref = modes(asm.M, None, asm.K, asm.A, 6).omega
     assert np.abs(omega / ref - 1).max() < 1e-8
+    # and as a case: the block a Nastran substructure, its face chosen by a box
+    (tmp_path / "block.bdf").write_text("\n".join(block_lines + ["ENDDATA", ""]))
+    case = {"name": "joint", "substructures": [
+        {"name": "block", "type": "nastran", "file": str(tmp_path / "block.bdf")},
+        {"name": "beam", "type": "frame", "nodes": {1: [0.1, 0.1, 0.1], 2: [1.1, 0.1, 0.1]},
+         "materials": {"steel": {"E": E, "G": E / (2 * (1 + NU)), "rho": RHO}},
+         "sections": {"bar": {"A": 1e-2, "Iy": 8.333333e-6, "Iz": 8.333333e-6,
+                              "J": 1.406e-5}},
+         "members": [{"nodes": [1, 2], "section": "bar", "material": "steel",
+                      "orientation": [0, 1, 0], "divisions": 8}]}],
+        "links": [{"type": "interpolation", "reference": "beam@1",
+                   "face": {"part": "block", "box": [[0.1, 0.05, 0.05], [0.1, 0.15, 0.15]]}}],
+        "analysis": {"modes": {"count": 6}}}
+    asm = assemble_case(load_case(case)).assembly
+    assert np.abs(modes(asm.M, None, asm.K, asm.A, 6).omega / ref - 1).max() < 1e-8
 
 
 @pytest.mark.parametrize("change, message", [
