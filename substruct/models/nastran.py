@@ -237,6 +237,15 @@ def _bar(bulk: BulkData, bar: Bar, s: BdfSection) -> tuple[np.ndarray, np.ndarra
                        ident=bar.id) from None
 
 
+def _rotations(col: np.ndarray, n_grids: int, n: int) -> sp.csr_array:
+    """``(3 N, n)``: the rotations of the grids from the free coordinates."""
+    drawn = np.arange(3 * n_grids)
+    turn = (drawn // 3) * 6 + 3 + drawn % 3
+    ok = col[turn] >= 0
+    return sp.csr_array((np.ones(int(ok.sum())), (drawn[ok], col[turn][ok])),
+                        shape=(drawn.size, n))
+
+
 def nastran_substructure(name: str, mats: NastranMatrices,
                          keep: Collection[tuple[int, int]] = (), autospc: bool | None = None
                          ) -> Substructure:
@@ -316,5 +325,6 @@ def nastran_substructure(name: str, mats: NastranMatrices,
     return Substructure(
         name=name, M=as_csr(mats.M[free][:, free]), K=as_csr(mats.K[free][:, free]),
         C=as_csr(None, n), dof_labels=tuple(labels[d] for d in free), locate=locate,
-        kind="nastran", geometry=Geometry(points=mats.xyz, cells=cells, interp=interp),
+        kind="nastran", geometry=Geometry(points=mats.xyz, cells=cells, interp=interp,
+                                          rotations=_rotations(col, len(mats.ids), n)),
         meta=meta, position=position)
