@@ -10,6 +10,8 @@ references.
   the same joint meshed in solids (block + bar, quadratic hexahedra): the difference of the
   first bending frequency shrinks as the bar gets slender (measured: 0.60%, 0.30%, 0.15% at
   ``L/h = 5, 10, 20``, the joint's ``h/L``);
+* a rigid spider (``type: rigid`` with ``face:``) moves every face node with the rigid motion
+  of its node in each coupled mode, and the three formulations agree;
 * in a case file, ``face:`` gives the links of the nodes listed one by one; a face whose nodes
   lie on one line cannot carry the rotation about it: exit 2, one line, nothing written.
 """
@@ -25,6 +27,7 @@ from skfem import MeshHex
 
 from substruct import cli
 from substruct.analysis.api import modes
+from substruct.assembly import PointRef as P
 from substruct.assembly import assemble
 from substruct.assembly.faces import FaceRegion, face_node_refs, face_nodes, tributary_areas
 from substruct.assembly.links import LinkError, NodeRef, interpolation_link, link_constraints
@@ -172,6 +175,27 @@ def test_a_face_in_a_case_is_its_nodes_listed():
     area["links"][0]["weights"] = "area"
     diff = np.abs(case_omega(area) / case_omega(face) - 1).max()
     assert 1e-6 < diff < 0.05  # other weights, another (close) joint
+
+
+def test_a_rigid_spider_moves_its_face_rigidly_with_the_node():
+    raw = face_case()
+    raw["links"][0] = {"name": "column_foot", "type": "rigid", "independent": "column@1",
+                       "components": "123",
+                       "face": {"part": "block", "box": [[-0.1, -0.1, 0], [0.1, 0.1, 0]]}}
+    asm = assemble_case(load_case(raw)).assembly
+    res = modes(asm.M, None, asm.K, asm.A, 6, checks=("null-space", "kkt"))
+    assert max(res.agreement.values()) < 1e-9
+    xs = [(x, y) for x in (-0.1, 0.0, 0.1) for y in (-0.1, 0.0, 0.1)]
+    for k in range(6):
+        q = res.shapes[:, k]
+        ref = np.array([(asm.row(P("column", f"1:{c}")) @ q)[0]
+                        for c in ("ux", "uy", "uz", "rx", "ry", "rz")])
+        scale = np.abs(ref[:3]).max() + 0.1 * np.abs(ref[3:]).max()
+        for x, y in xs:
+            u = np.array([(asm.row(P("block", {"at": [x, y, 0.0], "component": c})) @ q)[0]
+                          for c in "xyz"])
+            rigid = ref[:3] + np.cross(ref[3:], [x, y, 0.0])
+            assert np.abs(u - rigid).max() < 1e-9 * scale
 
 
 @pytest.mark.parametrize("face, message", [
