@@ -153,5 +153,5 @@ def face_node_refs(sub: Substructure, picked: np.ndarray) -> list[NodeRef]:
     if sub.kind == "nastran":
         ids = sub.meta["node_ids"]
         return [NodeRef(sub.name, {"node": int(ids[k])}) for k in picked]
-    raise ValueError(f"faces are taken from solids and Nastran models, and {sub.name} is a "
-                     f"{sub.kind}")
+    raise ValueError(f"faces are taken from unreduced solids and Nastran models, and "
+                     f"{sub.name} is a {sub.kind} substructure")
