@@ -38,12 +38,16 @@ class Geometry:
         interp: sparse ``(3 N, n)`` matrix; ``(interp @ q).reshape(N, 3)`` is the displacement of
             the drawing nodes for the coordinate vector ``q``.
         glyphs: names of drawing nodes to mark (attachment points), as ``{label: node index}``.
+        rotations: sparse ``(3 N, n)`` or ``None``: ``(rotations @ q).reshape(N, 3)`` are the
+            rotations of the drawing nodes (frames, shells and Nastran models; ``None`` for
+            parts without rotations).
     """
 
     points: np.ndarray
     cells: list[tuple[str, np.ndarray]]
     interp: sp.csr_array
     glyphs: dict[str, int] = field(default_factory=dict)
+    rotations: sp.csr_array | None = None
 
     def displacement(self, q: np.ndarray) -> np.ndarray:
         """Nodal displacements ``(N, 3)`` (complex if ``q`` is) for coordinates ``q``."""
@@ -51,7 +55,8 @@ class Geometry:
 
     def transformed(self, T: sp.sparray | np.ndarray) -> "Geometry":
         """The same drawing for new coordinates ``p`` with ``q = T p``."""
-        return replace(self, interp=sp.csr_array(self.interp @ T))
+        rot = None if self.rotations is None else sp.csr_array(self.rotations @ T)
+        return replace(self, interp=sp.csr_array(self.interp @ T), rotations=rot)
 
 
 @dataclass(frozen=True, eq=False)

@@ -198,7 +198,7 @@ def test_rigid_elements_and_mpc_are_the_library_rows(tmp_path):
 
 
 @pytest.mark.parametrize("text, fragment", [
-    ("GRID,1,,0.,0.,0.\nCHEXA,3,1,1,2,3,4", "line 2: CHEXA 3: card CHEXA is not supported"),
+    ("GRID,1,,0.,0.,0.\nCQUAD8,3,1,1,2,3,4", "line 2: CQUAD8 3: card CQUAD8 is not supported"),
     ("GRID,1,,0.,0.,0.\nGRID,1,,1.,0.,0.", "line 2: GRID 1: duplicate grid id (also GRID on "
                                             "line 1)"),
     ("GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nCBAR,4,7,1,2,0.,1.,0.",

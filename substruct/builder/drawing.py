@@ -25,3 +25,6 @@ class Drawing:
     cells: list[tuple[str, np.ndarray]]
     interp: sp.csr_array
     glyphs: dict[str, int] = field(default_factory=dict)
+    #: ``(rotations @ u).reshape(-1, 3)`` are the rotations of ``points`` (``None``: no
+    #: rotations, as on solids).
+    rotations: sp.csr_array | None = None

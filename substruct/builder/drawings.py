@@ -177,7 +177,9 @@ def layout_drawings(asm: Assembly, connections: list[list[PointRef]]) -> list[Dr
         out.append(Drawing(name=s.name, kind=s.kind, points=points,
                            cells=[(t, np.asarray(c)) for t, c in g.cells],
                            interp=_lift(interp, int(asm.offsets[k]), asm.n_dof),
-                           glyphs=dict(g.glyphs)))
+                           glyphs=dict(g.glyphs),
+                           rotations=None if g.rotations is None else
+                           _lift(g.rotations, int(asm.offsets[k]), asm.n_dof)))
     return out
 
 

@@ -15,13 +15,14 @@ from typing import Any, Mapping, Sequence
 from substruct.assembly.links import (
     Link, LinkError, NodeRef, interpolation_link, link_constraints, mpc, rigid_link,
 )
+from substruct.assembly.faces import face_node_refs, face_nodes, region_of, tributary_areas
 from substruct.assembly.stack import LinearConstraint, PointRef
 from substruct.builder.nastran import autospc, bulk_links, used_columns
 from substruct.builder.solids import solid_where
 from substruct.case.bdf_fields import BdfError
 from substruct.case.fields import parse_point
 from substruct.case.frames import FrameSpec
-from substruct.case.links import InterpolationLinkSpec, MpcLinkSpec, RigidLinkSpec
+from substruct.case.links import FaceSpec, InterpolationLinkSpec, MpcLinkSpec, RigidLinkSpec
 from substruct.case.nastran import NastranSpec
 from substruct.case.solids import SolidSpec
 from substruct.substructure import PointError, Substructure
@@ -42,7 +43,7 @@ def link_point_texts(case: Any) -> list[tuple[str, tuple, str]]:
         nodes: list[tuple[tuple, str]] = [(("independent",), link.independent)] \
             if isinstance(link, RigidLinkSpec) else [(("reference",), link.reference)]
         field = "dependents" if isinstance(link, RigidLinkSpec) else "nodes"
-        items = link.dependents if isinstance(link, RigidLinkSpec) else link.nodes
+        items = (link.dependents if isinstance(link, RigidLinkSpec) else link.nodes) or []
         nodes += [((field, j), t) for j, t in enumerate(items)]
         for loc, text in nodes:
             spec = specs.get(parse_point(text)[0])
@@ -90,25 +91,58 @@ def _term(case: Any, text: str, point: PointRef, loc: tuple) -> tuple[NodeRef, s
                      "Nastran models; use constraints: for other points", text)
 
 
+def _face(case: Any, face: FaceSpec, subs: Mapping[str, Substructure], weights: Any,
+          loc: tuple) -> tuple[list[NodeRef], list[float] | None]:
+    """The nodes of a ``face:`` and their weights (``None``: uniform; ``area``: tributary
+    areas, :mod:`substruct.assembly.faces`)."""
+    spec = case.substructure(face.part)
+    if spec is None or face.part not in subs:
+        raise case.error(loc + ("part",), f"unknown substructure {face.part!r}", face.part)
+    if not isinstance(spec, (SolidSpec, NastranSpec)):
+        raise case.error(loc + ("part",), "a face is taken from a solid or a Nastran model",
+                         face.part)
+    sub = subs[face.part]
+    try:
+        picked = face_nodes(sub, region_of(face.region()))
+        if picked.size == 0:
+            raise ValueError("the region holds no node of the part")
+        refs = face_node_refs(sub, picked)
+        w = tributary_areas(sub, picked).tolist() if weights == "area" else None
+    except ValueError as err:
+        raise case.error(loc, str(err), face.region()) from None
+    return refs, w
+
+
 def _yaml_link(case: Any, k: int, spec: Any, subs: Mapping[str, Substructure],
                points: Mapping[str, PointRef]) -> Link:
     name = spec.name or f"link{k + 1}"
     loc = ("links", k)
     try:
         if isinstance(spec, RigidLinkSpec):
+            if spec.face is not None:
+                deps, _ = _face(case, spec.face, subs, None, loc + ("face",))
+            else:
+                deps = [link_node(case, d, loc + ("dependents", j))
+                        for j, d in enumerate(spec.dependents or [])]
             return rigid_link(subs, link_node(case, spec.independent, loc + ("independent",)),
-                              [link_node(case, d, loc + ("dependents", j))
-                               for j, d in enumerate(spec.dependents)], spec.components, name)
+                              deps, spec.components, name)
         if isinstance(spec, InterpolationLinkSpec):
+            weights = spec.weights if isinstance(spec.weights, list) else None
+            if spec.face is not None:
+                nodes, weights = _face(case, spec.face, subs, spec.weights, loc + ("face",))
+            else:
+                nodes = [link_node(case, d, loc + ("nodes", j))
+                         for j, d in enumerate(spec.nodes or [])]
             return interpolation_link(
-                subs, link_node(case, spec.reference, loc + ("reference",)),
-                [link_node(case, d, loc + ("nodes", j)) for j, d in enumerate(spec.nodes)],
-                spec.weights, spec.components, spec.node_components, name)
+                subs, link_node(case, spec.reference, loc + ("reference",)), nodes,
+                weights, spec.components, spec.node_components, name)
         terms = [(*_term(case, p, points[p], loc + ("terms", p)), float(a))
                  for p, a in spec.terms.items()]
         return mpc(subs, terms, name)
     except (LinkError, PointError) as err:
         field = {"rigid": "dependents", "interpolation": "nodes", "mpc": "terms"}[spec.type]
+        if getattr(spec, "face", None) is not None:
+            field = "face"
         raise case.error(loc + (field,), str(err).split(": ", 1)[-1]) from None
 
 

@@ -42,6 +42,7 @@ from substruct.case.bdf_fields import RawCard, split_bdf
 from substruct.case.bdf_include import bdf_lines
 from substruct.case.bdf_model import BulkData, BdfSection
 from substruct.case.bdf_shells import read_cquad4, read_ctria3, read_pshell
+from substruct.case.bdf_solids import read_psolid, read_solid
 from substruct.case.bdf_springs import read_cbush, read_celas, read_pbush, read_pelas
 from substruct.case.bdf_xref import ELEMENTS, Cards, cross_reference
 
@@ -50,7 +51,7 @@ __all__ = ["BulkData", "BdfSection", "read_bulk", "parse_bulk", "CARDS", "PARAMS
 
 #: Bulk data cards read (docs/structures.md has what is read of each).
 CARDS = ("GRID", "CORD2R", "CROD", "PROD", "CBAR", "PBAR", "CBEAM", "PBEAM", "CQUAD4",
-         "CTRIA3", "PSHELL", "CONM2", "CELAS1", "CELAS2", "PELAS", "CBUSH", "PBUSH", "RBE2",
+         "CTRIA3", "PSHELL", "CHEXA", "CPENTA", "CTETRA", "PSOLID", "CONM2", "CELAS1", "CELAS2", "PELAS", "CBUSH", "PBUSH", "RBE2",
          "RBE3", "MPC", "SPC", "SPC1", "MAT1", "EIGRL", "PARAM")
 
 
@@ -83,7 +84,8 @@ def parse_bulk(text: str | list[tuple[str, int, str]], source: str) -> BulkData:
         "CROD": read_rod, "CBAR": read_bar, "CBEAM": read_bar, "CONM2": read_conm2,
         "CELAS1": read_celas, "CELAS2": read_celas, "CBUSH": read_cbush,
         "CQUAD4": read_cquad4, "CTRIA3": read_ctria3, "RBE2": read_rbe2, "RBE3": read_rbe3,
-        "MPC": read_mpc, "EIGRL": read_eigrl}
+        "MPC": read_mpc, "EIGRL": read_eigrl, "CHEXA": read_solid, "CPENTA": read_solid,
+        "CTETRA": read_solid}
     for card in split.cards:
         name = card.name
         if name not in CARDS:
@@ -105,6 +107,10 @@ def parse_bulk(text: str | list[tuple[str, int, str]], source: str) -> BulkData:
             ps = read_pshell(card)
             rd.unique("property", ps.id, card)
             cards.pshell[ps.id] = (card, ps)
+        elif name == "PSOLID":
+            pso = read_psolid(card)
+            rd.unique("property", pso.id, card)
+            cards.psolid[pso.id] = (card, pso)
         elif name == "PBUSH":
             pid, kvals = read_pbush(card)
             rd.unique("property", pid, card)

@@ -14,6 +14,7 @@ from substruct.case.bdf_cards import Bar, Conm2, Mat1, Rod
 from substruct.case.bdf_constraints import Mpc, Rbe2, Rbe3
 from substruct.case.bdf_control import Eigrl
 from substruct.case.bdf_shells import Plate
+from substruct.case.bdf_solids import SolidCell
 from substruct.case.bdf_springs import Bush
 
 __all__ = ["BdfSection", "ShellSection", "BushSpring", "BulkData"]
@@ -42,6 +43,7 @@ class BulkData:
         rods, bars: elements with their :class:`BdfSection`.
         plates: CQUAD4 and CTRIA3 with their :class:`ShellSection`.
         bushes: CBUSH with their stiffness and axes (:class:`BushSpring`).
+        solids: CHEXA, CPENTA and CTETRA with their PSOLID's MAT1.
         masses: CONM2 with offset and inertia in basic coordinates.
         springs: ``(id, k, (grid, component), (grid, component) or None)``, components 0-5.
         rbe2, rbe3, mpcs: rigid elements and the chosen MPC set.
@@ -59,6 +61,7 @@ class BulkData:
         field(default_factory=list)
     plates: list[tuple[Plate, "ShellSection"]] = field(default_factory=list)
     bushes: list["BushSpring"] = field(default_factory=list)
+    solids: list[tuple[SolidCell, Mat1]] = field(default_factory=list)
     rbe2: list[Rbe2] = field(default_factory=list)
     rbe3: list[Rbe3] = field(default_factory=list)
     mpcs: list[Mpc] = field(default_factory=list)

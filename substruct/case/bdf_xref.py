@@ -17,13 +17,14 @@ from substruct.case.bdf_control import param, select_sets
 from substruct.case.bdf_fields import BdfError, RawCard
 from substruct.case.bdf_model import BulkData, BushSpring, BdfSection, ShellSection
 from substruct.case.bdf_shells import Pshell
+from substruct.case.bdf_solids import Psolid
 from substruct.case.fields import MAX_ELEMENTS, MAX_MATRIX_SIZE
 
 __all__ = ["ELEMENTS", "Cards", "coordinate_systems", "cross_reference"]
 
 #: Cards that are elements (their ids share one space).
 ELEMENTS = ("CROD", "CBAR", "CBEAM", "CONM2", "CELAS1", "CELAS2", "CBUSH", "CQUAD4", "CTRIA3",
-            "RBE2", "RBE3")
+            "CHEXA", "CPENTA", "CTETRA", "RBE2", "RBE3")
 
 
 @dataclass
@@ -40,6 +41,7 @@ class Cards:
     props: dict[int, tuple[RawCard, tuple[Any, ...]]] = field(default_factory=dict)
     pshell: dict[int, tuple[RawCard, Pshell]] = field(default_factory=dict)
     pbush: dict[int, tuple[RawCard, tuple[float, ...]]] = field(default_factory=dict)
+    psolid: dict[int, tuple[RawCard, Psolid]] = field(default_factory=dict)
     mats: dict[int, Mat1] = field(default_factory=dict)
     pelas: dict[int, float] = field(default_factory=dict)
     params: dict[str, tuple[RawCard, str]] = field(default_factory=dict)
@@ -164,6 +166,11 @@ def cross_reference(cards: Cards) -> BulkData:
             for k, g in enumerate(plate.nodes):
                 grid(card, g, f"G{k + 1}")
             out.plates.append((plate, _shell_section(card, plate.pid, cards)))
+    for kind in ("CHEXA", "CPENTA", "CTETRA"):
+        for card, cell in by.get(kind, []):
+            for k, g in enumerate(cell.nodes):
+                grid(card, g, f"G{k + 1}")
+            out.solids.append((cell, _solid_material(card, cell.pid, cards, systems)))
     for card, b in by.get("CBUSH", []):
         grid(card, b.ga, "GA")
         if b.gb is not None:
@@ -249,3 +256,17 @@ def _shell_section(card: RawCard, pid: int, cards: Cards) -> ShellSection:
             raise pcard.error("a shell's MAT1 needs E > 0, G > 0 and -1 < NU < 0.5", mid, name)
         found.append(mat)
     return ShellSection(p.t, found[0], found[1], p.bend, p.nsm)
+
+
+def _solid_material(card: RawCard, pid: int, cards: Cards, systems: dict) -> Mat1:
+    if pid not in cards.psolid:
+        raise card.error("no PSOLID of that id", pid, "PID")
+    pcard, p = cards.psolid[pid]
+    if p.cordm not in systems and p.cordm != -1:
+        raise pcard.error("no such coordinate system", p.cordm, "CORDM")
+    if p.mid not in cards.mats:
+        raise pcard.error("no MAT1 of that id", p.mid, "MID")
+    mat = cards.mats[p.mid]
+    if not (mat.E > 0 and mat.G > 0 and -1 < mat.E / (2 * mat.G) - 1 < 0.5):
+        raise pcard.error("a solid's MAT1 needs E > 0, G > 0 and -1 < NU < 0.5", p.mid, "MID")
+    return mat

@@ -14,6 +14,13 @@ or by any linear relation (:mod:`substruct.assembly.links`).
         weights: [1, 1, 2]           # default all 1
         components: "123456"         # of the reference node
         node_components: "123"       # of the nodes (translations)
+      - type: interpolation          # beam-to-solid: the nodes of a face of a solid
+        reference: frame@1
+        face: {part: box, box: [[0, -1, -1], [0, 1, 1]]}   # or plane: {point, normal},
+        weights: area                # uniform (default) or area      # tolerance
+      - type: rigid                  # a rigid spider onto a face
+        independent: frame@2
+        face: {part: box, plane: {point: [0, 0, 1], normal: [0, 0, 1]}}
       - type: mpc                    # sum a_k u_k = 0, the first term dependent
         terms: {frame@5:ux: 1.0, other@3:uy: -1.0}
 
@@ -30,9 +37,11 @@ from typing import Annotated, Any, Literal, Union
 from pydantic import Field, model_validator
 
 from substruct.case.errors import FieldError
-from substruct.case.fields import Name, Number, Point, Positive, StrictModel, parse_point
+from substruct.case.fields import (
+    Name, NonNegative, Number, Point, Positive, StrictModel, parse_point,
+)
 
-__all__ = ["RigidLinkSpec", "InterpolationLinkSpec", "MpcLinkSpec", "LinkSpec",
+__all__ = ["FaceSpec", "PlaneSpec", "RigidLinkSpec", "InterpolationLinkSpec", "MpcLinkSpec", "LinkSpec",
            "component_set", "link_nodes"]
 
 _NAMES = ("ux", "uy", "uz", "rx", "ry", "rz")
@@ -86,6 +95,50 @@ def _node(text: str) -> str:
 Node = Annotated[Point, Field(description="part@node")]
 
 
+class PlaneSpec(StrictModel):
+    """A plane through ``point`` with normal ``normal``."""
+
+    point: Annotated[list[Number], Field(min_length=3, max_length=3)]
+    normal: Annotated[list[Number], Field(min_length=3, max_length=3)]
+
+    @model_validator(mode="after")
+    def _check(self) -> "PlaneSpec":
+        if not any(self.normal):
+            raise FieldError("normal", "the normal of a plane must not be zero", self.normal)
+        return self
+
+
+class FaceSpec(StrictModel):
+    """The nodes of a face of a solid or Nastran ``part``: those in a ``box``, on a ``plane``
+    (within ``tolerance``, the part's node tolerance by default), or both."""
+
+    part: Name
+    box: tuple[list[Number], list[Number]] | None = None
+    plane: PlaneSpec | None = None
+    tolerance: NonNegative | None = None
+
+    @model_validator(mode="after")
+    def _check(self) -> "FaceSpec":
+        if self.box is None and self.plane is None:
+            raise ValueError("a face needs a box: [[xmin, ymin, zmin], [xmax, ymax, zmax]] or "
+                             "a plane: {point: [x, y, z], normal: [nx, ny, nz]} or both")
+        if self.box is not None:
+            lo, hi = self.box
+            if len(lo) != 3 or len(hi) != 3 or any(a > b for a, b in zip(lo, hi)):
+                raise FieldError("box", "a box is [[xmin, ymin, zmin], [xmax, ymax, zmax]] "
+                                 "with min <= max", [list(lo), list(hi)])
+        if self.tolerance is not None and self.plane is None:
+            raise FieldError("tolerance", "a tolerance is the distance from a plane: give a "
+                             "plane", self.tolerance)
+        return self
+
+    def region(self) -> dict[str, Any]:
+        """The region as :func:`substruct.assembly.faces.region_of` takes it."""
+        return {"box": None if self.box is None else [list(b) for b in self.box],
+                "plane": None if self.plane is None else self.plane.model_dump(),
+                "tolerance": self.tolerance}
+
+
 class _Link(StrictModel):
     name: Name | None = None
 
@@ -109,11 +162,19 @@ class RigidLinkSpec(_Link):
 
     type: Literal["rigid"]
     independent: Node
-    dependents: Annotated[list[Node], Field(min_length=1)]
+    dependents: Annotated[list[Node], Field(min_length=1)] | None = None
+    face: FaceSpec | None = None
     components: Any = "123456"
 
     @model_validator(mode="after")
     def _check(self) -> "RigidLinkSpec":
+        if (self.dependents is None) == (self.face is None):
+            raise ValueError("a rigid link needs exactly one of dependents: [nodes] and "
+                             "face: {part, box, plane}")
+        if self.dependents is None:
+            self.check_nodes([("independent", self.independent)])
+            self.check_components("components")
+            return self
         self.check_nodes([("independent", self.independent)] +
                          [(("dependents", j), d) for j, d in enumerate(self.dependents)])
         for j, d in enumerate(self.dependents):
@@ -129,17 +190,27 @@ class InterpolationLinkSpec(_Link):
 
     type: Literal["interpolation"]
     reference: Node
-    nodes: Annotated[list[Node], Field(min_length=1)]
-    weights: list[Positive] | None = None
+    nodes: Annotated[list[Node], Field(min_length=1)] | None = None
+    face: FaceSpec | None = None
+    weights: list[Positive] | Literal["uniform", "area"] | None = None
     components: Any = "123456"
     node_components: Any = "123"
 
     @model_validator(mode="after")
     def _check(self) -> "InterpolationLinkSpec":
+        if (self.nodes is None) == (self.face is None):
+            raise ValueError("an interpolation link needs exactly one of nodes: [nodes] and "
+                             "face: {part, box, plane}")
         self.check_nodes([("reference", self.reference)] +
-                         [(("nodes", j), d) for j, d in enumerate(self.nodes)])
-        if self.weights is not None and len(self.weights) != len(self.nodes):
-            raise FieldError("weights", f"one weight per node ({len(self.nodes)})",
+                         [(("nodes", j), d) for j, d in enumerate(self.nodes or [])])
+        if isinstance(self.weights, list) and self.nodes is None:
+            raise FieldError("weights", "the weights of a face are uniform or area",
+                             self.weights)
+        if self.weights == "area" and self.face is None:
+            raise FieldError("weights", "area weights need a face: {part, box, plane}",
+                             self.weights)
+        if isinstance(self.weights, list) and len(self.weights) != len(self.nodes or []):
+            raise FieldError("weights", f"one weight per node ({len(self.nodes or [])})",
                              self.weights)
         self.check_components("components")
         self.check_components("node_components", translations_only=True)
@@ -171,8 +242,8 @@ def link_nodes(link: Any) -> list[tuple[tuple, str]]:
     link)."""
     if isinstance(link, RigidLinkSpec):
         return [(("independent",), link.independent)] + \
-            [(("dependents", j), d) for j, d in enumerate(link.dependents)]
+            [(("dependents", j), d) for j, d in enumerate(link.dependents or [])]
     if isinstance(link, InterpolationLinkSpec):
         return [(("reference",), link.reference)] + \
-            [(("nodes", j), d) for j, d in enumerate(link.nodes)]
+            [(("nodes", j), d) for j, d in enumerate(link.nodes or [])]
     return []

@@ -4,7 +4,12 @@ All drawings of a model become one mesh: their points are stacked and their cell
 nodal displacement of mode ``k`` is ``interp @ shapes[:, k - 1]`` reshaped to ``(N, 3)``, where
 ``interp`` stacks the drawings' interpolation matrices; its real and imaginary parts are written
 as point data ``mode_<k>_real`` and ``mode_<k>_imag`` (mode numbers are 1-based, as printed by
-``substruct run``).  In ParaView, *Warp By Vector* with ``mode_<k>_real`` shows the mode.
+``substruct run``).  In ParaView, *Warp By Vector* with ``mode_<k>_real`` shows the mode.  When
+a drawing has rotations (frames, shells, Nastran models), the nodal rotations
+``rotations @ shapes[:, k - 1]`` (radians, global axes) are point data of their own,
+``mode_<k>_rotation_real`` and ``mode_<k>_rotation_imag`` (``rotation_real``/``rotation_imag``
+in the per-mode and XDMF files), zero on the points of parts without rotations; they are never
+added to the displacements.
 
 - ``fmt="vtu"``: one file ``<case>_modes.vtu`` (``<case>_modes_<variant>.vtu`` for the modes
   of a variant) holding every selected mode, with field data
@@ -67,6 +72,13 @@ class CombinedMesh:
     cell_drawing: list[int]
     interp: sp.csr_array
     point_offsets: np.ndarray
+    rotations: sp.csr_array | None = None
+
+    def rotation(self, u: np.ndarray) -> np.ndarray | None:
+        """Nodal rotations ``(N, 3)`` of ``u``, or ``None`` when no drawing has rotations."""
+        if self.rotations is None:
+            return None
+        return np.asarray(self.rotations @ np.asarray(u)).reshape(-1, 3)
 
     def displacement(self, u: np.ndarray) -> np.ndarray:
         """Nodal displacements ``(N, 3)`` (complex if ``u`` is) of the coordinate vector ``u``."""
@@ -84,6 +96,7 @@ def combined_mesh(model: ModelInfo | Sequence[Drawing]) -> CombinedMesh:
     if not drawings:
         raise ValueError("the model has no drawings (nothing to draw or export)")
     points, cells, owner, interps, offsets = [], [], [], [], [0]
+    turns: list[sp.csr_array | None] = []
     for i, d in enumerate(drawings):
         p = np.asarray(d.points, dtype=float).reshape(-1, 3)
         for cell_type, conn in d.cells:
@@ -96,10 +109,20 @@ def combined_mesh(model: ModelInfo | Sequence[Drawing]) -> CombinedMesh:
             raise ValueError(f"drawing {d.name!r}: interp has {interp.shape[0]} rows for "
                              f"{len(p)} points (expected {3 * len(p)})")
         interps.append(interp)
+        rot = getattr(d, "rotations", None)
+        if rot is not None and sp.csr_array(rot).shape != interp.shape:
+            raise ValueError(f"drawing {d.name!r}: rotations are {sp.csr_array(rot).shape}, "
+                             f"expected {interp.shape}")
+        turns.append(None if rot is None else sp.csr_array(rot))
         offsets.append(offsets[-1] + len(p))
+    rotations = None
+    if any(t is not None for t in turns):
+        rotations = sp.csr_array(sp.vstack(
+            [t if t is not None else sp.csr_array(i.shape) for t, i in zip(turns, interps)],
+            format="csr"))
     return CombinedMesh(points=np.vstack(points), cells=cells, cell_drawing=owner,
                         interp=sp.csr_array(sp.vstack(interps, format="csr")),
-                        point_offsets=np.asarray(offsets))
+                        point_offsets=np.asarray(offsets), rotations=rotations)
 
 
 def _checked_cells(d: Drawing, cell_type: str, conn: object, n_points: int) -> np.ndarray:
@@ -247,6 +270,7 @@ def export_modes(result: Result, out: str | os.PathLike, fmt: str = "vtu",
                          f"have {mr.shapes.shape[0]}")
     paths = export_paths(result, out, fmt, numbers, variant=variant, per_mode=per_mode)
     disp = {k: mesh.displacement(mr.shapes[:, k - 1]) for k in numbers}
+    rot = {k: r for k in numbers if (r := mesh.rotation(mr.shapes[:, k - 1])) is not None}
     with OutputDir(paths[0].parent) as target:
         for p in paths:  # under the lock: no other writer adds one before the commit
             if p.is_dir() or (p.exists() and not force):
@@ -256,9 +280,9 @@ def export_modes(result: Result, out: str | os.PathLike, fmt: str = "vtu",
         here = staging / paths[0].name
         with write_errors(paths[0].parent):
             if fmt == "vtu":
-                written = _write_vtu(here, mesh, mr, numbers, disp, per_mode)
+                written = _write_vtu(here, mesh, mr, numbers, disp, per_mode, rot)
             else:
-                written = write_xdmf(here, mesh.points, mesh.cells, numbers, disp)
+                written = write_xdmf(here, mesh.points, mesh.cells, numbers, disp, rot)
                 check_xdmf(here, len(mesh.points), sum(len(c) for _, c in mesh.cells),
                            len(numbers))
         if sorted(p.name for p in written) != sorted(p.name for p in paths):
@@ -281,13 +305,18 @@ def _field_data(mr: Modes, numbers: list[int]) -> dict[str, np.ndarray]:
 
 
 def _write_vtu(path: Path, mesh: CombinedMesh, mr: Modes, numbers: list[int],
-               disp: dict[int, np.ndarray], per_mode: bool) -> list[Path]:
+               disp: dict[int, np.ndarray], per_mode: bool,
+               rot: dict[int, np.ndarray] | None = None) -> list[Path]:
     import meshio
 
     point_data = {}
+    rot = rot or {}
     for k in numbers:
         point_data[f"mode_{k}_real"] = np.ascontiguousarray(disp[k].real, dtype=float)
         point_data[f"mode_{k}_imag"] = np.ascontiguousarray(disp[k].imag, dtype=float)
+        if k in rot:
+            point_data[f"mode_{k}_rotation_real"] = np.ascontiguousarray(rot[k].real, float)
+            point_data[f"mode_{k}_rotation_imag"] = np.ascontiguousarray(rot[k].imag, float)
     written = [_write_mesh(path, meshio.Mesh(mesh.points, mesh.cells, point_data=point_data,
                                              cell_data=_cell_data(mesh),
                                              field_data=_field_data(mr, numbers)))]
@@ -297,7 +326,10 @@ def _write_vtu(path: Path, mesh: CombinedMesh, mr: Modes, numbers: list[int],
             one = meshio.Mesh(
                 mesh.points, mesh.cells,
                 point_data={"shape_real": point_data[f"mode_{k}_real"],
-                            "shape_imag": point_data[f"mode_{k}_imag"]},
+                            "shape_imag": point_data[f"mode_{k}_imag"],
+                            **({"rotation_real": point_data[f"mode_{k}_rotation_real"],
+                                "rotation_imag": point_data[f"mode_{k}_rotation_imag"]}
+                               if k in rot else {})},
                 cell_data=_cell_data(mesh), field_data=_field_data(mr, [k]))
             written.append(_write_mesh(path.with_name(f"{stem}_mode_{k}.vtu"), one))
     return written

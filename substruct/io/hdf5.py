@@ -13,7 +13,8 @@ The layout is documented in ``docs/results.md``; in short::
                            (receptance, mobility or accelerance; receptance if absent)
     /model/                dof_labels, substructure_names, substructure_kinds, offsets,
                            A (CSR group), b, R (CSR group), constraint_labels
-    /model/drawings/<i>/   points, interp (CSR group), cells/<k> (attr cell_type),
+    /model/drawings/<i>/   points, interp (CSR group), rotations (CSR group, frames and
+                           Nastran models only), cells/<k> (attr cell_type),
                            glyph_names, glyph_indices; attrs name, kind
     /recovery/<i>/         labels, modes, history, peak_max(_t), peak_min(_t); attrs part,
                            name, of (:mod:`substruct.io.recovery_hdf5`)
@@ -251,6 +252,8 @@ def _write_model(g: h5py.Group, model: ModelInfo) -> None:
         dg.attrs["kind"] = str(d.kind)
         _array(dg, "points", np.asarray(d.points, dtype=float).reshape(-1, 3))
         _csr(dg, "interp", d.interp)
+        if d.rotations is not None:
+            _csr(dg, "rotations", d.rotations)
         cells = dg.create_group("cells", track_order=True)
         for k, (cell_type, conn) in enumerate(d.cells):
             ds = cells.create_dataset(str(k), data=np.asarray(conn, dtype=np.int64))

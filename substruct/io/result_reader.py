@@ -241,7 +241,8 @@ def _drawing(rd: _Reader, dg: h5py.Group, n: int) -> Drawing:
         raise _Bad(f"{dg.name}/glyph_indices points past the {N} points")
     return Drawing(name=_text(attrs["name"]), kind=_text(attrs["kind"]), points=points,
                    cells=cells, interp=rd.csr(dg, "interp", 3 * N, n),
-                   glyphs={a: int(i) for a, i in zip(names, indices)})
+                   glyphs={a: int(i) for a, i in zip(names, indices)},
+                   rotations=rd.csr(dg, "rotations", 3 * N, n) if "rotations" in dg else None)
 
 
 def _model(rd: _Reader, g: h5py.Group) -> ModelInfo:

@@ -63,16 +63,22 @@ def _xdmf_writer():
 
 
 def write_xdmf(path: Path, points: np.ndarray, cells: list[tuple[str, np.ndarray]],
-               numbers: list[int], disp: dict[int, np.ndarray]) -> list[Path]:
+               numbers: list[int], disp: dict[int, np.ndarray],
+               rot: dict[int, np.ndarray] | None = None) -> list[Path]:
     """Write ``path`` (``.xdmf``) and its ``.h5`` beside it: the mesh, then one step per mode
-    ``k`` of ``numbers`` with point data ``shape_real``/``shape_imag`` of ``disp[k]``;
-    return both paths."""
+    ``k`` of ``numbers`` with point data ``shape_real``/``shape_imag`` of ``disp[k]`` and,
+    when ``rot`` has mode ``k``, ``rotation_real``/``rotation_imag`` of ``rot[k]``; return
+    both paths."""
+    rot = rot or {}
     with _xdmf_writer()(path) as writer:
         writer.write_points_cells(points, _by_type(cells))
         for k in numbers:
-            writer.write_data(k, point_data={
-                "shape_real": np.ascontiguousarray(disp[k].real, dtype=float),
-                "shape_imag": np.ascontiguousarray(disp[k].imag, dtype=float)})
+            data = {"shape_real": np.ascontiguousarray(disp[k].real, dtype=float),
+                    "shape_imag": np.ascontiguousarray(disp[k].imag, dtype=float)}
+            if k in rot:
+                data["rotation_real"] = np.ascontiguousarray(rot[k].real, dtype=float)
+                data["rotation_imag"] = np.ascontiguousarray(rot[k].imag, dtype=float)
+            writer.write_data(k, point_data=data)
     return [path, path.with_suffix(".h5")]
 
 

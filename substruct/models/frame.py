@@ -317,7 +317,11 @@ def frame(name: str, nodes: Mapping[int, Sequence[float]], beams: Sequence[Beam]
     cells += [(kind, np.asarray(f, dtype=np.int64)) for kind, f in mesh.faces.items()]
     if not cells:
         cells = [("vertex", np.arange(len(all_xyz)).reshape(-1, 1))]
-    geometry = Geometry(points=all_xyz, cells=cells, interp=interp)
+    turn = translation + 3
+    keep = col[turn] >= 0
+    rotations = sp.csr_array((np.ones(int(keep.sum())), (drawn[keep], col[turn][keep])),
+                             shape=(3 * len(all_xyz), n))
+    geometry = Geometry(points=all_xyz, cells=cells, interp=interp, rotations=rotations)
     n_faces = sum(len(f) for f in mesh.faces.values())
     meta = {"dim": 3, "node_ids": list(ids), "node_xyz": all_xyz, "elements": pairs,
             "faces": mesh.faces, "n_nodes": len(ids), "n_elements": len(pairs) + n_faces,

@@ -23,6 +23,8 @@ offsets of its ends (:math:`u_{end} = u_{grid} + \theta \times w`).
 * **CONM2**: mass ``m`` with offset ``r`` and inertia ``J`` about its centre of gravity,
   :math:`M_c = E^T \mathrm{diag}(m I, J) E`, :math:`E = [I, -[r]_\times; 0, I]`.
 * **CELAS1/2**: a spring on one coordinate, or between two, or grounded.
+* **CHEXA / CPENTA / CTETRA**: linear solids on the translations
+  (:mod:`substruct.models.nastran_solids`).
 
 **Supports**: the SPC set and GRID ``PS`` are removed (a point on them has an all-zero row);
 with AUTOSPC (Nastran's default) so are the coordinates that no element, spring or mass
@@ -45,6 +47,7 @@ from substruct.case.bdf_fields import BdfError
 from substruct.models.beam import bending_matrices, release, rotation
 from substruct.models.frame import frame_component
 from substruct.models.nastran_shells import bush_matrices, plate_matrices
+from substruct.models.nastran_solids import solid_blocks
 from substruct.models.selection import node_tolerance
 from substruct.substructure import Geometry, PointError, Substructure, as_csr
 
@@ -186,6 +189,12 @@ def nastran_matrices(bulk: BulkData) -> NastranMatrices:
     for kind, nodes, Ke, Me in plate_matrices(bulk, index):
         add((6 * np.asarray(nodes)[:, None] + np.arange(6)).ravel(), Ke, Me)
         faces.setdefault(kind, []).append(nodes)
+    for kind, conn, Ks, Ms in solid_blocks(bulk, index):
+        rows += [Ks.row, Ms.row]
+        cols += [Ks.col, Ms.col]
+        kv += [Ks.data, np.zeros_like(Ms.data)]
+        mv += [np.zeros_like(Ks.data), Ms.data]
+        faces.setdefault(kind, []).extend(tuple(int(i) for i in c) for c in conn)
     for bush in bulk.bushes:
         grids, Kb = bush_matrices(bulk, bush)
         dofs = (6 * np.array([index[g] for g in grids])[:, None] + np.arange(6)).ravel()
@@ -226,6 +235,15 @@ def _bar(bulk: BulkData, bar: Bar, s: BdfSection) -> tuple[np.ndarray, np.ndarra
     except ValueError as err:
         raise BdfError(bulk.source, str(err), line=bar.line, card=bar.kind,
                        ident=bar.id) from None
+
+
+def _rotations(col: np.ndarray, n_grids: int, n: int) -> sp.csr_array:
+    """``(3 N, n)``: the rotations of the grids from the free coordinates."""
+    drawn = np.arange(3 * n_grids)
+    turn = (drawn // 3) * 6 + 3 + drawn % 3
+    ok = col[turn] >= 0
+    return sp.csr_array((np.ones(int(ok.sum())), (drawn[ok], col[turn][ok])),
+                        shape=(drawn.size, n))
 
 
 def nastran_substructure(name: str, mats: NastranMatrices,
@@ -307,5 +325,6 @@ def nastran_substructure(name: str, mats: NastranMatrices,
     return Substructure(
         name=name, M=as_csr(mats.M[free][:, free]), K=as_csr(mats.K[free][:, free]),
         C=as_csr(None, n), dof_labels=tuple(labels[d] for d in free), locate=locate,
-        kind="nastran", geometry=Geometry(points=mats.xyz, cells=cells, interp=interp),
+        kind="nastran", geometry=Geometry(points=mats.xyz, cells=cells, interp=interp,
+                                          rotations=_rotations(col, len(mats.ids), n)),
         meta=meta, position=position)

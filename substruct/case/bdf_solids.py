@@ -1,0 +1,97 @@
+"""The solid cards of a Nastran file: CHEXA (8 grids), CPENTA (6) and CTETRA (4) and their
+PSOLID property, read from the fields of a :class:`~substruct.case.bdf_fields.RawCard` (field
+indices as in :mod:`substruct.case.bdf_cards`).  Every field is read or refused.
+
+The elements are the linear isoparametric solids (trilinear hexahedron, linear wedge, linear
+tetrahedron) integrated with 2 x 2 x 2 Gauss points (hexahedron; 3 x 2 on the wedge): PSOLID's
+``IN = 2`` and ``ISOP = FULL``.  Mid-side grids (CHEXA with 20, CPENTA with 15, CTETRA with
+10), the reduced or bubble-function integration (``ISOP = REDUCED``, ``IN = BUBBLE``/``3``) and
+fluid elements (``FCTN`` other than ``SMECH``) are refused.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from substruct.case.bdf_fields import RawCard, nastran_int
+
+__all__ = ["SolidCell", "Psolid", "read_solid", "read_psolid", "SOLID_CORNERS"]
+
+#: Corner grids of each solid card, the most grids it can have, and meshio's name of the cell
+#: (whose corner order is Nastran's: G1-G4 one face of the hexahedron, G5-G8 the other; G1-G3
+#: one triangle of the wedge, G4-G6 the other).
+SOLID_CORNERS: dict[str, tuple[int, int, str]] = {
+    "CHEXA": (8, 20, "hexahedron"), "CPENTA": (6, 15, "wedge"), "CTETRA": (4, 10, "tetra")}
+
+
+@dataclass(frozen=True)
+class SolidCell:
+    """CHEXA / CPENTA / CTETRA: its corner grids in Nastran's order."""
+
+    kind: str
+    id: int
+    pid: int
+    nodes: tuple[int, ...]
+    line: int
+
+
+@dataclass(frozen=True)
+class Psolid:
+    """PSOLID: material ``mid`` and the material coordinate system ``cordm`` (no effect with
+    an isotropic MAT1; checked to exist)."""
+
+    id: int
+    mid: int
+    cordm: int
+    line: int
+
+
+def read_solid(c: RawCard) -> SolidCell:
+    """CHEXA EID PID G1 ... G8 (G9 - G20 blank), CPENTA EID PID G1 ... G6 (G7 - G15 blank),
+    CTETRA EID PID G1 ... G4 (G5 - G10 blank)."""
+    n, most, _ = SOLID_CORNERS[c.name]
+    for k in range(2 + n, 2 + most):
+        if c.text(k):
+            raise c.error(f"{c.name} with mid-side grids is not supported (the {n}-grid "
+                          f"element only)", c.text(k), f"G{k - 1}")
+    c.blank_after(2 + most, f"{c.name} has at most {most} grids")
+    eid = c.integer(0, "EID")
+    nodes = tuple(c.integer(2 + k, f"G{k + 1}") for k in range(n))
+    if len(set(nodes)) != n:
+        raise c.error("the corners are different grids", list(nodes), "G1")
+    return SolidCell(c.name, eid, c.integer(1, "PID"), nodes, c.line)
+
+
+def _choice(c: RawCard, i: int, name: str, allowed: tuple[str, ...], why: str) -> None:
+    value = c.text(i).upper()
+    if value not in allowed:
+        raise c.error(why, c.text(i), name)
+
+
+def read_psolid(c: RawCard) -> Psolid:
+    """PSOLID PID MID CORDM IN STRESS ISOP FCTN.
+
+    * ``CORDM`` (blank: 0): the material axes, no effect with an isotropic MAT1;
+    * ``IN``: blank (the element's default) or ``2``/``TWO`` (2 x 2 x 2 Gauss points); ``0``/
+      ``BUBBLE`` and ``3``/``THREE`` are refused;
+    * ``STRESS`` (where stresses are output): read and not used;
+    * ``ISOP``: blank, ``1`` or ``FULL``; ``0``/``REDUCED`` (reduced shear integration) is
+      refused;
+    * ``FCTN``: blank or ``SMECH``; fluids (``PFLUID``, ``FFLUID``) are refused.
+    """
+    c.blank_after(7, "PSOLID has one line")
+    pid, mid = c.integer(0, "PID"), c.integer(1, "MID")
+    if mid <= 0:
+        raise c.error("must be a positive material id", mid, "MID")
+    cordm = c.integer(2, "CORDM", 0)
+    _choice(c, 3, "IN", ("", "2", "TWO"), "only the 2 x 2 x 2 Gauss integration (IN blank, 2 "
+            "or TWO) is supported")
+    _choice(c, 4, "STRESS", ("", "0", "1", "GRID", "GAUSS"), "must be blank, 0, 1, GRID or "
+            "GAUSS")
+    _choice(c, 5, "ISOP", ("", "1", "FULL"), "only full integration (ISOP blank, 1 or FULL) "
+            "is supported")
+    _choice(c, 6, "FCTN", ("", "SMECH"), "only structural solids (FCTN blank or SMECH) are "
+            "supported")
+    if c.text(2) and nastran_int(c.text(2)) is None:
+        raise c.error("must be an integer", c.text(2), "CORDM")
+    return Psolid(pid, mid, cordm, c.line)

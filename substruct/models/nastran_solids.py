@@ -1,0 +1,122 @@
+r"""The solids of a Nastran model (CHEXA, CPENTA, CTETRA with PSOLID and MAT1) as matrices on
+the translations of its grids, in basic axes.
+
+Linear elasticity with :math:`\lambda = E\nu / ((1 + \nu)(1 - 2\nu))`, :math:`\mu = G`,
+
+.. math::  K_e = \int_{\Omega_e} \bigl(2 \mu\, \varepsilon(\Phi) : \varepsilon(\Phi) +
+           \lambda\, \operatorname{div} \Phi \operatorname{div} \Phi\bigr)\, d\Omega, \qquad
+           M_e = \int_{\Omega_e} \rho\, \Phi^T \Phi \, d\Omega
+
+on scikit-fem's linear vector elements (``ElementHex1``, ``ElementWedge1``, ``ElementTetP1``)
+over meshes made from the elements' grids (``MeshHex1`` and ``MeshTet1`` read through meshio,
+whose corner order is Nastran's; ``MeshWedge1`` directly, its corner order being Nastran's too), with 2 Gauss points along each axis of the
+hexahedron and the wedge (Nastran's ``IN = 2``, ``ISOP = FULL``): scikit-fem's own rule on
+the hexahedron, and on the wedge the 3 x 2 rule of :func:`wedge_quadrature` (scikit-fem
+12.0.2's wedge rules have weights summing to 1/4, not to the reference wedge's volume 1/2, so
+they halve every matrix).  Elements of one kind and
+one material make one mesh.
+
+Mass, as in Nastran: lumped by default, the element's mass :math:`\rho V_e` in equal shares on
+the translations of its corners; coupled (``PARAM,COUPMASS`` positive), the consistent
+:math:`M_e`.  The solids stiffen no rotation of a grid: with AUTOSPC those are removed unless
+an element, a link or a point of the case names them.
+"""
+
+from __future__ import annotations
+
+from typing import Iterator
+
+import meshio
+import numpy as np
+import scipy.sparse as sp
+from skfem import Basis, BilinearForm, ElementHex1, ElementTetP1, ElementVector, \
+    ElementWedge1, Functional, MeshWedge1, asm
+from skfem.helpers import dot
+from skfem.io.meshio import from_meshio
+from skfem.models.elasticity import linear_elasticity
+
+from substruct.case.bdf_fields import BdfError
+from substruct.case.bdf_model import BulkData
+from substruct.case.bdf_solids import SOLID_CORNERS
+
+__all__ = ["solid_blocks", "wedge_quadrature"]
+
+_ELEMENT = {"hexahedron": ElementHex1, "wedge": ElementWedge1, "tetra": ElementTetP1}
+
+
+def solid_blocks(bulk: BulkData, index: dict[int, int]
+                 ) -> Iterator[tuple[str, np.ndarray, sp.coo_array, sp.coo_array]]:
+    """``(cell kind, grid indices of the cells (ne, nv), K, M)`` of each group of solids of one
+    kind and one material (module docstring); ``K`` and ``M`` are on the coordinates
+    ``6 * grid index + component`` of the whole model.
+
+    Raises:
+        BdfError: an element of zero volume, naming its card.
+    """
+    N = 6 * len(index)
+    groups: dict[tuple[str, int], list] = {}
+    for cell, mat in bulk.solids:
+        groups.setdefault((cell.kind, mat.id), []).append((cell, mat))
+    for (card, _), items in groups.items():
+        kind = SOLID_CORNERS[card][2]
+        mat = items[0][1]
+        conn = np.array([[index[g] for g in cell.nodes] for cell, _ in items], dtype=np.int64)
+        used, local = np.unique(conn, return_inverse=True)
+        local = local.reshape(conn.shape)
+        xyz = np.array([bulk.grids[g] for g in (list(index)[k] for k in used)])
+        _check_volumes(bulk, items, xyz[local])
+        mesh = MeshWedge1(xyz.T, local.T) if kind == "wedge" else \
+            from_meshio(meshio.Mesh(xyz, [(kind, local)]))
+        basis = Basis(mesh, ElementVector(_ELEMENT[kind]()), intorder=2) if kind != "wedge" \
+            else Basis(mesh, ElementVector(ElementWedge1()), quadrature=wedge_quadrature())
+        nu = mat.E / (2 * mat.G) - 1
+        lam = mat.E * nu / ((1 + nu) * (1 - 2 * nu))
+        K = asm(linear_elasticity(lam, mat.G), basis)
+        if bulk.coupled:
+            M = asm(BilinearForm(lambda u, v, w: mat.rho * dot(u, v)), basis)
+        else:
+            vol = Functional(lambda w: 1.0 + 0.0 * w.x[0]).elemental(basis)
+            share = np.zeros(len(used))
+            np.add.at(share, local, (mat.rho * vol / conn.shape[1])[:, None])
+            M = sp.diags(np.repeat(share, 3))  # scikit-fem's vertex order is the mesh's
+        # the coordinate of each basis DOF in the whole model: vertex k, component c
+        target = np.empty(basis.N, dtype=np.int64)
+        for c in range(3):
+            target[basis.nodal_dofs[c]] = 6 * used + c
+        if bulk.coupled:
+            yield kind, conn, _moved(K, target, N), _moved(M, target, N)
+        else:
+            lumped = sp.coo_array(M)
+            order = np.repeat(6 * used, 3) + np.tile(np.arange(3), len(used))
+            yield kind, conn, _moved(K, target, N), sp.coo_array(
+                (lumped.data, (order[lumped.row], order[lumped.col])), shape=(N, N))
+
+
+def wedge_quadrature() -> tuple[np.ndarray, np.ndarray]:
+    r"""Points ``(3, 6)`` and weights of the 3 x 2 Gauss rule on the reference wedge
+    :math:`\{x, y \ge 0, x + y \le 1\} \times [0, 1]`: the triangle's three points
+    :math:`(1/6, 1/6), (2/3, 1/6), (1/6, 2/3)` (weights 1/6, degree 2) times two Gauss points
+    :math:`1/2 \mp 1/(2\sqrt3)` (weights 1/2); the weights sum to 1/2, the wedge's volume."""
+    tri = np.array([[1 / 6, 1 / 6], [2 / 3, 1 / 6], [1 / 6, 2 / 3]])
+    line = 0.5 + np.array([-0.5, 0.5]) / np.sqrt(3.0)
+    X = np.array([[a, b, z] for z in line for a, b in tri]).T
+    return X, np.full(6, 1 / 12)
+
+
+def _moved(A: sp.sparray | sp.spmatrix, target: np.ndarray, N: int) -> sp.coo_array:
+    a = sp.coo_array(A)
+    return sp.coo_array((a.data, (target[a.row], target[a.col])), shape=(N, N))
+
+
+def _check_volumes(bulk: BulkData, items: list, X: np.ndarray) -> None:
+    """Refuse an element whose corners span no volume (relative to its size cubed)."""
+    span = np.ptp(X, axis=1).max(axis=1)
+    c = X.mean(axis=1, keepdims=True)
+    d = X - c
+    # the smallest singular value of the corners' spread measures their flatness
+    flat = np.linalg.svd(d, compute_uv=False)[:, -1]
+    for k in np.flatnonzero(~(flat > 1e-8 * np.maximum(span, 1e-300))):
+        cell = items[int(k)][0]
+        raise BdfError(bulk.source, "the corners span no volume (a flat or collapsed "
+                       "element)", list(cell.nodes), line=cell.line, card=cell.kind,
+                       ident=cell.id)
