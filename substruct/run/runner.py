@@ -16,6 +16,7 @@ import scipy.sparse as sp
 
 from substruct.analysis.checks import require_finite
 from substruct.analysis.events import Phase
+from substruct.analysis.frf.stream import FrequencySink
 from substruct.analysis.results import Modes
 from substruct.builder.frf_parts import assemble_frf_case, has_frf_parts
 from substruct.builder.model import Model, assemble_case
@@ -73,7 +74,7 @@ def build_model(case: Case, events: Phase | None = None,
 
 
 def run_case(case: Case, progress: Progress | None = None, model: Model | None = None,
-             events: Phase | None = None) -> Result:
+             events: Phase | None = None, frf_sink: FrequencySink | None = None) -> Result:
     """Run the analyses of a case.
 
     Args:
@@ -83,6 +84,10 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
         events: called as each phase starts, ``events(kind, what, size)``
             (:class:`substruct.analysis.events.Phase`): assembly, each eigen solve, each
             receptance sweep.
+        frf_sink: where the receptances of a finite-element model go as they are computed, a
+            block of frequencies at a time (:func:`substruct.run.analyses.frf_result`; the
+            result file of ``substruct run``); the other receptance routes (FRF parts,
+            virtual points, loss factor) compute theirs whole.
 
     Returns:
         The :class:`~substruct.run.result.Result`: modes (physical modes ascending, spurious
@@ -136,7 +141,7 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
             result.frf = loss_frf_result(case, model, progress)
         else:
             result.frf = coupled_frf_result(case, model, progress) if has_frf_parts(case) \
-                else frf_result(case, model, progress)
+                else frf_result(case, model, progress, frf_sink)
     plan = recovery_plan(case, asm)
     result.recovery = plan.empty()
     if plan and result.modes is not None:
