@@ -117,9 +117,9 @@ def receptance_sweep(system: ConstrainedSystem | Matrix, *args: Any,
 
     The compatibility form ``receptance_sweep(K, M, C, A, omegas, inputs, outputs, *, R=None,
     method=..., checks=(), tolerance=1e-6, input_names=None, output_names=None,
-    constraint_labels=None, progress=None, what="frf", modal=None)`` takes the matrices (in
-    the order ``K, M``) and the options loose, as before the system type: it builds both and
-    calls :func:`system_receptance_sweep`.
+    constraint_labels=None, progress=None, what="frf", modal=None, sink=None)`` takes the
+    matrices (in the order ``K, M``) and the options loose, as before the system type: it
+    builds both and calls :func:`system_receptance_sweep`.
 
     Examples
     --------
@@ -153,13 +153,14 @@ def _compatible_sweep(K: Matrix, M: Matrix, C: Matrix | None, A: Matrix | None,
                       output_names: Sequence[str] | None = None,
                       constraint_labels: Sequence[str] | None = None,
                       progress: Progress | None = None, what: str = "frf",
-                      modal: ModalOptions | None = None) -> Receptance:
+                      modal: ModalOptions | None = None,
+                      sink: FrequencySink | None = None) -> Receptance:
     """The loose-argument form of :func:`receptance_sweep`: options, system, then the call."""
     options = SweepOptions(method=method, checks=checks, tolerance=tolerance,
                            input_names=input_names, output_names=output_names,
                            progress=progress, what=what, modal=modal)
     system = ConstrainedSystem.of(M, C, K, A, R=R, constraint_labels=constraint_labels)
-    return system_receptance_sweep(system, omegas, inputs, outputs, options=options)
+    return system_receptance_sweep(system, omegas, inputs, outputs, options=options, sink=sink)
 
 
 def system_receptance_sweep(system: ConstrainedSystem, omegas: Sequence[float] | np.ndarray,
