@@ -2,6 +2,7 @@
 
     OMP_NUM_THREADS=1 python benchmarks/run_output.py [--frequencies 1000] [--repeat 3]
                                                       [--startup-repeat 9] [--quick]
+                                                      [--skip-startup]
 
 Big output: the two tied 200-mass chains of ``benchmarks/frf_sweep.py``, all 400 x 400
 receptances at ``--frequencies`` frequencies (1,000: a 2.56 GB result), each side a fresh
@@ -17,6 +18,10 @@ process (imports, Numba's compilation and the first touch of the output's pages 
 Printed: (a) the sweep and the write, (b) the whole command, (c) the ratio of (b) to (a)'s
 sweep + write (target 1.3) and to (a)'s whole process, (d) the peak resident set of (b)'s
 largest process against the size of the result file (target: at most the size + 1 GB).  The
+files are compared in a process of their own: Linux carries a process's peak resident set
+over into the processes it starts, so the benchmark's own process must stay small for (d) to
+be the command's (comparing in it, through a mapping of the 2.56 GB raw file, made every
+later (b) read 2.6 GB whatever the command used).  The
 two run in turn, ``--repeat`` times; medians.  Times are CPU seconds (user + system, of the
 process and the children it waited for: ``wait4``), which a machine shared with other jobs
 disturbs far less than the wall clock (printed too).  (b)'s receptances are compared with
@@ -119,6 +124,12 @@ def same_receptances(h5: Path, raw: Path, shape: tuple[int, ...]) -> bool:
                    for k in range(0, shape[0], step))
 
 
+def worker_compare(h5: str, raw: str, shape: str) -> None:
+    """In its own process (:func:`same_receptances`): one JSON line."""
+    dims = tuple(int(d) for d in shape.split(","))
+    print(json.dumps({"equal": same_receptances(Path(h5), Path(raw), dims)}))
+
+
 def big_output(opts: argparse.Namespace, env: dict, work: Path) -> None:
     case = write_case(work, opts.frequencies)
     raw = work / "H.raw"
@@ -133,7 +144,10 @@ def big_output(opts: argparse.Namespace, env: dict, work: Path) -> None:
         b = child(run_cmd, env)
         h5 = work / "out" / "two_chains.h5"
         b["size"] = h5.stat().st_size
-        equal = equal and same_receptances(h5, raw, tuple(a["shape"]))
+        compare = child([sys.executable, __file__, "--worker", "compare", "--raw", str(raw),
+                         "--h5", str(h5), "--shape", ",".join(str(d) for d in a["shape"])],
+                        env)
+        equal = equal and json.loads(compare["out"].strip().splitlines()[-1])["equal"]
         raw.unlink()
         a_rows.append(a)
         b_rows.append(b)
@@ -200,11 +214,17 @@ def main() -> None:
     parser.add_argument("--startup-repeat", type=int, default=9)
     parser.add_argument("--quick", action="store_true",
                         help="200 frequencies, one run, three start-up runs")
-    parser.add_argument("--worker", choices=["library"], help=argparse.SUPPRESS)
+    parser.add_argument("--skip-startup", action="store_true", help="the big output only")
+    parser.add_argument("--worker", choices=["library", "compare"], help=argparse.SUPPRESS)
     parser.add_argument("--raw", help=argparse.SUPPRESS)
+    parser.add_argument("--h5", help=argparse.SUPPRESS)
+    parser.add_argument("--shape", help=argparse.SUPPRESS)
     opts = parser.parse_args()
     if opts.worker == "library":
         worker_library(opts.frequencies, opts.raw)
+        return
+    if opts.worker == "compare":
+        worker_compare(opts.h5, opts.raw, opts.shape)
         return
     if opts.quick:
         opts.frequencies, opts.repeat, opts.startup_repeat = 200, 1, 3
@@ -220,7 +240,8 @@ def main() -> None:
           f"{platform.python_version()}, NumPy {np.__version__}, SciPy {scipy.__version__}, "
           f"h5py {h5py.__version__} (HDF5 {h5py.version.hdf5_version})")
     with tempfile.TemporaryDirectory() as tmp:
-        startup(opts, env, Path(tmp))
+        if not opts.skip_startup:
+            startup(opts, env, Path(tmp))
         big_output(opts, env, Path(tmp))
 
 

@@ -204,9 +204,9 @@ def test_checks_solve_a_spread_sample_of_many_inputs_and_catch_a_wrong_column(mo
     real = api.production_sweep
 
     def wrong(*args, **kwargs):
-        H = real(*args, **kwargs)
-        H[:, :, checked_inputs(n)[5]] *= 1.001
-        return H
+        H, checked = real(*args, **kwargs)  # the checks read the checked frequencies
+        checked[:, :, checked_inputs(n)[5]] *= 1.001
+        return H, checked
     monkeypatch.setattr(api, "production_sweep", wrong)
     with pytest.raises(CheckError, match="generalized-inverse"):
         api.receptance_sweep(K, M, C, A, w, E, O)

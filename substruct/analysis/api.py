@@ -21,7 +21,8 @@ and with :class:`~substruct.analysis.errors.AnalysisInputError` (or another of
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+import dataclasses
+from typing import Any, Sequence, cast
 
 import numpy as np
 import scipy.sparse as sp
@@ -53,6 +54,7 @@ from substruct.analysis.frf.production import (
     production_sweep_applies,
     sweep_checks,
 )
+from substruct.analysis.frf.stream import FrequencySink, SweepTap, feed
 from substruct.analysis.results import DEFAULT_TOLERANCE, Receptance
 from substruct.analysis.system import (
     ConstrainedSystem,
@@ -115,9 +117,9 @@ def receptance_sweep(system: ConstrainedSystem | Matrix, *args: Any,
 
     The compatibility form ``receptance_sweep(K, M, C, A, omegas, inputs, outputs, *, R=None,
     method=..., checks=(), tolerance=1e-6, input_names=None, output_names=None,
-    constraint_labels=None, progress=None, what="frf", modal=None)`` takes the matrices (in
-    the order ``K, M``) and the options loose, as before the system type: it builds both and
-    calls :func:`system_receptance_sweep`.
+    constraint_labels=None, progress=None, what="frf", modal=None, sink=None)`` takes the
+    matrices (in the order ``K, M``) and the options loose, as before the system type: it
+    builds both and calls :func:`system_receptance_sweep`.
 
     Examples
     --------
@@ -151,18 +153,20 @@ def _compatible_sweep(K: Matrix, M: Matrix, C: Matrix | None, A: Matrix | None,
                       output_names: Sequence[str] | None = None,
                       constraint_labels: Sequence[str] | None = None,
                       progress: Progress | None = None, what: str = "frf",
-                      modal: ModalOptions | None = None) -> Receptance:
+                      modal: ModalOptions | None = None,
+                      sink: FrequencySink | None = None) -> Receptance:
     """The loose-argument form of :func:`receptance_sweep`: options, system, then the call."""
     options = SweepOptions(method=method, checks=checks, tolerance=tolerance,
                            input_names=input_names, output_names=output_names,
                            progress=progress, what=what, modal=modal)
     system = ConstrainedSystem.of(M, C, K, A, R=R, constraint_labels=constraint_labels)
-    return system_receptance_sweep(system, omegas, inputs, outputs, options=options)
+    return system_receptance_sweep(system, omegas, inputs, outputs, options=options, sink=sink)
 
 
 def system_receptance_sweep(system: ConstrainedSystem, omegas: Sequence[float] | np.ndarray,
                             inputs: Matrix, outputs: Matrix, *,
-                            options: SweepOptions | None = None) -> Receptance:
+                            options: SweepOptions | None = None,
+                            sink: FrequencySink | None = None) -> Receptance:
     r"""Receptances of a system under ``A q = R F`` at a frequency grid, with their
     cross-checks and constraint residual (eqs 11-15).
 
@@ -192,6 +196,13 @@ def system_receptance_sweep(system: ConstrainedSystem, omegas: Sequence[float] |
             ``"1"``, ...).  ``progress``: called as ``progress(done, total, method)`` during
             the sweeps.  ``what``: how the analysis is named in error messages.  ``modal``:
             options of the modal sweep (:class:`~substruct.analysis.frf.modal.ModalOptions`).
+        sink: where the receptances go, a block of frequencies at a time
+            (:class:`~substruct.analysis.frf.stream.FrequencySink`, wrapped in a
+            :class:`~substruct.analysis.frf.stream.SweepTap` unless it is one); the result's
+            ``H`` is then a :class:`~substruct.analysis.frf.stream.StreamedArray` (its summary
+            and selections).  The sparse production sweep computes block by block and never
+            holds the whole output; the other formulations send theirs once computed.  The
+            checks run on the same numbers either way.
 
     Raises:
         CheckError: a check disagrees by more than ``tolerance``.
@@ -204,8 +215,13 @@ def system_receptance_sweep(system: ConstrainedSystem, omegas: Sequence[float] |
     held = holds_every_coordinate(A, R, system.n)
     if held and method == "modal":  # no mode to sum: the direct form gives the exact zero
         method = GENERALIZED_INVERSE
+    tap = sink if isinstance(sink, SweepTap) or sink is None else SweepTap(sink)
     if method == "modal":
-        return modal_receptance_sweep(system, omegas, inputs, outputs, options=opts)
+        res = modal_receptance_sweep(system, omegas, inputs, outputs, options=opts)
+        if tap is None:
+            return res
+        feed(tap, res.H)
+        return dataclasses.replace(res, H=cast(np.ndarray, tap.array()))
     checks, tolerance, progress, what = opts.checks, opts.tolerance, opts.progress, opts.what
     n = system.n
     forces = sp.csc_array(inputs, dtype=float)
@@ -218,8 +234,8 @@ def system_receptance_sweep(system: ConstrainedSystem, omegas: Sequence[float] |
     floor = compliance_scale(K, M, C, w, forces, out_rows) if held else 0.0
     production = production_sweep_applies(n, R, method) and not held
     if production:  # the outputs only; the constraint residual at the checked frequencies
-        H = production_sweep(K, M, C, A, w, forces, out_rows, progress)
-        residual = constraint_residual(K, M, C, A, w, forces, H)
+        H, checked = production_sweep(K, M, C, A, w, forces, out_rows, progress, tap)
+        residual = constraint_residual(K, M, C, A, w, forces, checked)
     else:
         # the residual's rows are the system's, equilibrated with their R: its figure is that
         # of D A
@@ -233,17 +249,23 @@ def system_receptance_sweep(system: ConstrainedSystem, omegas: Sequence[float] |
         H = _leading_rows(full, k_out)
     agreement = {}
     if production:  # checked at a few frequencies (analysis/frf/production.py)
-        agreement = sweep_checks(system, w, forces, out_rows, H, method, checks)
+        agreement = sweep_checks(system, w, forces, out_rows, checked, method, checks)
         method = PRODUCTION_SWEEP
     for check in [] if production else check_methods(method, checks):
+        assert H is not None  # computed whole off the production path
         Hc = _sweep(system, w, check, forces, out_rows, progress)
         agreement[check] = receptance_difference(Hc, H, floor)
-    if held:  # the main formulation against the exact zero
+    if held and H is not None:  # the main formulation against the exact zero
         agreement[EXACT_ZERO] = max((float(np.abs(Hk).max(initial=0.0)) for Hk in H),
                                     default=0.0) / max(floor, 1e-300)
     require_agreement(what, method, agreement, tolerance)
-    if held:
+    if held and H is not None:
         H[...] = 0.0
+    if tap is not None:
+        if H is not None:  # computed whole: sent once checked
+            feed(tap, H)
+        H = cast(np.ndarray, tap.array())  # its summary and selections (a StreamedArray)
+    assert H is not None
     names_in = list(opts.input_names) if opts.input_names is not None else \
         [str(j + 1) for j in range(forces.shape[1])]
     names_out = list(opts.output_names) if opts.output_names is not None else \

@@ -142,12 +142,20 @@ def require_finite(what: str, **arrays: np.ndarray) -> None:
 
     Args:
         what: the analysis, as the message starts.
-        arrays: name -> computed array.
+        arrays: name -> computed array (or a
+            :class:`~substruct.analysis.frf.stream.StreamedArray`, whose blocks were counted as
+            they passed).
     """
     for name, values in arrays.items():
-        a = np.asarray(values)
-        if a.size and a.dtype.kind in "fc" and not np.all(np.isfinite(a)):
-            bad = int(a.size - np.count_nonzero(np.isfinite(a)))
-            raise CheckError(f"{what}: {bad} of {a.size} values of {name} are inf or NaN (an "
+        counted = getattr(values, "nonfinite", None)  # a streamed output counted its blocks
+        if counted is not None:
+            bad, size = int(counted), int(values.size)
+        else:
+            a = np.asarray(values)
+            size = a.size
+            bad = int(a.size - np.count_nonzero(np.isfinite(a))) \
+                if a.size and a.dtype.kind in "fc" else 0
+        if bad:
+            raise CheckError(f"{what}: {bad} of {size} values of {name} are inf or NaN (an "
                              f"overflow: the model's numbers span more than double precision "
                              f"carries); nothing written")

@@ -107,7 +107,9 @@ class Receptance:
     Attributes:
         method: the formulation of ``H`` (``generalized-inverse``, ``null-space``, ``kkt``).
         omega: circular frequencies (rad/s).
-        H: complex ``(n_omega, n_outputs, n_inputs)``.
+        H: complex ``(n_omega, n_outputs, n_inputs)`` (a sweep that wrote its blocks to a
+            sink gives a :class:`~substruct.analysis.frf.stream.StreamedArray` instead: the
+            shape, the summary and selections of what the sink holds).
         inputs, outputs: the names of the input and output points, verbatim.
         agreement: check formulation -> ``max |H_check - H| / max |H|``.
         constraint_residual: :math:`\max |D (A \hat q - R F)| / \max |H|` over all

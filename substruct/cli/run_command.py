@@ -40,15 +40,17 @@ if TYPE_CHECKING:
 __all__ = ["run_command", "picture_paths", "write_pictures", "compute", "stage_set"]
 
 
-def compute(case: Any, quiet: bool) -> Result:
-    """Build and analyse ``case`` (in the child process of :func:`run_command`)."""
+def compute(case: Any, quiet: bool, frf_sink: Any = None) -> Result:
+    """Build and analyse ``case`` (in the child process of :func:`run_command`); the
+    receptances go to ``frf_sink`` as they are computed, if given
+    (:func:`substruct.run.runner.run_case`)."""
     with collector_paused():  # loading the builder and the analyses
         import substruct.run.runner as runner
 
     bar = ProgressBar(sys.stderr) if not quiet else None
     events = PhaseLog(sys.stderr, phases_wanted(sys.stderr, quiet), warn=not quiet)
     return runner.run_case(case, progress=bar, model=runner.build_model(case, events),
-                           events=events)
+                           events=events, frf_sink=frf_sink)
 
 
 def run_command(args: argparse.Namespace) -> int:
@@ -99,22 +101,27 @@ def stage_set(case: Any, args: argparse.Namespace, staging: Path, out: Path,
     (with the names of the pictures), the transient animation; render the report.  Return
     the names written and the report (in the child process of :func:`run_command`).
 
-    The result stays in this process: its arrays are drawn from (a selection of the
-    receptances, never a copy of the whole) and written to the result file a block at a time
-    (:func:`substruct.io.blocks.write_blocks`); only the names and the report go back to the
-    parent.
+    The result stays in this process.  The result file is opened (under a temporary name)
+    before the computation, and the receptance sweep writes its blocks of frequencies into it
+    as they are computed (:func:`substruct.io.hdf5.result_file`): the whole receptance is
+    never in memory.  The summary and the pictures are drawn from what the sweep kept as the
+    blocks passed (its largest value, the first curves) or from a selection read back; the
+    rest of the result is written once the pictures are drawn, and the file is renamed into
+    place only then.  Only the names and the report go back to the parent.
     """
     from substruct.io.paths import write_errors
 
-    result = compute(case, args.quiet)
     results = optional_module("io.hdf5")
     h5_name = f"{case.name}.h5"
     drawn: list[Path] = []
+    with results.result_file(staging / h5_name, where=out) as h5:
+        result = compute(case, args.quiet, h5.frf_sink)
+        with write_errors(out):
+            if pictures:
+                drawn = write_pictures(result, staging, case.name)
+            result.attrs["pictures"] = "\n".join(p.name for p in drawn)
+            h5.save(result)
     with write_errors(out):
-        if pictures:
-            drawn = write_pictures(result, staging, case.name)
-        result.attrs["pictures"] = "\n".join(p.name for p in drawn)
-        results.save(result, staging / h5_name)
         tr = result.transient
         if pictures and tr is not None and len(tr.snapshot_t) and result.model.drawings:
             movie = optional_module("viz.transient_animation")

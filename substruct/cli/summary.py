@@ -13,6 +13,7 @@ from substruct.cli.recovery_summary import print_recovery, recovery_json
 from substruct.cli.spec_summary import print_random, print_srs, random_json, srs_json
 from substruct.cli.testlab_summary import testlab_json, testlab_lines
 from substruct.cli.transient_summary import print_transient, transient_json
+from substruct.analysis.frf.stream import StreamedArray
 from substruct.io.blocks import max_abs
 
 if TYPE_CHECKING:
@@ -81,7 +82,7 @@ def summary_json(result: Result, files: Sequence[Path] = ()) -> dict[str, Any]:
         out["variants"] = {k: modes_json(v) for k, v in result.variants.items()}
     if result.frf is not None:
         frf = result.frf
-        H = np.asarray(frf.H)
+        H = frf.H if isinstance(frf.H, StreamedArray) else np.asarray(frf.H)
         out["frf"] = {"method": frf.method, "n_omega": int(len(frf.omega)),
                       "omega_range": [json_number(frf.omega.min()),
                                       json_number(frf.omega.max())],
@@ -90,6 +91,7 @@ def summary_json(result: Result, files: Sequence[Path] = ()) -> dict[str, Any]:
                       "constraint_residual": json_number(frf.constraint_residual),
                       "agreement": {k: json_number(v) for k, v in frf.agreement.items()}}
         if H.size <= 1000:
+            H = np.asarray(H)  # a streamed output this small is kept whole
             out["frf"]["H"] = {"real": H.real.tolist(), "imag": H.imag.tolist()}
     if result.transient is not None:
         out["transient"] = transient_json(result.transient)
@@ -144,8 +146,9 @@ def print_modes(modes: Any, out: TextIO, requested: int | None = None) -> None:
 
 def print_frf(frf: Any, out: TextIO) -> None:
     """The receptances: span, residual and checks; ``H`` itself for up to three frequencies
-    and 64 pairs, else the peak of each of the first 6 x 6 pairs."""
-    H = np.asarray(frf.H)
+    and 64 pairs, else the peak of each of the first 6 x 6 pairs (from selections: a streamed
+    output gives the curves it kept)."""
+    H = frf.H if isinstance(frf.H, StreamedArray) else np.asarray(frf.H)
     w = np.asarray(frf.omega)
     span = f"omega = {w[0]:g} rad/s" if len(w) == 1 else \
         f"{len(w)} frequencies, {w.min():g} to {w.max():g} rad/s"

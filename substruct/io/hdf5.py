@@ -21,6 +21,9 @@ The layout is documented in ``docs/results.md``; in short::
 
 :func:`save` writes to a temporary file in the target directory and renames it over the
 target, so an interrupted run never leaves a broken (or half-overwritten) result.
+:func:`result_file` opens that temporary file before the result is computed, so that a
+receptance sweep writes its blocks into it as they come (``/frf/H`` is then never whole in
+memory); it is renamed only once the result is saved.
 :func:`load` (:mod:`substruct.io.result_reader`, which checks every part of the file before
 trusting it) returns the same objects that were saved.
 """
@@ -40,8 +43,9 @@ import scipy.sparse as sp
 
 from substruct import __version__
 from substruct.analysis.results import Modes, Receptance
-from substruct.io.blocks import BLOCK_BYTES, CHUNK_BYTES, write_blocks
+from substruct.io.blocks import BLOCK_BYTES, CHUNK_BYTES, DatasetSink, write_blocks
 from substruct.io.file_set import TEMP_PREFIX
+from substruct.io.paths import write_errors
 from substruct.io.recovery_hdf5 import write_recovery
 from substruct.io.spec_hdf5 import write_random, write_srs
 from substruct.io.tpa_hdf5 import write_semm, write_tpa
@@ -50,7 +54,8 @@ from substruct.io.transient_hdf5 import write_transient
 from substruct.io.result_reader import FORMAT, FORMAT_VERSION, RESERVED_ATTRS, load
 from substruct.run.result import ModelInfo, Result
 
-__all__ = ["save", "load", "atomic_path", "listed_pictures", "FORMAT", "FORMAT_VERSION"]
+__all__ = ["save", "load", "atomic_path", "listed_pictures", "result_file", "ResultFile",
+           "FORMAT", "FORMAT_VERSION"]
 
 _RESERVED = RESERVED_ATTRS
 #: Root attributes :func:`save` always writes itself (never taken from ``Result.attrs``).
@@ -58,6 +63,8 @@ _OWN = _RESERVED + ("substruct_version", "created")
 _DEFAULT_UNITS = "consistent units of the case file; omega in rad/s"
 
 _STR = h5py.string_dtype("utf-8")
+#: Where a streamed sweep writes its receptances until the result moves them to ``/frf/H``.
+_STREAMED_FRF = "_frf_H_streaming"
 
 
 # ----------------------------------------------------------------------------- writing
@@ -76,41 +83,101 @@ def save(result: Result, path: str | os.PathLike, *, block_bytes: int = BLOCK_BY
     (whole frequencies or instants), optionally compressed (``"gzip"``, ``"lzf"``; off by
     default: :mod:`substruct.io.blocks` gives the measured cost).
     """
-    path = Path(path)
-    with atomic_path(path, suffix=".h5.part") as tmp:
-        with h5py.File(tmp, "w", track_order=True) as f:
-            _write_root(f, result)
-            _write_model(f.create_group("model", track_order=True), result.model)
-            if result.modes is not None:
-                _write_modes(f.create_group("modes", track_order=True), result.modes)
-            if result.variants:
-                group = f.create_group("variants", track_order=True)
-                used: set[str] = set()
-                for name, modes in result.variants.items():
-                    g = group.create_group(_group_name(str(name), used), track_order=True)
-                    g.attrs["name"] = str(name)
-                    _write_modes(g, modes)
-            if result.frf is not None:
-                _write_frf(f.create_group("frf", track_order=True), result.frf, block_bytes,
-                           chunk_bytes, compression)
-            if result.transient is not None:
-                write_transient(f.create_group("transient", track_order=True),
-                                result.transient, block_bytes=block_bytes,
-                                chunk_bytes=chunk_bytes, compression=compression)
-            if result.recovery:
-                write_recovery(f.create_group("recovery", track_order=True), result.recovery)
-            if result.random is not None:
-                write_random(f.create_group("random", track_order=True), result.random)
-            if result.srs is not None:
-                write_srs(f.create_group("srs", track_order=True), result.srs)
-            if result.virtual_points:
-                write_virtual_points(f.create_group("virtual_points", track_order=True),
-                                     result.virtual_points)
-            if result.tpa is not None:
-                write_tpa(f.create_group("tpa", track_order=True), result.tpa)
-            if result.semm is not None:
-                write_semm(f.create_group("semm", track_order=True), result.semm)
-    return path
+    with result_file(path, block_bytes=block_bytes, chunk_bytes=chunk_bytes,
+                     compression=compression) as out:
+        out.save(result)
+    return Path(path)
+
+
+class ResultFile:
+    """A result file open for writing, before its result is complete: :attr:`frf_sink`
+    takes the receptances of a sweep as they are computed
+    (:class:`~substruct.io.blocks.DatasetSink`, a dataset aside in the file), and
+    :meth:`save` then writes the rest of the result, the streamed receptances becoming
+    ``/frf/H`` without a copy (an HDF5 link moved).  The file is the one :func:`save` writes.
+    """
+
+    def __init__(self, f: h5py.File, block_bytes: int, chunk_bytes: int,
+                 compression: str | None, where: str | os.PathLike | None = None) -> None:
+        self.file = f
+        self.options: dict[str, Any] = {"block_bytes": block_bytes,
+                                        "chunk_bytes": chunk_bytes, "compression": compression}
+        self.frf_sink = DatasetSink(f, _STREAMED_FRF, where=where, **self.options)
+        self.saved = False
+
+    def save(self, result: Result) -> None:
+        """Write ``result`` into the file (once)."""
+        if self.saved:
+            raise RuntimeError("the result file is already written")
+        f = self.file
+        _write_root(f, result)
+        _write_model(f.create_group("model", track_order=True), result.model)
+        if result.modes is not None:
+            _write_modes(f.create_group("modes", track_order=True), result.modes)
+        if result.variants:
+            group = f.create_group("variants", track_order=True)
+            used: set[str] = set()
+            for name, modes in result.variants.items():
+                g = group.create_group(_group_name(str(name), used), track_order=True)
+                g.attrs["name"] = str(name)
+                _write_modes(g, modes)
+        if result.frf is not None:
+            streamed = self.frf_sink if getattr(result.frf.H, "sink", None) is self.frf_sink \
+                else None
+            _write_frf(f.create_group("frf", track_order=True), result.frf, streamed,
+                       **self.options)
+        if _STREAMED_FRF in f:  # a sweep streamed here whose result was not kept
+            del f[_STREAMED_FRF]
+        if result.transient is not None:
+            write_transient(f.create_group("transient", track_order=True),
+                            result.transient, **self.options)
+        if result.recovery:
+            write_recovery(f.create_group("recovery", track_order=True), result.recovery)
+        if result.random is not None:
+            write_random(f.create_group("random", track_order=True), result.random)
+        if result.srs is not None:
+            write_srs(f.create_group("srs", track_order=True), result.srs)
+        if result.virtual_points:
+            write_virtual_points(f.create_group("virtual_points", track_order=True),
+                                 result.virtual_points)
+        if result.tpa is not None:
+            write_tpa(f.create_group("tpa", track_order=True), result.tpa)
+        if result.semm is not None:
+            write_semm(f.create_group("semm", track_order=True), result.semm)
+        self.saved = True
+
+
+@contextlib.contextmanager
+def result_file(path: str | os.PathLike, *, block_bytes: int = BLOCK_BYTES,
+                chunk_bytes: int = CHUNK_BYTES, compression: str | None = None,
+                where: str | os.PathLike | None = None) -> Iterator[ResultFile]:
+    """The result file ``path`` open for writing (:class:`ResultFile`) under a temporary name
+    (:func:`atomic_path`), renamed over ``path`` when the block ends with the result saved.
+    On any error, or with nothing saved, the temporary file is removed and ``path`` is
+    untouched: a sweep that fails half-way through its blocks leaves no file.
+
+    With ``where``, an error of the file system while the file is opened, written by the
+    sweep (:attr:`ResultFile.frf_sink`) or closed is a :class:`~substruct.io.paths.WriteError`
+    naming ``where`` (:func:`~substruct.io.paths.write_errors`); other errors of the block
+    pass unchanged.
+
+    Raises:
+        RuntimeError: the block ended without :meth:`ResultFile.save`.
+    """
+    def guard() -> contextlib.AbstractContextManager:
+        return write_errors(where) if where is not None else contextlib.nullcontext()
+
+    with guard(), contextlib.ExitStack() as opening:
+        tmp = opening.enter_context(atomic_path(path, suffix=".h5.part"))
+        f = opening.enter_context(h5py.File(tmp, "w", track_order=True))
+        stack = opening.pop_all()
+    with stack:  # an error of the block: the file closed and removed
+        out = ResultFile(f, block_bytes, chunk_bytes, compression, where)
+        yield out
+        if not out.saved:
+            raise RuntimeError(f"the result file {Path(path).name} was left unwritten")
+        with guard():
+            stack.close()  # closed, then renamed into place
 
 
 @contextlib.contextmanager
@@ -220,16 +287,20 @@ def _write_modes(g: h5py.Group, modes: Modes) -> None:
     _strings(g, "spurious_reason", list(modes.spurious_reason))
 
 
-def _write_frf(g: h5py.Group, frf: Receptance, block_bytes: int = BLOCK_BYTES,
-               chunk_bytes: int = CHUNK_BYTES, compression: str | None = None) -> None:
+def _write_frf(g: h5py.Group, frf: Receptance, streamed: DatasetSink | None = None,
+               block_bytes: int = BLOCK_BYTES, chunk_bytes: int = CHUNK_BYTES,
+               compression: str | None = None) -> None:
     g.attrs["method"] = str(frf.method)
     g.attrs["constraint_residual"] = float(frf.constraint_residual)
     g.attrs["tolerance"] = float(frf.tolerance)
     g.attrs["quantity"] = str(frf.quantity)
     _write_agreement(g, frf.agreement)
     _array(g, "omega", np.asarray(frf.omega, dtype=float), "rad/s")
-    write_blocks(g, "H", np.asarray(frf.H), block_bytes=block_bytes, chunk_bytes=chunk_bytes,
-                 compression=compression)
+    if streamed is not None:  # written block by block as the sweep computed it
+        g.file.move(streamed.dataset.name, f"{g.name}/H")
+    else:
+        write_blocks(g, "H", np.asarray(frf.H), block_bytes=block_bytes,
+                     chunk_bytes=chunk_bytes, compression=compression)
     _strings(g, "inputs", list(frf.inputs))
     _strings(g, "outputs", list(frf.outputs))
 

@@ -41,6 +41,7 @@ from substruct.analysis.errors import INPUT_ERRORS, CheckError
 from substruct.analysis.events import Phase
 from substruct.analysis.frf.quantity import as_quantity, quantity_factor
 from substruct.analysis.frf.modal import ModalOptions
+from substruct.analysis.frf.stream import FrequencySink, SweepTap
 from substruct.analysis.modes.amls import AmlsOptions
 from substruct.analysis.results import Modes, Receptance
 from substruct.assembly.stack import Assembly
@@ -171,9 +172,15 @@ def check_dense_modes(case: Case, asm: Assembly) -> None:
     check_dense_sizes(case, asm.n_dof, at_least=False)
 
 
-def frf_result(case: Case, model: Model, progress: Progress | None) -> Receptance:
+def frf_result(case: Case, model: Model, progress: Progress | None,
+               sink: FrequencySink | None = None) -> Receptance:
     """The receptances ``case.analysis.frf`` asks for, at its points
     (:func:`substruct.analysis.api.receptance_sweep`).
+
+    Given a ``sink``, the receptances go to it a block of frequencies at a time as they are
+    computed, already as ``analysis.frf.quantity`` (a
+    :class:`~substruct.analysis.frf.stream.SweepTap` converts each block after keeping the
+    checked frequencies), and the result's ``H`` is their summary and selections.
 
     Raises:
         CaseError: at ``analysis.frf``, for input the solver cannot take (an inconsistent
@@ -192,8 +199,16 @@ def frf_result(case: Case, model: Model, progress: Progress | None) -> Receptanc
         options = SweepOptions(method=spec.method, checks=spec.check, tolerance=spec.tolerance,
                                input_names=spec.inputs, output_names=spec.outputs,
                                progress=progress, modal=modal)
-        return in_place_quantity(receptance_sweep(asm.system, spec.omegas(), inputs, outputs,
-                                                  options=options), spec.quantity)
+        w = spec.omegas()
+        if sink is None:
+            return in_place_quantity(receptance_sweep(asm.system, w, inputs, outputs,
+                                                      options=options), spec.quantity)
+        factor = None if spec.quantity == "receptance" else \
+            quantity_factor(np.asarray(w, dtype=float), spec.quantity)
+        tap = SweepTap(sink, None if factor is None else
+                       lambda start, count: factor[start:start + count])
+        res = receptance_sweep(asm.system, w, inputs, outputs, options=options, sink=tap)
+        return dataclasses.replace(res, quantity=spec.quantity)
     except INPUT_ERRORS as err:
         raise case.error(("analysis", "frf"), " ".join(str(err).split())) from None
     except CheckError as err:

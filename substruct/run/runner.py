@@ -16,6 +16,7 @@ import scipy.sparse as sp
 
 from substruct.analysis.checks import require_finite
 from substruct.analysis.events import Phase
+from substruct.analysis.frf.stream import FrequencySink
 from substruct.analysis.results import Modes
 from substruct.builder.frf_parts import assemble_frf_case, has_frf_parts
 from substruct.builder.model import Model, assemble_case
@@ -73,7 +74,7 @@ def build_model(case: Case, events: Phase | None = None,
 
 
 def run_case(case: Case, progress: Progress | None = None, model: Model | None = None,
-             events: Phase | None = None) -> Result:
+             events: Phase | None = None, frf_sink: FrequencySink | None = None) -> Result:
     """Run the analyses of a case.
 
     Args:
@@ -83,6 +84,10 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
         events: called as each phase starts, ``events(kind, what, size)``
             (:class:`substruct.analysis.events.Phase`): assembly, each eigen solve, each
             receptance sweep.
+        frf_sink: where the receptances of a finite-element model go as they are computed, a
+            block of frequencies at a time (:func:`substruct.run.analyses.frf_result`; the
+            result file of ``substruct run``); the other receptance routes (FRF parts,
+            virtual points, loss factor) compute theirs whole.
 
     Returns:
         The :class:`~substruct.run.result.Result`: modes (physical modes ascending, spurious
@@ -126,6 +131,8 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
                 what=f"modes (variant {variant.name})", events=events)
     frf = case.analysis.frf
     if frf is not None:
+        # TPA and SEMM read the whole receptance back: the sweep is kept in memory for them
+        testlab = case.analysis.tpa is not None or case.analysis.semm is not None
         if events is not None:
             n_omega = len(frf.omega.grid())
             events("sweep", f"receptances: {n_omega} frequencies, {len(frf.outputs)} output(s) "
@@ -136,8 +143,8 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
             result.frf = loss_frf_result(case, model, progress)
         else:
             result.frf = coupled_frf_result(case, model, progress) if has_frf_parts(case) \
-                else frf_result(case, model, progress)
-        if case.analysis.tpa is not None or case.analysis.semm is not None:
+                else frf_result(case, model, progress, None if testlab else frf_sink)
+        if testlab:
             from substruct.run.testlab_route import semm_result, tpa_result  # when used
             if case.analysis.tpa is not None:
                 result.tpa = tpa_result(case, result.frf)

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from substruct.analysis.frf.stream import StreamedArray
 from substruct.case.yaml_io import load_yaml
 from substruct.io.hdf5 import atomic_path
 from substruct.run.result import Result
@@ -69,7 +70,8 @@ def draw_frf(result: Result, *, max_curves: int = MAX_FRF_CURVES,
     frf = result.frf
     if frf is None:
         raise ValueError(f"result {result.case_name!r} holds no FRF to plot")
-    H = np.asarray(frf.H)
+    # a streamed output (never whole in memory) gives its selections
+    H = frf.H if isinstance(frf.H, StreamedArray) else np.asarray(frf.H)
     omega = np.asarray(frf.omega, dtype=float)
     if H.ndim != 3 or H.shape[0] != omega.size or omega.size == 0:
         raise ValueError(f"FRF array has shape {H.shape}, expected ({omega.size}, n_out, n_in)")

@@ -20,7 +20,9 @@ The constraint residual :math:`\max |A u| / \max |H|` of the null-space sweep (:
 holds to round-off by construction) is measured at the same frequencies
 (:func:`constraint_residual`), so that the sweep itself computes the outputs only: a
 receptance of 1,000 x 400 x 400 is then one contiguous array, written and sent between
-processes without a copy.
+processes without a copy.  The checks read only the checked frequencies of the sweep (its
+numbers as computed): given a sink (:class:`~substruct.analysis.frf.stream.SweepTap`), the
+sweep keeps those as the blocks pass and never holds the whole output.
 
 A sweep with a force-tied constraint (``R != 0``), or of a small model, is left to the direct
 formulations (every frequency, every check).
@@ -36,6 +38,7 @@ import scipy.sparse as sp
 from substruct.analysis.checks import receptance_difference
 from substruct.analysis.formulations.coupling import FORMULATIONS, receptance
 from substruct.analysis.frf.sparse import null_space_sparse_sweep
+from substruct.analysis.frf.stream import SweepTap
 from substruct.linalg.scaling import equilibrate
 from substruct.vocabulary import KKT, NULL_SPACE
 from substruct.linalg.system import ConstrainedSystem
@@ -86,39 +89,51 @@ def checked_inputs(count: int) -> np.ndarray:
 
 def production_sweep(K: sp.csr_array, M: sp.csr_array, C: sp.csr_array | None,
                      A: sp.csr_array, omegas: np.ndarray, inputs: sp.csc_array,
-                     rows: sp.csr_array, progress: Callable[[int, int, str], None] | None
-                     ) -> np.ndarray:
+                     rows: sp.csr_array, progress: Callable[[int, int, str], None] | None,
+                     tap: SweepTap | None = None) -> tuple[np.ndarray | None, np.ndarray]:
     """The production sweep (:func:`~substruct.analysis.frf.sparse.null_space_sparse_sweep`)
-    with progress reported as ``progress(done, total, NULL_SPACE)``."""
+    with progress reported as ``progress(done, total, NULL_SPACE)``: ``(H, checked)``, with
+    ``checked = H[check_frequencies(len(omegas))]`` as computed.  Given a ``tap``, the blocks
+    go to it (it keeps the checked frequencies) and ``H`` is ``None``."""
     total = len(omegas)
 
     def report(done: int) -> None:
         if progress is not None:
             progress(done, total, NULL_SPACE)
 
-    return null_space_sparse_sweep(K, M, C, A, omegas, inputs, rows, progress=report)
+    idx = check_frequencies(total)
+    if tap is None:
+        H = null_space_sparse_sweep(K, M, C, A, omegas, inputs, rows, progress=report)
+        assert H is not None
+        return H, H[idx]
+    tap.keep(idx)
+    null_space_sparse_sweep(K, M, C, A, omegas, inputs, rows, progress=report, sink=tap)
+    return None, tap.checked
 
 
 def constraint_residual(K: sp.csr_array, M: sp.csr_array, C: sp.csr_array | None,
                         A: sp.csr_array, omegas: np.ndarray, inputs: sp.csc_array,
-                        H: np.ndarray) -> float:
-    r""":math:`\max |D A u| / \max |H|` of the production sweep ``H``, both at
+                        checked: np.ndarray) -> float:
+    r""":math:`\max |D A u| / \max |H|` of the production sweep, both at
     :func:`check_frequencies` and the :func:`checked_inputs` (``u`` every coordinate's response
-    by the null-space sweep, ``D A`` the rows scaled to unit norm)."""
+    by the null-space sweep, ``D A`` the rows scaled to unit norm); ``checked`` is the sweep's
+    ``H`` at :func:`check_frequencies`."""
     idx = check_frequencies(len(omegas))
     if not A.shape[0] or not idx.size:
         return 0.0
     cols = checked_inputs(inputs.shape[1])
     AH = null_space_sparse_sweep(K, M, C, A, omegas[idx], sp.csc_array(inputs[:, cols]),
                                  sp.csr_array(equilibrate(A).A))
-    scale = max(float(np.abs(H[idx][:, :, cols]).max(initial=0.0)), 1e-300)
+    assert AH is not None
+    scale = max(float(np.abs(checked[:, :, cols]).max(initial=0.0)), 1e-300)
     return float(np.abs(AH).max(initial=0.0) / scale)
 
 
 def sweep_checks(system: ConstrainedSystem, omegas: np.ndarray, inputs: sp.csc_array,
-                 outputs: sp.csr_array, H: np.ndarray, method: str,
+                 outputs: sp.csr_array, checked: np.ndarray, method: str,
                  checks: Sequence[str]) -> dict[str, float]:
-    """The check figures of a production sweep ``H``: each of ``method`` and ``checks`` other
+    """The check figures of a production sweep (``checked``: its ``H`` at
+    :func:`check_frequencies`): each of ``method`` and ``checks`` other
     than ``null-space`` (``kkt`` if none is left) solved by
     :func:`substruct.analysis.formulations.coupling.receptance` at :func:`check_frequencies` for every
     output and the :func:`checked_inputs` (the system's own rows, ``R`` none on this path)."""
@@ -134,5 +149,5 @@ def sweep_checks(system: ConstrainedSystem, omegas: np.ndarray, inputs: sp.csc_a
     for name in names:
         Hc = receptance(system.K, system.M, system.C, system.A, omegas[idx], None, method=name,
                         inputs=sample, outputs=outputs, labels=labels)
-        out[name] = receptance_difference(Hc, H[idx][:, :, cols])
+        out[name] = receptance_difference(Hc, checked[:, :, cols])
     return out

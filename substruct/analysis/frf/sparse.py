@@ -23,6 +23,11 @@ loops over the inputs (:func:`~substruct.linalg.banded.band_solve_many`), with f
 reduced system has ``n - rank(A)`` unknowns instead of the ``n + m`` of the KKT system and
 the ``n + m`` of the bordered generalized-inverse system, and needs one factorization a
 frequency instead of their two.
+
+Given a ``sink`` (:class:`~substruct.analysis.frf.stream.FrequencySink`), the sweep holds one
+block of frequencies (as many as the sink asks for) and hands each block to the sink when it
+is full: the whole output is never in memory (``substruct run`` writes the blocks to the
+result file as they come).  Each frequency's numbers are the same, bit for bit, either way.
 """
 
 from __future__ import annotations
@@ -33,6 +38,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from substruct.analysis.errors import AnalysisInputError, require_analysis_memory
+from substruct.analysis.frf.stream import FrequencySink
 from substruct.analysis.modes.krylov import eliminate
 from substruct.linalg.banded import (
     BAND_MAX,
@@ -111,7 +117,8 @@ def _singular(omega: float) -> AnalysisInputError:
 def null_space_sparse_sweep(K: sp.sparray, M: sp.sparray, C: sp.sparray | None,
                             A: sp.sparray, omegas: np.ndarray, inputs: sp.sparray,
                             outputs: sp.sparray,
-                            progress: Callable[[int], None] | None = None) -> np.ndarray:
+                            progress: Callable[[int], None] | None = None,
+                            sink: FrequencySink | None = None) -> np.ndarray | None:
     r"""``H[k] = (O T) Z_T(\omega_k)^{-1} (T^T E)`` for a system under ``A q = 0`` (module
     docstring), complex ``(n_omega, n_outputs, n_inputs)``.
 
@@ -122,6 +129,13 @@ def null_space_sparse_sweep(K: sp.sparray, M: sp.sparray, C: sp.sparray | None,
         inputs: ``n x p`` generalized forces (columns).
         outputs: ``q x n`` output rows.
         progress: called with the number of frequencies done, every 10 frequencies.
+        sink: if given, the receptances go to it a block of frequencies at a time
+            (``sink.open(shape, dtype)`` gives the block's length, then
+            ``sink.write(start, block)`` for each block, in order) and ``None`` is returned;
+            the memory check then counts one block, not the whole output.
+
+    Returns:
+        ``H``, or ``None`` with a ``sink``.
 
     Raises:
         ValueError: ``Z_T`` singular at a frequency (a resonance of an undamped system, or
@@ -144,7 +158,9 @@ def null_space_sparse_sweep(K: sp.sparray, M: sp.sparray, C: sp.sparray | None,
     B = np.asarray(sp.csr_array(Tt @ sp.csc_array(inputs, dtype=float)).toarray(),
                    dtype=complex)
     pattern = abs(Kt) + abs(Mt) + (abs(Ct) if Ct is not None else 0)
-    out_bytes = 16.0 * w.size * OT.shape[0] * B.shape[1]
+    shape = (w.size, OT.shape[0], B.shape[1])
+    rows = w.size if sink is None else max(1, min(w.size, sink.open(shape, np.dtype(complex))))
+    out_bytes = 16.0 * rows * OT.shape[0] * B.shape[1]
     require_analysis_memory(
         factor_memory(pattern, "superlu", complex_factor=True) + out_bytes,
         f"the receptance sweep of {Kt.shape[0]} reduced coordinates "
@@ -156,7 +172,7 @@ def null_space_sparse_sweep(K: sp.sparray, M: sp.sparray, C: sp.sparray | None,
     Cp = None if Ct is None else sp.csc_array(Ct[p][:, p])
     Bp = np.asfortranarray(B[p])
     gather = Gather(sp.csr_array(OT[:, p]))
-    H = np.empty((w.size, OT.shape[0], B.shape[1]), dtype=complex)
+    H = np.empty((rows, OT.shape[0], B.shape[1]), dtype=complex)  # the output, or one block
     many = banded and kernel_pays(Kt.shape[0], B.shape[1], w.size)
     if banded:
         Kb, Mb = band_storage(Kp, width), band_storage(Mp, width)
@@ -178,7 +194,10 @@ def null_space_sparse_sweep(K: sp.sparray, M: sp.sparray, C: sp.sparray | None,
                 Xk = complex_symmetric(Z, ordered=True)(Bp)
         except (RuntimeError, np.linalg.LinAlgError) as exc:
             raise _singular(wk) from exc
-        gather(np.asarray(Xk).reshape(Bp.shape), H[k])
+        gather(np.asarray(Xk).reshape(Bp.shape), H[k % rows])
+        if sink is not None and ((k + 1) % rows == 0 or k + 1 == w.size):
+            start = k // rows * rows
+            sink.write(start, H[:k + 1 - start])
         if progress is not None and ((k + 1) % 10 == 0 or k + 1 == w.size):
             progress(k + 1)
-    return H
+    return None if sink is not None else H
