@@ -17,6 +17,7 @@ run: $(STAMP)
 	$(BIN)/substruct run cases/tapered_rod.yaml --out results --force
 	$(BIN)/substruct run cases/tapered_rod_table1.yaml --out results --force
 	$(BIN)/substruct run cases/three_dof_frf.yaml --out results --force
+	$(BIN)/substruct run cases/frame_plate.yaml --out results --force
 
 # The house rules first (import layers, types), then the tests.
 test: $(STAMP)

@@ -1,5 +1,6 @@
 """How each substructure is drawn from the stacked coordinates: rods joined end to end one
-after the other, discrete systems at the point they are attached to, springs between their ends."""
+after the other, discrete systems at the point they are attached to, springs between their ends,
+frames with their beams as curves (:mod:`substruct.builder.frame_drawing`)."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ import scipy.sparse as sp
 
 from substruct.assembly.stack import Assembly, PointRef
 from substruct.builder.drawing import Drawing
+from substruct.builder.frame_drawing import beam_curves
 from substruct.models.selection import component_index
 from substruct.substructure import Geometry, Substructure
 
@@ -174,8 +176,10 @@ def layout_drawings(asm: Assembly, connections: list[list[PointRef]]) -> list[Dr
             points = points * scale + placed.get(s.name, np.zeros(3))
         elif s.name in shifts:
             points[:, 0] += shifts[s.name]
-        out.append(Drawing(name=s.name, kind=s.kind, points=points,
-                           cells=[(t, np.asarray(c)) for t, c in g.cells],
+        cells = [(t, np.asarray(c)) for t, c in g.cells]
+        if s.kind.startswith("frame"):  # beams drawn as curves bent by the end rotations
+            points, cells, interp = beam_curves(s, points, cells, interp)
+        out.append(Drawing(name=s.name, kind=s.kind, points=points, cells=cells,
                            interp=_lift(interp, int(asm.offsets[k]), asm.n_dof),
                            glyphs=dict(g.glyphs),
                            rotations=None if g.rotations is None else

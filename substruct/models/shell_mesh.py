@@ -20,7 +20,7 @@ from typing import Callable
 import numpy as np
 
 from substruct.models.beam import Material
-from substruct.models.shell import shell_matrices
+from substruct.models.shell_batch import shell_matrices_batch
 
 __all__ = ["Shell", "ShellMesh", "shell_mesh", "shell_divisions"]
 
@@ -50,7 +50,8 @@ class Shell:
 @dataclass
 class ShellMesh:
     """Element triplets and faces made from the shells: ``rows``, ``cols``, ``kv``, ``mv``
-    (one array each per element, 6 coordinates per node), faces by kind (``"triangle"``,
+    (one array each per shell, its elements' ``(6n)^2`` entries one after another, 6
+    coordinates per node), faces by kind (``"triangle"``,
     ``"quad"``: node indices) and the largest element size."""
 
     rows: list[np.ndarray] = field(default_factory=list)
@@ -100,7 +101,8 @@ def _grid(shell: Shell, X: np.ndarray) -> tuple[np.ndarray, list[tuple[int, ...]
 def shell_mesh(shells: list[Shell], points: list[np.ndarray], ids: list[int],
                index: dict[int, int], tol: float, mass: str,
                label: Callable[[int], str]) -> ShellMesh:
-    """Divide ``shells`` and make their element matrices (module docstring).
+    """Divide ``shells`` and make their element matrices (module docstring), all elements of a
+    shell at once (:func:`substruct.models.shell_batch.shell_matrices_batch`).
 
     ``points``, ``ids`` and ``index`` (node id -> position in ``points``) are the frame's
     nodes so far; new nodes are appended to them.
@@ -132,36 +134,35 @@ def shell_mesh(shells: list[Shell], points: list[np.ndarray], ids: list[int],
             node_of[j] = index[corner]
             known.add(j)
         from scipy.spatial import cKDTree  # imported where used (start-up time)
-        tree = cKDTree(np.asarray(points)) if len(local) > n else None
-        next_id = max(ids) + 1
-        for j, x in enumerate(local):
-            if j in known:
-                continue
-            assert tree is not None
-            dist, near = tree.query(x)
-            if dist <= tol:
-                node_of[j] = int(near)
-            else:
-                points.append(x)
-                ids.append(next_id)
-                index[next_id] = len(points) - 1
-                node_of[j] = len(points) - 1
-                next_id += 1
+        fresh = np.array([j for j in range(len(local)) if j not in known], dtype=np.int64)
+        if fresh.size:
+            # the new grid points are distinct from each other: one query against the nodes
+            # made so far finds those that are existing nodes
+            dist, near = cKDTree(np.asarray(points)).query(local[fresh])
+            old = dist <= tol
+            node_of[fresh[old]] = near[old]
+            new = fresh[~old]
+            start = len(points)
+            points.extend(local[new])
+            new_ids = range(max(ids) + 1, max(ids) + 1 + new.size)
+            ids.extend(new_ids)
+            index.update({i: start + k for k, i in enumerate(new_ids)})
+            node_of[new] = start + np.arange(new.size)
         kind = "quad" if n == 4 else "triangle"
-        for el in elements:
-            nodes = tuple(int(node_of[e]) for e in el)
-            Xe = np.array([points[i] for i in nodes])
-            try:
-                Ke, Me = shell_matrices(Xe, mat.E, nu, shell.thickness, mat.rho, mass,
-                                        shell.nsm)
-            except ValueError as err:
-                raise ValueError(f"{where}: {err}") from None
-            dofs = (6 * np.asarray(nodes)[:, None] + np.arange(6)).ravel()
-            out.rows.append(np.repeat(dofs, dofs.size))
-            out.cols.append(np.tile(dofs, dofs.size))
-            out.kv.append(Ke.ravel())
-            out.mv.append(Me.ravel())
-            out.faces.setdefault(kind, []).append(nodes)
-            out.h_max = max(out.h_max, float(np.linalg.norm(Xe - np.roll(Xe, 1, axis=0),
-                                                            axis=1).max()))
+        nodes = node_of[np.asarray(elements, dtype=np.int64)]  # (m, n) node indices
+        Xe = np.asarray(points)[nodes]
+        try:
+            Ke, Me = shell_matrices_batch(Xe, mat.E, nu, shell.thickness, mat.rho, mass,
+                                          shell.nsm)
+        except ValueError as err:
+            raise ValueError(f"{where}: {err}") from None
+        dofs = (6 * nodes[:, :, None] + np.arange(6)).reshape(len(nodes), -1)
+        size = dofs.shape[1]
+        out.rows.append(np.repeat(dofs, size, axis=1).ravel())
+        out.cols.append(np.tile(dofs, (1, size)).ravel())
+        out.kv.append(Ke.ravel())
+        out.mv.append(Me.ravel())
+        out.faces.setdefault(kind, []).extend(tuple(f) for f in nodes.tolist())
+        out.h_max = max(out.h_max, float(np.linalg.norm(Xe - np.roll(Xe, 1, axis=1),
+                                                        axis=2).max()))
     return out

@@ -1,6 +1,7 @@
-"""One mode drawn into a pyvista subplot: continua warped over their grey undeformed edges,
-rods as tubes over their grey axis, attachments as zigzag springs with their masses, walls at
-fixed ends; colour is ``|u| / max |u|`` of the mode throughout.
+"""One mode drawn into a pyvista subplot: continua and shells warped over their grey
+undeformed edges, rods and beams as tubes over their grey axis (beams bent by their end
+rotations, :mod:`substruct.builder.frame_drawing`), links as thin spiders, attachments as
+zigzag springs with their masses, walls at fixed ends; colour is ``|u| / max |u|`` of the mode throughout.
 
 ``pv`` (the pyvista module) and the plotter are passed in: pyvista is imported only by the
 function that makes a picture (:func:`substruct.viz.mode_picture.plot_modes`).
@@ -96,22 +97,20 @@ def draw_mode(pv: Any, plotter: Any, lay: Layout, pos: np.ndarray, mag: np.ndarr
         sl = slice(m.point_offsets[i], m.point_offsets[i + 1])
         p0, p, s = lay.points[sl], pos[sl], mag[sl]
         if not is_line_drawing(d):
-            grid = pv.from_meshio(_meshio_mesh(p0, d.cells))
+            faces = [(t, c) for t, c in d.cells if not t.startswith("line")]
+            grid = pv.from_meshio(_meshio_mesh(p0, faces))
             plotter.add_mesh(grid.extract_all_edges(), color=GHOST, line_width=1, opacity=0.6)
             warped = grid.copy()
             warped.points = p
             warped.point_data["|u|"] = s
             plotter.add_mesh(warped, scalars="|u|", show_edges=True, edge_color="#404040",
                              line_width=0.5, smooth_shading=False, **kw)
+            _draw_lines(pv, plotter, d, p0, p, s, size, kw)  # beams of a frame with shells
             continue
         if is_spring(d):
             _draw_spring(pv, plotter, d, p0, p, s, lay, kw)
             continue
-        ghost = _line_mesh(pv, p0, d.cells)
-        if ghost is not None:
-            plotter.add_mesh(ghost.tube(radius=0.0035 * size, n_sides=12), color=GHOST)
-            curve = _line_mesh(pv, p, d.cells, s)
-            plotter.add_mesh(curve.tube(radius=0.008 * size, n_sides=16), scalars="|u|", **kw)
+        _draw_lines(pv, plotter, d, p0, p, s, size, kw)
         nodes = [np.ravel(c) for t, c in d.cells if t == "vertex"]
         if nodes:
             dots = pv.PolyData(p[np.unique(np.concatenate(nodes))])
@@ -124,6 +123,22 @@ def draw_mode(pv: Any, plotter: Any, lay: Layout, pos: np.ndarray, mag: np.ndarr
             _label_coordinates(plotter, d, p0, lay)
         if lay.axial is not None:
             _draw_supports(pv, plotter, d, p0, lay, lay.axial)
+
+
+def _draw_lines(pv: Any, plotter: Any, d: Drawing, p0: np.ndarray, p: np.ndarray,
+                s: np.ndarray, size: float, kw: dict[str, Any]) -> None:
+    """The line cells of a drawing (rods, beams, the legs of a link's spider) as tubes over
+    their grey rest position; a link's legs thinner."""
+    ghost = _line_mesh(pv, p0, d.cells)
+    if ghost is None:
+        return
+    thin = 0.4 if d.kind == "link" else 1.0
+    rest = ghost.tube(radius=0.0035 * size * thin, n_sides=12)
+    if rest.n_points:  # not a link between coincident nodes
+        plotter.add_mesh(rest, color=GHOST)
+    curve = _line_mesh(pv, p, d.cells, s).tube(radius=0.008 * size * thin, n_sides=16)
+    if curve.n_points:
+        plotter.add_mesh(curve, scalars="|u|", **kw)
 
 
 def _label_coordinates(plotter: Any, d: Drawing, p0: np.ndarray, lay: Layout) -> None:
