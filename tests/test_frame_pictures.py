@@ -35,9 +35,17 @@ TUBE = Section(A=4.44e-4, Iy=1.01e-7, Iz=1.3e-7, J=1.64e-7)
 
 def _drawn(sub, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Points and displacements of a frame's beam-curve drawing for coordinates ``u``."""
+    points, disp, _ = _drawn_with_rotations(sub, u)
+    return points, disp
+
+
+def _drawn_with_rotations(sub, u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Points, displacements and rotations of a frame's beam-curve drawing."""
     g = sub.geometry
-    points, _, interp = beam_curves(sub, np.asarray(g.points, float), list(g.cells), g.interp)
-    return points, (interp @ u).reshape(-1, 3)
+    points, _, interp, rot = beam_curves(sub, np.asarray(g.points, float), list(g.cells),
+                                         g.interp, g.rotations)
+    assert rot is not None and rot.shape == interp.shape
+    return points, (interp @ u).reshape(-1, 3), (rot @ u).reshape(-1, 3)
 
 
 def test_frame_plate_case_draws_its_modes_at_the_nodes_translations(tmp_path: Path) -> None:
@@ -85,10 +93,12 @@ def test_a_rigid_motion_is_drawn_exactly_along_every_beam() -> None:
     u = np.array([field[ids.index(int(lab.split(":")[0])),
                         ("ux", "uy", "uz", "rx", "ry", "rz").index(lab.split(":")[1])]
                   for lab in sub.dof_labels])
-    points, disp = _drawn(sub, u)
+    points, disp, rot = _drawn_with_rotations(sub, u)
     assert len(points) == len(xyz) + 8 * (BEAM_SEGMENTS - 1)
     exact = a + np.cross(theta, points)
     assert np.abs(disp - exact).max() <= 1e-13 * np.abs(exact).max()
+    # the exported rotation of every drawn point is the rigid rotation, inside the beams too
+    assert np.abs(rot - theta).max() <= 1e-13 * np.abs(theta).max()
 
 
 def test_a_cantilever_under_a_tip_load_is_drawn_on_the_cubic() -> None:
@@ -102,10 +112,13 @@ def test_a_cantilever_under_a_tip_load_is_drawn_on_the_cubic() -> None:
     for c, comp in enumerate(("ux", "uy", "uz")):
         f[list(sub.dof_labels).index(f"2:{comp}")] = P * y[c]
     u = spla.spsolve(sub.K.tocsc(), f)
-    points, disp = _drawn(sub, u)
+    points, disp, rot = _drawn_with_rotations(sub, u)
     x = points @ d
     exact = np.outer(P * x**2 * (3 * L - x) / (6 * STEEL.E * TUBE.Iy), y)
     assert np.abs(disp - exact).max() <= 1e-9 * np.abs(exact).max()
+    # the bending rotation is d x w'(x): w' = P x (2 L - x) / (2 E I) along y
+    slope = np.outer(P * x * (2 * L - x) / (2 * STEEL.E * TUBE.Iy), np.cross(d, y))
+    assert np.abs(rot - slope).max() <= 1e-9 * np.abs(slope).max()
     assert np.isclose(x.max(), L) and len(points) == 4 + 3 * (BEAM_SEGMENTS - 1)
 
 

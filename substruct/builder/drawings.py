@@ -177,13 +177,14 @@ def layout_drawings(asm: Assembly, connections: list[list[PointRef]]) -> list[Dr
         elif s.name in shifts:
             points[:, 0] += shifts[s.name]
         cells = [(t, np.asarray(c)) for t, c in g.cells]
+        rotations = g.rotations
         if s.kind.startswith("frame"):  # beams drawn as curves bent by the end rotations
-            points, cells, interp = beam_curves(s, points, cells, interp)
+            points, cells, interp, rotations = beam_curves(s, points, cells, interp, rotations)
         out.append(Drawing(name=s.name, kind=s.kind, points=points, cells=cells,
                            interp=_lift(interp, int(asm.offsets[k]), asm.n_dof),
                            glyphs=dict(g.glyphs),
-                           rotations=None if g.rotations is None else
-                           _lift(g.rotations, int(asm.offsets[k]), asm.n_dof)))
+                           rotations=None if rotations is None else
+                           _lift(rotations, int(asm.offsets[k]), asm.n_dof)))
     return out
 
 

@@ -15,6 +15,13 @@ the transverse displacement at an end is :math:`\theta \times e`).  At the nodes
 is the nodes' translations; a rigid motion :math:`u = a + \theta \times x` is drawn exactly
 along the element; a released end (pin) or a Timoshenko element bends the drawn curve with
 the node's rotation, not the element's own end slope (a picture, not a result).
+The rotations of the points inside (exported beside the displacements) are those of the same
+interpolation: the twist linear along the axis, the bending rotation :math:`e \times u'(s)/L`,
+
+.. math::  \theta(s) = P\bigl[(1-s)\theta_i + s\theta_j\bigr]
+           + e \times (H_1' u_i + H_3' u_j) / L + H_2' Q \theta_i + H_4' Q \theta_j,
+
+so a rigid rotation is carried unchanged along the element.
 
 **Links.** A rigid or interpolation link of a case is drawn as a spider: straight lines from
 its independent (reference) node to each of its other nodes, which move with the nodes'
@@ -51,16 +58,18 @@ def _cross_matrix(e: np.ndarray) -> np.ndarray:
 
 
 def beam_curves(sub: Substructure, points: np.ndarray, cells: list[tuple[str, np.ndarray]],
-                interp: sp.csr_array) -> tuple[np.ndarray, list[tuple[str, np.ndarray]],
-                                               sp.csr_array]:
+                interp: sp.csr_array, rotations: sp.csr_array | None = None
+                ) -> tuple[np.ndarray, list[tuple[str, np.ndarray]], sp.csr_array,
+                           sp.csr_array | None]:
     """A frame's drawing with each beam element drawn as a curve (module docstring): its
     ``points`` (the nodes, unchanged and first), then :data:`BEAM_SEGMENTS` - 1 points inside
     each element; the ``line`` cells replaced by the pieces; ``interp`` ``(3 p, n)`` over the
-    frame's coordinates with the rows of the new points.  A frame without beams is returned
+    frame's coordinates with the rows of the new points; ``rotations`` (if given) likewise, the
+    new points' rows from the interpolation's rotation.  A frame without beams is returned
     as it is."""
     pairs = np.asarray(sub.meta.get("elements") or [], dtype=np.int64).reshape(-1, 2)
     if not len(pairs):
-        return points, cells, interp
+        return points, cells, interp, rotations
     ids = list(sub.meta["node_ids"])
     col = {label: j for j, label in enumerate(sub.dof_labels)}
     cols = np.array([[col.get(f"{i}:{c}", -1) for c in _COMPONENTS] for i in ids],
@@ -85,6 +94,30 @@ def beam_curves(sub: Substructure, points: np.ndarray, cells: list[tuple[str, np
                  cols[pairs[:, 1], 3:]]
     m, k, n0 = len(pairs), n_seg - 1, len(points)
     new = n0 + np.arange(m * k).reshape(m, k)  # the new points, element by element
+    extra = _new_rows(blocks, node_cols, new, n0, interp.shape[1])
+    if rotations is not None:
+        D1, D2, D3, D4 = -6 * s + 6 * s**2, 1 - 4 * s + 3 * s**2, 6 * s - 6 * s**2, 3 * s**2 - 2 * s
+        turn = [  # the rotation of the new points, on u_i, theta_i, u_j, theta_j
+            (D1[None, :, None, None] / L[:, None, None, None]) * ex[:, None],
+            (1 - s)[None, :, None, None] * P[:, None] + D2[None, :, None, None] * Q[:, None],
+            (D3[None, :, None, None] / L[:, None, None, None]) * ex[:, None],
+            s[None, :, None, None] * P[:, None] + D4[None, :, None, None] * Q[:, None],
+        ]
+        rotations = sp.csr_array(sp.vstack(
+            [sp.csr_array(rotations), _new_rows(turn, node_cols, new, n0, rotations.shape[1])],
+            format="csr"))
+    pos = xi[:, None] + s[None, :, None] * (xj - xi)[:, None]
+    chain = np.concatenate([pairs[:, :1], new, pairs[:, 1:]], axis=1)  # (m, k + 2)
+    pieces = np.stack([chain[:, :-1], chain[:, 1:]], axis=2).reshape(-1, 2)
+    cells = [("line", pieces)] + [(t, c) for t, c in cells if t != "line"]
+    return (np.vstack([points, pos.reshape(-1, 3)]), cells,
+            sp.csr_array(sp.vstack([sp.csr_array(interp), extra], format="csr")), rotations)
+
+
+def _new_rows(blocks: list[np.ndarray], node_cols: list[np.ndarray], new: np.ndarray, n0: int,
+              n: int) -> sp.csr_array:
+    """The rows ``(3 m k, n)`` of the new points ``new`` ``(m, k)`` from ``blocks``
+    ``(m, k, 3, 3)`` on the columns ``node_cols`` ``(m, 3)`` (-1: a held coordinate)."""
     rows, cs, vals = [], [], []
     for block, c in zip(blocks, node_cols):
         r = np.broadcast_to((3 * new)[:, :, None, None] + np.arange(3)[:, None], block.shape)
@@ -93,15 +126,9 @@ def beam_curves(sub: Substructure, points: np.ndarray, cells: list[tuple[str, np
         rows.append(r[keep])
         cs.append(cc[keep])
         vals.append(block[keep])
-    extra = sp.csr_array((np.concatenate(vals), (np.concatenate(rows) - 3 * n0,
-                                                  np.concatenate(cs))),
-                         shape=(3 * m * k, interp.shape[1]))
-    pos = xi[:, None] + s[None, :, None] * (xj - xi)[:, None]
-    chain = np.concatenate([pairs[:, :1], new, pairs[:, 1:]], axis=1)  # (m, k + 2)
-    pieces = np.stack([chain[:, :-1], chain[:, 1:]], axis=2).reshape(-1, 2)
-    cells = [("line", pieces)] + [(t, c) for t, c in cells if t != "line"]
-    return (np.vstack([points, pos.reshape(-1, 3)]), cells,
-            sp.csr_array(sp.vstack([sp.csr_array(interp), extra], format="csr")))
+    m, k = new.shape
+    return sp.csr_array((np.concatenate(vals), (np.concatenate(rows) - 3 * n0,
+                                                 np.concatenate(cs))), shape=(3 * m * k, n))
 
 
 def spider_drawing(name: str, centre: tuple[np.ndarray, sp.csr_array],
