@@ -43,6 +43,7 @@ from substruct.analysis.frf.quantity import as_quantity, quantity_factor
 from substruct.analysis.frf.modal import ModalOptions
 from substruct.analysis.modes.amls import AmlsOptions
 from substruct.analysis.results import Modes, Receptance
+from substruct.linalg.amls_block import TaskMap
 from substruct.assembly.stack import Assembly
 from substruct.builder.model import Model
 from substruct.case.fields import gigabytes
@@ -60,9 +61,11 @@ DENSE_FRF_LIMIT = 4000
 
 
 def modes_result(case: Case, asm: Assembly, A: sp.csr_array, loc: tuple,
-                 what: str = "modes", events: Phase | None = None) -> Modes:
+                 what: str = "modes", events: Phase | None = None,
+                 tasks: TaskMap | None = None) -> Modes:
     """The coupled modes of ``asm`` under the rows ``A`` as ``case.analysis.modes`` asks
-    (:func:`substruct.analysis.api.modes`); ``events`` is told as each eigen solve starts.
+    (:func:`substruct.analysis.api.modes`); ``events`` is told as each eigen solve starts;
+    ``tasks`` runs the blocks of an AMLS reduction (``None``: in this process).
 
     Raises:
         CaseError: at ``loc``, for input the solver cannot take.
@@ -77,7 +80,7 @@ def modes_result(case: Case, asm: Assembly, A: sp.csr_array, loc: tuple,
         options = ModesOptions(method=spec.method, checks=spec.check, solver=spec.solver,
                                tolerance=spec.tolerance, what=what, events=events)
         if spec.solver == "amls":
-            return _amls(case, system, options)
+            return _amls(case, system, options, tasks)
         if spec.band is None:
             return modes(system, spec.count, options=options)
         return _in_band(case, system, options)
@@ -87,7 +90,8 @@ def modes_result(case: Case, asm: Assembly, A: sp.csr_array, loc: tuple,
         raise CheckError(f"{err}; to accept it, raise analysis.modes.tolerance") from None
 
 
-def _amls(case: Case, system: ConstrainedSystem, options: ModesOptions) -> Modes:
+def _amls(case: Case, system: ConstrainedSystem, options: ModesOptions,
+          tasks: TaskMap | None = None) -> Modes:
     """``solver: amls``: with a band that has a ``max``, every mode below it by one AMLS run,
     then those in the band, ``count`` at most; otherwise the lowest ``count`` (a band's
     ``min`` by :func:`_in_band`)."""
@@ -95,7 +99,8 @@ def _amls(case: Case, system: ConstrainedSystem, options: ModesOptions) -> Modes
     assert spec is not None
     block = spec.amls
     top = spec.band.max if spec.band is not None else None
-    amls = AmlsOptions(**({} if block is None else block.model_dump()), omega_max=top)
+    amls = AmlsOptions(**({} if block is None else block.model_dump()), omega_max=top,
+                       tasks=tasks)
     options = dataclasses.replace(options, amls=amls)
     if spec.band is None:
         return modes(system, spec.count, options=options)

@@ -27,7 +27,7 @@ shift-invert Lanczos solution of the lowest :data:`CHECKED_MODES` modes
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Sequence
 
 import numpy as np
@@ -46,6 +46,7 @@ from substruct.analysis.modes.production import production_modes
 from substruct.analysis.modes.sparse import has_damping
 from substruct.analysis.results import Modes
 from substruct.linalg.amls import AMLSModes, amls_modes
+from substruct.linalg.amls_block import TaskMap
 from substruct.linalg.scaling import massless_coordinates
 from substruct.linalg.system import Matrix
 
@@ -72,12 +73,17 @@ class AmlsOptions:
         iterations: subspace iterations with the full factorization after the reduction.
         omega_max: the wanted circular frequency (every mode below it); ``None``: found from
             the count.
+        tasks: runs the independent blocks of each tree level as tasks
+            (:data:`~substruct.linalg.amls_block.TaskMap`: a Dask client's map from
+            ``substruct run --workers N``); ``None``: in this process.  The modes are the
+            same bit for bit.
     """
 
     cutoff: float = 5.0
     leaf_size: int = 1000
     iterations: int = 0
     omega_max: float | None = None
+    tasks: TaskMap | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.cutoff) and self.cutoff > 1):
@@ -93,11 +99,16 @@ class AmlsOptions:
 def _solve(K: sp.csr_array, M: sp.csr_array, count: int | None, opts: AmlsOptions,
            say: Phase | None) -> tuple[AMLSModes, float]:
     """AMLS at ``opts.omega_max``, or at a growing wanted frequency until ``count`` modes."""
+    def line(text: str) -> None:
+        if say is not None:
+            say("amls", f"modes: {text}", K.shape[0])
+
     def run(w: float) -> AMLSModes:
         if say is not None:
             say("sparse-eigen", f"modes: AMLS up to {w:.4g} rad/s (cut-off {opts.cutoff:g})", K.shape[0])
         return amls_modes(K, M, w, cutoff=opts.cutoff, leaf_size=opts.leaf_size,
-                          iterations=opts.iterations, ritz_ratio=min(2.0, opts.cutoff))
+                          iterations=opts.iterations, ritz_ratio=min(2.0, opts.cutoff),
+                          progress=line, map=opts.tasks)
 
     if opts.omega_max is not None:
         return run(opts.omega_max), opts.omega_max
