@@ -192,8 +192,10 @@ def frf_result(case: Case, model: Model, progress: Progress | None) -> Receptanc
     inputs = sp.csc_array(asm.rows([model.points[p] for p in spec.inputs]).T)
     outputs = asm.rows([model.points[p] for p in spec.outputs])
     try:
+        block = spec.modal.amls
         modal = ModalOptions(spec.modal.count, spec.modal.cutoff, spec.modal.residual,
-                             spec.modal.check_frequencies, spec.modal.solver)
+                             spec.modal.check_frequencies, spec.modal.solver,
+                             AmlsOptions(**block.model_dump()) if block is not None else None)
         options = SweepOptions(method=spec.method, checks=spec.check, tolerance=spec.tolerance,
                                input_names=spec.inputs, output_names=spec.outputs,
                                progress=progress, modal=modal)
