@@ -37,7 +37,7 @@ import scipy.sparse.linalg as spla
 
 from substruct.linalg.amls_block import TaskMap
 from substruct.linalg.amls_reduce import ReducedModel, amls_reduce
-from substruct.linalg.amls_tree import dissection_tree
+from substruct.linalg.amls_tree import Node, dissection_tree
 from substruct.linalg.factorize import factorizer
 from substruct.linalg.lanczos import rayleigh_ritz
 
@@ -134,7 +134,7 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
                cutoff: float = 5.0, leaf_size: int = 1000, iterations: int = 0,
                ritz_ratio: float = 1.5, factorization: str = "auto",
                progress: Callable[[str], None] | None = None,
-               map: TaskMap | None = None) -> AMLSModes:
+               map: TaskMap | None = None, tree: Node | None = None) -> AMLSModes:
     r"""The eigenpairs of :math:`K u = \omega^2 M u` with :math:`\omega \le` ``omega_max`` by
     AMLS (module docstring).
 
@@ -153,6 +153,8 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
         map: runs the independent blocks of each tree level, and the subdomains'
             expansions, as tasks (:data:`~substruct.linalg.amls_block.TaskMap`, e.g. a Dask
             client's map); default: in this process.  The results do not depend on it.
+        tree: the dissection of ``K`` (:func:`~substruct.linalg.amls_tree.dissection_tree`
+            with ``leaf_size``), if already made (another wanted frequency of the same model).
     """
     if not (np.isfinite(omega_max) and omega_max > 0):
         raise ValueError(f"omega_max must be positive and finite, got {omega_max!r}")
@@ -167,7 +169,7 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
     lam_c = (cutoff * omega_max) ** 2
     times: dict[str, float] = {}
     t = time.perf_counter()
-    root = dissection_tree(K, leaf_size)
+    root = dissection_tree(K, leaf_size) if tree is None else tree
     n_blocks = len(root.postorder())
     times["tree"] = time.perf_counter() - t
     say(f"AMLS tree: {n_blocks} blocks, {max(b.level for b in root.postorder()) + 1} levels")

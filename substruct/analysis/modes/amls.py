@@ -48,6 +48,7 @@ from substruct.analysis.modes.sparse import has_damping
 from substruct.analysis.results import Modes
 from substruct.linalg.amls import AMLSModes, amls_modes
 from substruct.linalg.amls_block import TaskMap
+from substruct.linalg.amls_tree import dissection_tree
 from substruct.linalg.scaling import massless_coordinates
 from substruct.linalg.system import Matrix
 
@@ -109,12 +110,14 @@ def _solve(K: sp.csr_array, M: sp.csr_array, count: int | None, opts: AmlsOption
         if say is not None:
             say("amls", f"modes: {text}", K.shape[0])
 
+    tree = dissection_tree(K, opts.leaf_size)     # one dissection for every pass
+
     def run(w: float) -> AMLSModes:
         if say is not None:
             say("sparse-eigen", f"modes: AMLS up to {w:.4g} rad/s (cut-off {opts.cutoff:g})", K.shape[0])
         return amls_modes(K, M, w, cutoff=opts.cutoff, leaf_size=opts.leaf_size,
                           iterations=opts.iterations, ritz_ratio=min(2.0, opts.cutoff),
-                          progress=line, map=opts.tasks)
+                          progress=line, map=opts.tasks, tree=tree)
 
     if opts.omega_max is not None:
         return run(opts.omega_max), opts.omega_max
