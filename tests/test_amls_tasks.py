@@ -117,3 +117,12 @@ def test_workers_without_amls_is_refused(tmp_path):
                                    "reduction as tasks; the case's analysis.modes.solver is "
                                    "not amls, got sparse")
     assert not (tmp_path / "sparse").exists()
+
+
+def test_run_checks_the_scheduler_address_before_anything(tmp_path):
+    done = _cli(tmp_path, "bad", ["--scheduler", "http://127.0.0.1:8786"])
+    assert done.returncode == 2
+    assert done.stderr.startswith("substruct: error: --scheduler: protocol http:// is not "
+                                  "supported"), done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "bad").exists()
