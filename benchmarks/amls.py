@@ -169,10 +169,12 @@ def growth(rows: list[dict]) -> None:
             if len(rs) < 2:
                 continue
             x = [r["lanczos"]["n"] if key == "k" else r["k"] for r in rs]
-            print(f"growth at {key} = {value}: time ~ {other}^a over {other} = "
-                  f"{', '.join(str(v) for v in x)}: Lanczos a = "
-                  f"{slope(x, [r['lanczos']['time'] for r in rs]):.2f}, AMLS a = "
-                  f"{slope(x, [r['amls']['time'] for r in rs]):.2f}")
+            fit = {f"{side} {what}": slope(x, [r[side][what] for r in rs])
+                   for side in ("lanczos", "amls") for what in ("time", "cpu")}
+            print(f"growth at {key} = {value}: t ~ {other}^a over {other} = "
+                  f"{', '.join(str(v) for v in x)}: Lanczos a = {fit['lanczos time']:.2f} "
+                  f"(CPU {fit['lanczos cpu']:.2f}), AMLS a = {fit['amls time']:.2f} "
+                  f"(CPU {fit['amls cpu']:.2f})")
 
 
 def accuracy() -> None:
