@@ -15,8 +15,9 @@ __all__ = ["Phase", "PHASE_KINDS"]
 #: The kinds of phase: ``"assembly"`` (size: stacked coordinates), ``"dense-eigen"`` (all roots
 #: of the dense pencil of eqs 28-34; size: coordinates, the cost grows as its cube),
 #: ``"sparse-eigen"`` (factorization and shift-invert eigen solve), ``"sweep"`` (receptances
-#: over a frequency grid; size: frequencies).
-PHASE_KINDS = ("assembly", "dense-eigen", "sparse-eigen", "sweep")
+#: over a frequency grid; size: frequencies), ``"amls"`` (a stage or a tree level of the AMLS
+#: reduction done; size: coordinates of the model reduced).
+PHASE_KINDS = ("assembly", "dense-eigen", "sparse-eigen", "sweep", "amls")
 
 
 class Phase(Protocol):

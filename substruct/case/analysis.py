@@ -188,15 +188,17 @@ class ModalFrf(StrictModel):
     residual: Residual = "second-order"
     #: frequencies of the grid at which the direct solve checks the modal sum
     check_frequencies: Annotated[int, Field(ge=0, le=100)] = 3
+    #: amls: every root below the cut-off on the AMLS basis, damping projected on it
     solver: Solver = "auto"
+    #: the reduction of solver: amls (its defaults if blank)
+    amls: AmlsSpec | None = None
 
-    @field_validator("solver")
-    @classmethod
-    def _not_amls(cls, value: Solver) -> Solver:
-        if value == "amls":
-            raise ValueError("amls computes the modes of analysis.modes only; use auto, dense "
-                             "or sparse here")
-        return value
+    @model_validator(mode="after")
+    def _amls_block(self) -> "ModalFrf":
+        if self.amls is not None and self.solver != "amls":
+            raise FieldError("amls", f"the amls block is for solver: amls; the solver is "
+                             f"{self.solver}", "{...}")
+        return self
 
 
 class FrfAnalysis(StrictModel):

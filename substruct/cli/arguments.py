@@ -9,7 +9,8 @@ from typing import Any, NoReturn
 
 from substruct.cli.errors import InputError
 
-__all__ = ["COMMANDS", "build_parser", "add_compare_parser", "add_study_parser"]
+__all__ = ["COMMANDS", "build_parser", "add_compare_parser", "add_study_parser",
+           "add_backend_options"]
 
 #: The commands, in the order ``--help`` lists them.
 COMMANDS = ("run", "converge", "info", "export", "compare", "study")
@@ -51,6 +52,8 @@ def build_parser() -> argparse.ArgumentParser:
                      help="no progress bar and no table (errors are still reported)")
     run.add_argument("--json", action="store_true",
                      help="print a machine-readable summary instead of the table")
+    add_backend_options(run, "the blocks of each level of an AMLS reduction (analysis.modes."
+                        "solver: amls) as tasks")
 
     conv = sub.add_parser("converge", help="convergence study of a rod case",
                           description="Refine the case's rod by assumed modes, an enriched Ritz "
@@ -130,16 +133,22 @@ def add_study_parser(sub: Any) -> None:
                        help="output directory (default: results)")
     study.add_argument("--set", action="append", default=[], metavar="KEY.PATH=VALUE",
                        help="override a case value (repeatable), as for run")
-    where = study.add_mutually_exclusive_group()
-    where.add_argument("--workers", type=int, default=None, metavar="N",
-                       help="start a Dask LocalCluster of N worker processes (1 thread each)")
-    where.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
-                       help="run on an existing Dask cluster (tcp:// only)")
-    study.add_argument("--connect-timeout", type=float, default=None, metavar="SECONDS",
-                       help="with --scheduler: seconds to reach the scheduler and receive its "
-                       "handshake (default: 5)")
+    add_backend_options(study, "the samples")
     study.add_argument("--force", action="store_true", help="overwrite an existing study file")
     study.add_argument("--no-pictures", action="store_true", help="write the study file only")
     study.add_argument("--quiet", action="store_true", help="no progress bar and no summary")
     study.add_argument("--json", action="store_true",
                        help="print a machine-readable summary instead of the table")
+
+def add_backend_options(parser: Any, what: str) -> None:
+    """``--workers N`` | ``--scheduler tcp://HOST:PORT`` and ``--connect-timeout``: where
+    ``what`` runs (a Dask LocalCluster started here, or an existing cluster)."""
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, default=None, metavar="N",
+                       help=f"run {what} on a Dask LocalCluster of N worker processes "
+                       "(1 thread each)")
+    where.add_argument("--scheduler", default=None, metavar="tcp://HOST:PORT",
+                       help=f"run {what} on an existing Dask cluster (tcp:// only)")
+    parser.add_argument("--connect-timeout", type=float, default=None, metavar="SECONDS",
+                        help="with --scheduler: seconds to reach the scheduler and receive its "
+                        "handshake (default: 5)")

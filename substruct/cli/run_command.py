@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING, Any
 
 from substruct.cli.files import (check_out_dir, check_targets, collector_paused, input_files,
                                  optional_module)
+from substruct.cli.errors import InputError
 from substruct.cli.isolated import call_isolated
 from substruct.cli.progress import PhaseLog, ProgressBar, phases_wanted
 from substruct.cli.summary import print_summary, summary_json
@@ -37,20 +38,56 @@ from substruct.cli.summary import print_summary, summary_json
 if TYPE_CHECKING:
     from substruct.run.result import Result
 
-__all__ = ["run_command", "picture_paths", "write_pictures", "compute", "stage_set"]
+__all__ = ["run_command", "run_backend", "picture_paths", "write_pictures", "compute",
+           "stage_set"]
 
 
-def compute(case: Any, quiet: bool, frf_sink: Any = None) -> Result:
+def compute(case: Any, quiet: bool, frf_sink: Any = None, backend: Any = None) -> Result:
     """Build and analyse ``case`` (in the child process of :func:`run_command`); the
     receptances go to ``frf_sink`` as they are computed, if given
-    (:func:`substruct.run.runner.run_case`)."""
+    (:func:`substruct.run.runner.run_case`); with a ``backend``
+    (:class:`~substruct.studies.study_backend.Backend`, ``--workers`` or ``--scheduler``), the
+    blocks of each level of an AMLS reduction are its tasks."""
     with collector_paused():  # loading the builder and the analyses
         import substruct.run.runner as runner
 
     bar = ProgressBar(sys.stderr) if not quiet else None
     events = PhaseLog(sys.stderr, phases_wanted(sys.stderr, quiet), warn=not quiet)
-    return runner.run_case(case, progress=bar, model=runner.build_model(case, events),
-                           events=events, frf_sink=frf_sink)
+    model = runner.build_model(case, events)
+    if backend is None:
+        return runner.run_case(case, progress=bar, model=model, events=events,
+                              frf_sink=frf_sink)
+    from substruct.studies.study_backend import BackendError, Session
+
+    try:
+        with Session(backend) as session:
+            if not quiet:
+                events("amls", f"AMLS tasks on {backend.describe()}", 0)
+            return runner.run_case(case, progress=bar, model=model, events=events,
+                                   frf_sink=frf_sink, tasks=session.map)
+    except BackendError as err:
+        raise InputError(str(err)) from None
+
+
+def run_backend(args: argparse.Namespace, case: Any) -> Any:
+    """The backend of ``--workers``/``--scheduler`` (``None`` without them), refused unless
+    the case computes its modes by AMLS (``analysis.modes.solver: amls``), the only analysis
+    of ``run`` whose tasks it runs."""
+    if getattr(args, "workers", None) is None and getattr(args, "scheduler", None) is None:
+        if getattr(args, "connect_timeout", None) is not None:
+            raise InputError(f"--connect-timeout: only with --scheduler, got "
+                             f"{args.connect_timeout!r}")
+        return None
+    from substruct.cli.study_command import backend_options
+
+    backend = backend_options(args)
+    modes = case.analysis.modes
+    if modes is None or modes.solver != "amls":
+        flag = "--workers" if args.workers is not None else "--scheduler"
+        raise InputError(f"{flag}: runs the blocks of an AMLS reduction as tasks; the case's "
+                         f"analysis.modes.solver is not amls, got "
+                         f"{modes.solver if modes is not None else 'no modes'}")
+    return backend
 
 
 def run_command(args: argparse.Namespace) -> int:
@@ -66,18 +103,19 @@ def run_command(args: argparse.Namespace) -> int:
         from substruct.io.file_set import OutputDir
 
         case = load_case(args.case, args.set)
+        backend = run_backend(args, case)
         pictures = case.output.pictures and not getattr(args, "no_pictures", False)
         h5_name = f"{case.name}.h5"
         candidates = [p.name for p in picture_paths(case, Path("."))]
         out = check_out_dir(args.out, "--out", [h5_name, *candidates])
     with OutputDir(out) as target:  # BusyError on entering: nothing was computed
-        report = _run_locked(case, args, target, out, h5_name, candidates, pictures)
+        report = _run_locked(case, args, target, out, h5_name, candidates, pictures, backend)
     sys.stdout.write(report)
     return 0
 
 
 def _run_locked(case: Any, args: argparse.Namespace, target: Any, out: Path, h5_name: str,
-                candidates: list[str], pictures: bool) -> str:
+                candidates: list[str], pictures: bool, backend: Any = None) -> str:
     """Check the targets, stage the set in a child (:func:`stage_set`), commit; the report."""
     check_targets(out, [h5_name, *(candidates if pictures else [])], input_files(case),
                   args.force)
@@ -85,7 +123,8 @@ def _run_locked(case: Any, args: argparse.Namespace, target: Any, out: Path, h5_
         results = optional_module("io.hdf5")
     old = results.listed_pictures(out / h5_name) if (out / h5_name).exists() else []
     staging = target.stage(case.name)
-    new, report = call_isolated(lambda: stage_set(case, args, staging, out, pictures))
+    new, report = call_isolated(lambda: stage_set(case, args, staging, out, pictures,
+                                                        backend))
     staged = sorted(p.name for p in staging.iterdir())
     if staged != sorted(new):
         raise RuntimeError(f"the run staged {staged}, expected {sorted(new)}")
@@ -96,7 +135,7 @@ def _run_locked(case: Any, args: argparse.Namespace, target: Any, out: Path, h5_
 
 
 def stage_set(case: Any, args: argparse.Namespace, staging: Path, out: Path,
-              pictures: bool) -> tuple[list[str], str]:
+              pictures: bool, backend: Any = None) -> tuple[list[str], str]:
     """Compute the case, then write its set into ``staging``: the pictures, the result file
     (with the names of the pictures), the transient animation; render the report.  Return
     the names written and the report (in the child process of :func:`run_command`).
@@ -115,7 +154,7 @@ def stage_set(case: Any, args: argparse.Namespace, staging: Path, out: Path,
     h5_name = f"{case.name}.h5"
     drawn: list[Path] = []
     with results.result_file(staging / h5_name, where=out) as h5:
-        result = compute(case, args.quiet, h5.frf_sink)
+        result = compute(case, args.quiet, h5.frf_sink, backend)
         with write_errors(out):
             if pictures:
                 drawn = write_pictures(result, staging, case.name)

@@ -28,7 +28,7 @@ from substruct.cli.errors import InputError
 from substruct.cli.progress import CountBar
 from substruct.cli.files import check_out_dir, check_targets, input_files
 
-__all__ = ["study_command"]
+__all__ = ["study_command", "backend_options"]
 
 
 def _summary(result: Any, seconds: float) -> dict[str, Any]:
@@ -57,12 +57,15 @@ def _den_hartog(case: Any) -> Any:
         return None
 
 
-def _backend(args: argparse.Namespace) -> Any:
-    """The :class:`~substruct.studies.study_backend.Backend` of the options, the scheduler's
-    address, its protocol and the timeout checked (nothing is connected yet)."""
+def backend_options(args: argparse.Namespace) -> Any:
+    """The :class:`~substruct.studies.study_backend.Backend` of the options ``--workers``,
+    ``--scheduler``, ``--connect-timeout``: the number of workers, the scheduler's address,
+    its protocol and the timeout checked (nothing is connected yet)."""
     from substruct.studies.study_backend import CONNECT_TIMEOUT, Backend, BackendError
     from substruct.studies.scheduler_probe import connect_timeout, scheduler_address
 
+    if args.workers is not None and not 1 <= args.workers <= 1024:
+        raise InputError(f"--workers: between 1 and 1024, got {args.workers}")
     if args.connect_timeout is not None and args.scheduler is None:
         raise InputError(f"--connect-timeout: only with --scheduler, got "
                          f"{args.connect_timeout!r}")
@@ -84,9 +87,7 @@ def study_command(args: argparse.Namespace) -> int:
     from substruct.io.file_set import OutputDir
     from substruct.studies.study_run import study_of
 
-    if args.workers is not None and not 1 <= args.workers <= 1024:
-        raise InputError(f"--workers: between 1 and 1024, got {args.workers}")
-    backend = _backend(args)
+    backend = backend_options(args)
     case = load_case(args.case, args.set)
     study_of(case)
     names = [f"{case.name}_study.h5", *(f"{case.name}_study_{kind}.png" for kind in _PICTURES)]

@@ -35,8 +35,9 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from substruct.linalg.amls_block import TaskMap
 from substruct.linalg.amls_reduce import ReducedModel, amls_reduce
-from substruct.linalg.amls_tree import dissection_tree
+from substruct.linalg.amls_tree import Node, dissection_tree
 from substruct.linalg.factorize import factorizer
 from substruct.linalg.lanczos import rayleigh_ritz
 
@@ -132,7 +133,8 @@ def reduced_eigenpairs(red: ReducedModel, lam_max: float) -> tuple[np.ndarray, n
 def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_max: float,
                cutoff: float = 5.0, leaf_size: int = 1000, iterations: int = 0,
                ritz_ratio: float = 1.5, factorization: str = "auto",
-               progress: Callable[[str], None] | None = None) -> AMLSModes:
+               progress: Callable[[str], None] | None = None,
+               map: TaskMap | None = None, tree: Node | None = None) -> AMLSModes:
     r"""The eigenpairs of :math:`K u = \omega^2 M u` with :math:`\omega \le` ``omega_max`` by
     AMLS (module docstring).
 
@@ -148,6 +150,11 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
         factorization: registry name (:mod:`substruct.linalg.factorize`) for the subdomains'
             and the full factorization.
         progress: receives one line per stage and tree level.
+        map: runs the independent blocks of each tree level, and the subdomains'
+            expansions, as tasks (:data:`~substruct.linalg.amls_block.TaskMap`, e.g. a Dask
+            client's map); default: in this process.  The results do not depend on it.
+        tree: the dissection of ``K`` (:func:`~substruct.linalg.amls_tree.dissection_tree`
+            with ``leaf_size``), if already made (another wanted frequency of the same model).
     """
     if not (np.isfinite(omega_max) and omega_max > 0):
         raise ValueError(f"omega_max must be positive and finite, got {omega_max!r}")
@@ -162,12 +169,12 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
     lam_c = (cutoff * omega_max) ** 2
     times: dict[str, float] = {}
     t = time.perf_counter()
-    root = dissection_tree(K, leaf_size)
+    root = dissection_tree(K, leaf_size) if tree is None else tree
     n_blocks = len(root.postorder())
     times["tree"] = time.perf_counter() - t
     say(f"AMLS tree: {n_blocks} blocks, {max(b.level for b in root.postorder()) + 1} levels")
     t = time.perf_counter()
-    red = amls_reduce(K, M, root, lam_c, factorization, say)
+    red = amls_reduce(K, M, root, lam_c, factorization, say, map)
     times["reduce"] = time.perf_counter() - t
     say(f"AMLS reduced: {red.size} coordinates from {red.n}")
     t = time.perf_counter()
@@ -175,7 +182,7 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
     lam, Y = reduced_eigenpairs(red, bound)
     times["reduced"] = time.perf_counter() - t
     t = time.perf_counter()
-    U = red.expand(Y) if Y.shape[1] else np.zeros((red.n, 0))  # PARDISO refuses no column
+    U = red.expand(Y, map) if Y.shape[1] else np.zeros((red.n, 0))  # PARDISO refuses no column
     times["expand"] = time.perf_counter() - t
     t = time.perf_counter()
     if iterations and U.shape[1]:

@@ -36,26 +36,35 @@ ones; truncating, they are upper bounds that decrease as :math:`\lambda_c` grows
 are nested).  Subdomains (sparse) use a factorization from :mod:`substruct.linalg.factorize`
 for their constraint modes; separators (dense after their children's condensation) a dense
 Cholesky.
+
+The blocks of one tree level are independent once the level below is reduced: each is one task
+(:func:`substruct.linalg.amls_block.reduce_block`) of a ``map`` given by the caller (in this
+process by default; a Dask client's map runs them on its workers), the levels bottom-up.  The
+tasks are pure functions of their data and the numbering of the reduced coordinates is made
+here afterwards, so the reduced model does not depend on where the tasks ran.
 """
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
 
+from substruct.linalg.amls_block import (
+    BlockJob,
+    BlockResult,
+    LeafExpansion,
+    TaskMap,
+    expand_leaf,
+    reduce_block,
+    serial_map,
+)
 from substruct.linalg.amls_tree import Node
-from substruct.linalg.factorize import Solve, factorizer
-from substruct.linalg.lanczos import shift_invert_lanczos
 
-__all__ = ["DENSE_LEAF", "ReducedModel", "amls_reduce", "block_modes"]
-
-#: Subdomains up to this many coordinates get their fixed-interface modes by a dense ``eigh``;
-#: larger ones by shift-invert Lanczos on their sparse factorization.
-DENSE_LEAF = 2000
+__all__ = ["ReducedModel", "amls_reduce"]
 
 
 @dataclass
@@ -67,8 +76,8 @@ class _Block:
     modes: np.ndarray          # indices of the block's modes among the reduced coordinates
     Phi: np.ndarray
     Psi: np.ndarray | None = None          # separators: dense constraint modes
-    K_dB: sp.csr_array | None = None       # subdomains: -solve(K_dB x_B) instead
-    solve: Solve | None = None
+    K: sp.csr_array | None = None          # subdomains: K_bb and K_bB, factorized again
+    K_dB: sp.csr_array | None = None
 
 
 @dataclass
@@ -81,6 +90,7 @@ class ReducedModel:
         level: the tree level (0: root) of each reduced coordinate.
         n: number of physical coordinates.
         blocks: the data of :meth:`expand`, root first.
+        factorization: the registry name the subdomains are factorized with.
     """
 
     lam: np.ndarray
@@ -88,54 +98,36 @@ class ReducedModel:
     level: np.ndarray
     n: int
     blocks: list[_Block] = field(repr=False)
+    factorization: str = "auto"
 
     @property
     def size(self) -> int:
         """Number of reduced coordinates."""
         return int(self.lam.size)
 
-    def expand(self, Y: np.ndarray) -> np.ndarray:
+    def expand(self, Y: np.ndarray, map: TaskMap | None = None) -> np.ndarray:
         r"""Physical coordinates :math:`X = Z Y` of reduced ones (``size x k``), top-down:
-        :math:`x_b = \Phi_b y_b + \Psi_b x_B` (subdomains: :math:`\Psi_b x_B` by a solve)."""
+        :math:`x_b = \Phi_b y_b + \Psi_b x_B` for the separators, root first, then every
+        subdomain as one task of ``map`` (:func:`substruct.linalg.amls_block.expand_leaf`)."""
         Y = np.asarray(Y, dtype=float).reshape(self.size, -1)
         X = np.zeros((self.n, Y.shape[1]))
+        leaves = []
         for b in self.blocks:
+            if b.Psi is None:
+                leaves.append(b)
+                continue
             xb = b.Phi @ Y[b.modes]
             if b.boundary.size:
-                xB = X[b.boundary]
-                if b.Psi is not None:
-                    xb += b.Psi @ xB
-                else:
-                    assert b.K_dB is not None and b.solve is not None
-                    xb -= np.asarray(b.solve(b.K_dB @ xB)).reshape(xb.shape)
+                xb += b.Psi @ X[b.boundary]
+            X[b.dofs] = xb
+        jobs = []
+        for b in leaves:
+            assert b.K is not None and b.K_dB is not None
+            jobs.append(LeafExpansion(b.K, b.K_dB, b.Phi, Y[b.modes], X[b.boundary],
+                                      self.factorization))
+        for b, xb in zip(leaves, (map or serial_map)(expand_leaf, jobs)):
             X[b.dofs] = xb
         return X
-
-
-def block_modes(Kb: np.ndarray | sp.sparray, Mb: np.ndarray | sp.sparray, lam_cut: float,
-                solve: Solve | None = None) -> tuple[np.ndarray, np.ndarray]:
-    r"""The eigenpairs :math:`K_b \phi = \lambda M_b \phi` with :math:`\lambda \le` ``lam_cut``,
-    ``M``-normalized: dense ``eigh`` (subset by value) for small or dense blocks, else
-    shift-invert Lanczos with ``solve`` (:math:`K_b^{-1}`), doubling the number of pairs until
-    one exceeds the cut-off (or the block is small enough for ``eigh``)."""
-    n = Kb.shape[0]
-    if n == 0:
-        return np.zeros(0), np.zeros((0, 0))
-    if sp.issparse(Kb) and n > DENSE_LEAF and solve is not None:
-        k = min(32, n // 4)
-        v0 = np.asarray(np.random.default_rng(0).standard_normal(n))
-        while k < n // 4:
-            lam, V = shift_invert_lanczos(sp.csr_array(Kb), sp.csr_array(Mb), k, 0.0, solve,
-                                          v0=v0)
-            if lam.max() > lam_cut:
-                order = np.argsort(lam)
-                keep = order[lam[order] <= lam_cut]
-                return lam[keep], V[:, keep]
-            k *= 2
-    Kd = sp.csr_array(Kb).toarray() if sp.issparse(Kb) else np.asarray(Kb)
-    Md = sp.csr_array(Mb).toarray() if sp.issparse(Mb) else np.asarray(Mb)
-    lam, V = sla.eigh(Kd, Md, subset_by_value=(-np.inf, lam_cut), driver="gvx")
-    return lam, V
 
 
 def _positions(I: np.ndarray, sub: np.ndarray) -> np.ndarray:
@@ -144,106 +136,137 @@ def _positions(I: np.ndarray, sub: np.ndarray) -> np.ndarray:
     return order[np.searchsorted(I, sub, sorter=order)]
 
 
+def _boundaries(P: sp.csr_array, order: list[Node]) -> list[np.ndarray]:
+    """Each block's boundary (post-order): the coordinates of later blocks (its ancestors'
+    separators) coupled to its own rows or passed up by its children."""
+    n = P.shape[0]
+    pos = np.empty(n, dtype=np.int64)
+    for i, b in enumerate(order):
+        pos[b.dofs] = i
+    index = {id(b): i for i, b in enumerate(order)}
+    out: list[np.ndarray] = []
+    for i, b in enumerate(order):
+        own = np.unique(P[b.dofs].indices) if b.dofs.size else np.zeros(0, dtype=np.int64)
+        B = own[pos[own] > i]
+        for c in b.children:
+            B = np.union1d(B, out[index[id(c)]])
+        out.append(B[pos[B] > i])
+    return out
+
+
+def _job(K: sp.csr_array, M: sp.csr_array, b: Node, B: np.ndarray, lam_cut: float,
+         factorization: str, below: list[tuple[np.ndarray, BlockResult]]) -> BlockJob:
+    r"""The task of block ``b``: a subdomain's sparse rows, or a separator's dense local pencil
+    on :math:`b \cup B` with its children's condensations added (``below``: each child's
+    boundary and result)."""
+    d = b.dofs
+    if b.is_leaf:
+        Kd, Md = K[d], M[d]
+        return BlockJob(True, Kd[:, d], Md[:, d], d.size, lam_cut, factorization,
+                        K_bB=sp.csr_array(Kd[:, B]), M_bB=sp.csr_array(Md[:, B]))
+    ns = d.size
+    I = np.concatenate([d, B])
+    Kl = np.zeros((I.size, I.size))
+    Ml = np.zeros((I.size, I.size))
+    Ks, Ms = K[d][:, I].toarray(), M[d][:, I].toarray()
+    Kl[:ns], Ml[:ns] = Ks, Ms
+    Kl[ns:, :ns], Ml[ns:, :ns] = Ks[:, ns:].T, Ms[:, ns:].T
+    children = []
+    for Bc, rc in below:
+        p = _positions(I, Bc)
+        Kl[np.ix_(p, p)] += rc.CK
+        Ml[np.ix_(p, p)] += rc.CM
+        Gf = np.zeros((rc.G.shape[0], I.size))
+        Gf[:, p] = rc.G
+        children.append(Gf)
+    return BlockJob(False, Kl, Ml, ns, lam_cut, factorization, children=children)
+
+
 def amls_reduce(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, root: Node,
                 lam_cut: float, factorization: str = "auto",
-                progress: Callable[[str], None] | None = None) -> ReducedModel:
+                progress: Callable[[str], None] | None = None,
+                map: TaskMap | None = None) -> ReducedModel:
     r"""The AMLS reduction of the symmetric pencil ``(K, M)`` over the tree ``root``, keeping in
     every block the fixed-interface modes with eigenvalue at most ``lam_cut`` (see the module
     docstring).  ``K`` restricted to every subdomain must be positive definite (true when the
     subdomains are held by separators, or ``K`` is); the root separator may be singular
-    (a free body's rigid modes).  ``progress`` receives one line per tree level."""
+    (a free body's rigid modes).
+
+    The blocks of each level, deepest first, are the tasks of one call of ``map``
+    (:data:`~substruct.linalg.amls_block.TaskMap`; default: in this process, one after the
+    other); ``progress`` receives one line as each level is done."""
     K = sp.csr_array(K, dtype=float)
     M = sp.csr_array(M, dtype=float)
+    run = map or serial_map
     n = K.shape[0]
-    P = sp.csr_array(abs(K) + abs(M))
     order = root.postorder()
-    pos = np.empty(n, dtype=np.int64)
-    for i, b in enumerate(order):
-        pos[b.dofs] = i
-    factor = factorizer(factorization)
-    passed: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = {}
+    bounds = _boundaries(sp.csr_array(abs(K) + abs(M)), order)
+    index = {id(b): i for i, b in enumerate(order)}
+    depth = max(b.level for b in order)
+    results: list[BlockResult | None] = [None] * len(order)
+    for lev in range(depth, -1, -1):
+        t = time.perf_counter()
+        here = [i for i, b in enumerate(order) if b.level == lev]
+        jobs = []
+        for i in here:
+            below = []
+            for c in order[i].children:
+                j = index[id(c)]
+                rc = results[j]
+                assert rc is not None
+                below.append((bounds[j], rc))
+            jobs.append(_job(K, M, order[i], bounds[i], lam_cut, factorization, below))
+        for i, r in zip(here, run(reduce_block, jobs)):
+            results[i] = r
+            for c in order[i].children:  # only its coupling G is still needed
+                rc = results[index[id(c)]]
+                assert rc is not None
+                rc.G = rc.G[:0]
+        if progress is not None:
+            kept = sum(int(r.lam.size) for r in (results[i] for i in here) if r is not None)
+            coords = sum(int(order[i].dofs.size) for i in here)
+            progress(f"AMLS level {lev} ({depth - lev + 1} of {depth + 1}): {len(here)} "
+                     f"block(s) of {coords} coordinates, {kept} modes kept "
+                     f"({time.perf_counter() - t:.1f} s)")
+    return _assemble(K, order, bounds, results, n, factorization)
+
+
+def _assemble(K: sp.csr_array, order: list[Node], bounds: list[np.ndarray],
+              results: list[BlockResult | None], n: int, factorization: str) -> ReducedModel:
+    """The reduced pencil: the reduced coordinates numbered block by block in post-order,
+    :math:`M_r` from the identity blocks and every separator's cross blocks."""
+    index = {id(b): i for i, b in enumerate(order)}
+    subtree: list[np.ndarray] = []   # the reduced coordinates of each block's subtree
     blocks: list[_Block] = []
-    lams: list[np.ndarray] = []
-    levels: list[np.ndarray] = []
     rows: list[np.ndarray] = []
     cols: list[np.ndarray] = []
     vals: list[np.ndarray] = []
     offset = 0
-    depth = max(b.level for b in order)
-    per_level = np.zeros(depth + 1, dtype=np.int64)
     for i, b in enumerate(order):
-        d = b.dofs
-        own = np.unique(P[d].indices) if d.size else np.zeros(0, dtype=np.int64)
-        B = own[pos[own] > i]
-        for c in b.children:
-            B = np.union1d(B, passed[id(c)][0])
-        B = B[pos[B] > i]
-        if b.is_leaf:
-            Kdd, Mdd = K[d][:, d], M[d][:, d]
-            KdB, MdB = K[d][:, B], M[d][:, B]
-            solve = factor(sp.csc_array(Kdd))
-            Psi = -np.asarray(solve(KdB.toarray())).reshape(d.size, B.size)
-            lam, Phi = block_modes(Kdd, Mdd, lam_cut, solve)
-            MdBt = MdB.toarray() + Mdd @ Psi
-            CK = KdB.T @ Psi
-            CM = MdB.T @ Psi + Psi.T @ MdBt
-            G_own = Phi.T @ MdBt
-            Qs: list[np.ndarray] = []
-            Gs: list[np.ndarray] = []
-            blk = _Block(d, B, np.arange(0), Phi, K_dB=KdB, solve=solve)
-        else:
-            ns = d.size
-            I = np.concatenate([d, B])
-            Kl = np.zeros((I.size, I.size))
-            Ml = np.zeros((I.size, I.size))
-            Ks, Ms = K[d][:, I].toarray(), M[d][:, I].toarray()
-            Kl[:ns], Ml[:ns] = Ks, Ms
-            Kl[ns:, :ns], Ml[ns:, :ns] = Ks[:, ns:].T, Ms[:, ns:].T
-            Qs, Gs = [], []
-            for c in b.children:
-                Bc, CKc, CMc, Qc, Gc = passed.pop(id(c))
-                p = _positions(I, Bc)
-                Kl[np.ix_(p, p)] += CKc
-                Ml[np.ix_(p, p)] += CMc
-                Gf = np.zeros((Qc.size, I.size))
-                Gf[:, p] = Gc
-                Qs.append(Qc)
-                Gs.append(Gf)
-            Kss, Mss = Kl[:ns, :ns], Ml[:ns, :ns]
-            if B.size and ns:
-                Psi = -sla.cho_solve(sla.cho_factor(Kss), Kl[:ns, ns:])
-            else:
-                Psi = np.zeros((ns, B.size))
-            lam, Phi = block_modes(Kss, Mss, lam_cut)
-            MsBt = Ml[:ns, ns:] + Mss @ Psi
-            CK = Kl[ns:, ns:] + Kl[ns:, :ns] @ Psi
-            CM = Ml[ns:, ns:] + Ml[ns:, :ns] @ Psi + Psi.T @ MsBt
-            G_own = Phi.T @ MsBt
-            blk = _Block(d, B, np.arange(0), Phi, Psi=Psi)
-        mine = np.arange(offset, offset + lam.size)
-        offset += lam.size
-        blk.modes = mine
-        blocks.append(blk)
-        lams.append(lam)
-        levels.append(np.full(lam.size, b.level))
-        per_level[b.level] += lam.size
-        Gnew = [G_own]
-        for Qc, Gf in zip(Qs, Gs):
-            cross = Gf[:, :d.size] @ Phi     # child-subtree modes against this block's modes
-            r, c_ = np.meshgrid(Qc, mine, indexing="ij")
-            rows += [r.ravel(), c_.ravel()]
-            cols += [c_.ravel(), r.ravel()]
+        r = results[i]
+        assert r is not None
+        mine = np.arange(offset, offset + r.lam.size)
+        offset += r.lam.size
+        Qs = [subtree[index[id(c)]] for c in b.children]
+        for Qc, cross in zip(Qs, r.cross):
+            rr, cc = np.meshgrid(Qc, mine, indexing="ij")
+            rows += [rr.ravel(), cc.ravel()]
+            cols += [cc.ravel(), rr.ravel()]
             vals += [cross.ravel(), cross.ravel()]
-            Gnew.append(Gf[:, :d.size] @ Psi + Gf[:, d.size:])
-        Q = np.concatenate([mine] + Qs)
-        passed[id(b)] = (B, (CK + CK.T) / 2, (CM + CM.T) / 2, Q, np.vstack(Gnew))
-    lam_all = np.concatenate(lams)
+        subtree.append(np.concatenate([mine] + Qs))
+        d = b.dofs
+        if b.is_leaf:
+            Kd = K[d]
+            blocks.append(_Block(d, bounds[i], mine, r.Phi, K=sp.csr_array(Kd[:, d]),
+                                 K_dB=sp.csr_array(Kd[:, bounds[i]])))
+        else:
+            blocks.append(_Block(d, bounds[i], mine, r.Phi, Psi=r.Psi))
+    lam_all = np.concatenate([r.lam for r in results if r is not None])
+    level = np.concatenate([np.full(r.lam.size, b.level) for b, r in zip(order, results)
+                            if r is not None])
     N = lam_all.size
     diag = np.arange(N)
     Mr = sp.csr_array((np.concatenate(vals + [np.ones(N)]),
                        (np.concatenate(rows + [diag]), np.concatenate(cols + [diag]))),
                       shape=(N, N))
-    if progress is not None:
-        for lev in range(depth + 1):
-            progress(f"AMLS level {lev}: {int(per_level[lev])} modes kept")
-    return ReducedModel(lam_all, Mr, np.concatenate(levels), n, blocks[::-1])
+    return ReducedModel(lam_all, Mr, level, n, blocks[::-1], factorization)

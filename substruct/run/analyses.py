@@ -44,6 +44,7 @@ from substruct.analysis.frf.modal import ModalOptions
 from substruct.analysis.frf.stream import FrequencySink, SweepTap
 from substruct.analysis.modes.amls import AmlsOptions
 from substruct.analysis.results import Modes, Receptance
+from substruct.linalg.amls_block import TaskMap
 from substruct.assembly.stack import Assembly
 from substruct.builder.model import Model
 from substruct.case.fields import gigabytes
@@ -61,9 +62,11 @@ DENSE_FRF_LIMIT = 4000
 
 
 def modes_result(case: Case, asm: Assembly, A: sp.csr_array, loc: tuple,
-                 what: str = "modes", events: Phase | None = None) -> Modes:
+                 what: str = "modes", events: Phase | None = None,
+                 tasks: TaskMap | None = None) -> Modes:
     """The coupled modes of ``asm`` under the rows ``A`` as ``case.analysis.modes`` asks
-    (:func:`substruct.analysis.api.modes`); ``events`` is told as each eigen solve starts.
+    (:func:`substruct.analysis.api.modes`); ``events`` is told as each eigen solve starts;
+    ``tasks`` runs the blocks of an AMLS reduction (``None``: in this process).
 
     Raises:
         CaseError: at ``loc``, for input the solver cannot take.
@@ -78,7 +81,7 @@ def modes_result(case: Case, asm: Assembly, A: sp.csr_array, loc: tuple,
         options = ModesOptions(method=spec.method, checks=spec.check, solver=spec.solver,
                                tolerance=spec.tolerance, what=what, events=events)
         if spec.solver == "amls":
-            return _amls(case, system, options)
+            return _amls(case, system, options, tasks)
         if spec.band is None:
             return modes(system, spec.count, options=options)
         return _in_band(case, system, options)
@@ -88,7 +91,8 @@ def modes_result(case: Case, asm: Assembly, A: sp.csr_array, loc: tuple,
         raise CheckError(f"{err}; to accept it, raise analysis.modes.tolerance") from None
 
 
-def _amls(case: Case, system: ConstrainedSystem, options: ModesOptions) -> Modes:
+def _amls(case: Case, system: ConstrainedSystem, options: ModesOptions,
+          tasks: TaskMap | None = None) -> Modes:
     """``solver: amls``: with a band that has a ``max``, every mode below it by one AMLS run,
     then those in the band, ``count`` at most; otherwise the lowest ``count`` (a band's
     ``min`` by :func:`_in_band`)."""
@@ -96,7 +100,8 @@ def _amls(case: Case, system: ConstrainedSystem, options: ModesOptions) -> Modes
     assert spec is not None
     block = spec.amls
     top = spec.band.max if spec.band is not None else None
-    amls = AmlsOptions(**({} if block is None else block.model_dump()), omega_max=top)
+    amls = AmlsOptions(**({} if block is None else block.model_dump()), omega_max=top,
+                       tasks=tasks)
     options = dataclasses.replace(options, amls=amls)
     if spec.band is None:
         return modes(system, spec.count, options=options)
@@ -194,8 +199,10 @@ def frf_result(case: Case, model: Model, progress: Progress | None,
     inputs = sp.csc_array(asm.rows([model.points[p] for p in spec.inputs]).T)
     outputs = asm.rows([model.points[p] for p in spec.outputs])
     try:
+        block = spec.modal.amls
         modal = ModalOptions(spec.modal.count, spec.modal.cutoff, spec.modal.residual,
-                             spec.modal.check_frequencies, spec.modal.solver)
+                             spec.modal.check_frequencies, spec.modal.solver,
+                             AmlsOptions(**block.model_dump()) if block is not None else None)
         options = SweepOptions(method=spec.method, checks=spec.check, tolerance=spec.tolerance,
                                input_names=spec.inputs, output_names=spec.outputs,
                                progress=progress, modal=modal)

@@ -18,6 +18,7 @@ from substruct.analysis.checks import require_finite
 from substruct.analysis.events import Phase
 from substruct.analysis.frf.stream import FrequencySink
 from substruct.analysis.results import Modes
+from substruct.linalg.amls_block import TaskMap
 from substruct.builder.frf_parts import assemble_frf_case, has_frf_parts
 from substruct.builder.model import Model, assemble_case
 from substruct.builder.superelements import rigid_body_attrs
@@ -74,7 +75,8 @@ def build_model(case: Case, events: Phase | None = None,
 
 
 def run_case(case: Case, progress: Progress | None = None, model: Model | None = None,
-             events: Phase | None = None, frf_sink: FrequencySink | None = None) -> Result:
+             events: Phase | None = None, frf_sink: FrequencySink | None = None,
+             tasks: TaskMap | None = None) -> Result:
     """Run the analyses of a case.
 
     Args:
@@ -88,6 +90,8 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
             block of frequencies at a time (:func:`substruct.run.analyses.frf_result`; the
             result file of ``substruct run``); the other receptance routes (FRF parts,
             virtual points, loss factor) compute theirs whole.
+        tasks: where the blocks of an AMLS reduction (``analysis.modes.solver: amls``) run
+            (:data:`substruct.linalg.amls_block.TaskMap`; ``None``: in this process).
 
     Returns:
         The :class:`~substruct.run.result.Result`: modes (physical modes ascending, spurious
@@ -121,14 +125,15 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
                                  "C": sp.csr_array(asm.C)}
     spec = case.analysis.modes
     if spec is not None:
-        result.modes = modes_result(case, asm, asm.A, ("analysis", "modes"), events=events)
+        result.modes = modes_result(case, asm, asm.A, ("analysis", "modes"), events=events,
+                                    tasks=tasks)
         labels = list(asm.constraint_labels)
         for i, variant in enumerate(spec.variants):
             keep = [r for r, lab in enumerate(labels) if lab not in variant.drop]
             A = sp.csr_array(asm.A[keep]) if keep else sp.csr_array((0, asm.n_dof))
             result.variants[variant.name] = modes_result(
                 case, asm, A, ("analysis", "modes", "variants", i),
-                what=f"modes (variant {variant.name})", events=events)
+                what=f"modes (variant {variant.name})", events=events, tasks=tasks)
     frf = case.analysis.frf
     if frf is not None:
         # TPA and SEMM read the whole receptance back: the sweep is kept in memory for them

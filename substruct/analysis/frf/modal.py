@@ -37,8 +37,8 @@ frequencies is its cross-check.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import Callable, Sequence
+from dataclasses import dataclass, replace
+from typing import Any, Callable, Sequence
 
 import numpy as np
 import scipy.sparse as sp
@@ -50,6 +50,7 @@ from substruct.analysis.checks import (
     require_agreement,
 )
 from substruct.analysis.formulations.coupling import receptance
+from substruct.analysis.modes.amls import AmlsOptions, amls_damped_basis
 from substruct.analysis.modes.eigen import modes
 from substruct.analysis.errors import AnalysisInputError
 from substruct.analysis.system import ConstrainedSystem, SweepOptions
@@ -85,7 +86,11 @@ class ModalOptions:
         cutoff: the cut-off as a multiple of the highest frequency.
         residual: one of :data:`RESIDUAL_ORDER`.
         n_check: how many frequencies of the grid the direct solve checks.
-        solver: the eigensolver strategy (:func:`substruct.analysis.api.choose_solver`).
+        solver: the eigensolver strategy (:func:`substruct.analysis.api.choose_solver`), or
+            ``"amls"``: every root below the cut-off on the AMLS basis
+            (:func:`substruct.analysis.modes.amls.amls_damped_basis`).
+        amls: with ``solver="amls"``, the reduction
+            (:class:`~substruct.analysis.modes.amls.AmlsOptions`; its defaults if ``None``).
     """
 
     count: int | None = None
@@ -93,6 +98,7 @@ class ModalOptions:
     residual: str = "second-order"
     n_check: int = MODAL_CHECK_FREQUENCIES
     solver: str = "auto"
+    amls: Any = None
 
 
 def frf_method(method: str, n: int, R: sp.sparray | np.ndarray | None) -> str:
@@ -137,13 +143,17 @@ def _modes(M: sp.csr_array, C: sp.csr_array | None, K: sp.csr_array, A: sp.csr_a
 
 def modal_basis(M: sp.csr_array, C: sp.csr_array | None, K: sp.csr_array, A: sp.csr_array,
                 omega_max: float, *, count: int | None = None,
-                cutoff: float = DEFAULT_CUTOFF, solver: str = "auto") -> ModalBasis:
+                cutoff: float = DEFAULT_CUTOFF, solver: str = "auto",
+                amls: Any = None) -> ModalBasis:
     r"""The roots of the coupled system up to ``cutoff * omega_max`` (or the lowest ``count``).
 
     .. math::  |\lambda_r| \le c\, \omega_{max}
 
     With ``count`` ``None`` the sparse solvers are asked for 20, 40, 80, ... roots until one
-    passes the cut-off (the dense solver computes all and keeps those below it).
+    passes the cut-off (the dense solver computes all and keeps those below it).  With
+    ``solver="amls"`` one AMLS reduction gives every undamped mode below the cut-off (or the
+    lowest ``count``) and the damping is projected on them
+    (:func:`substruct.analysis.modes.amls.amls_damped_basis`, options ``amls``).
 
     Raises:
         ValueError: a damped model with rigid-body modes.
@@ -152,7 +162,12 @@ def modal_basis(M: sp.csr_array, C: sp.csr_array | None, K: sp.csr_array, A: sp.
     damped = has_damping(C)
     Cm = C if damped else None
     limit = cutoff * omega_max
-    if count is not None:
+    if solver == "amls":
+        opts = amls if amls is not None else AmlsOptions()
+        opts = replace(opts, omega_max=None if count is not None else limit)
+        md, _ = amls_damped_basis(M, Cm, K, A, None if count is None else min(int(count), n),
+                                  opts)
+    elif count is not None:
         md = _modes(M, Cm, K, A, min(int(count), n), solver)
     else:
         k = min(20, n)
@@ -333,7 +348,7 @@ def modal_receptance_sweep(system: ConstrainedSystem, omegas: Sequence[float] | 
     E = sp.csc_array(inputs, dtype=float).toarray()
     O = sp.csr_array(outputs, dtype=float)
     basis = modal_basis(Ms, Cs, Ks, As, float(w.max(initial=0.0)), count=modal.count,
-                        cutoff=modal.cutoff, solver=modal.solver)
+                        cutoff=modal.cutoff, solver=modal.solver, amls=modal.amls)
     residual = modal.residual
     if basis.rigid.shape[1] and np.any(w <= 0):
         raise AnalysisInputError("the receptance of a model with rigid-body modes is infinite at "
@@ -367,6 +382,7 @@ def modal_receptance_sweep(system: ConstrainedSystem, omegas: Sequence[float] | 
         Hd = receptance(Ks, Ms, Cs, As, w[idx], None, method=check, inputs=E, outputs=O)
         agreement[f"{check} ({len(idx)} frequencies)"] = receptance_difference(Hd, H[idx])
     what_modes = f"modal: {basis.count} root(s) up to {basis.highest:.4g} rad/s" + \
+        (" (AMLS basis)" if modal.solver == "amls" else "") + \
         (f", {basis.rigid.shape[1]} rigid" if basis.rigid.shape[1] else "") + \
         (f" + {residual} residual" if order >= 0 else ", no residual")
     require_agreement(what, what_modes, agreement, tolerance)

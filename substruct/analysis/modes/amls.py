@@ -27,7 +27,7 @@ shift-invert Lanczos solution of the lowest :data:`CHECKED_MODES` modes
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Sequence
 
 import numpy as np
@@ -43,13 +43,21 @@ from substruct.analysis.modes.krylov import (
     stiffness_over_mass,
 )
 from substruct.analysis.modes.production import production_modes
+from substruct.analysis.modes.roots import normalize_shapes
 from substruct.analysis.modes.sparse import has_damping
 from substruct.analysis.results import Modes
 from substruct.linalg.amls import AMLSModes, amls_modes
+from substruct.linalg.amls_block import TaskMap
+from substruct.linalg.amls_tree import dissection_tree
 from substruct.linalg.scaling import massless_coordinates
 from substruct.linalg.system import Matrix
 
-__all__ = ["AMLS_CHECK", "AmlsOptions", "CHECKED_MODES", "amls_coupled_modes"]
+__all__ = ["AMLS_CHECK", "AmlsOptions", "CHECKED_MODES", "amls_coupled_modes",
+           "amls_damped_basis", "REAL_ROOT"]
+
+#: A root of the projected damped pencil whose imaginary part is below this fraction of its
+#: modulus is real (an over-damped root, an entry of its own).
+REAL_ROOT = 1e-10
 
 #: The name of the residual cross-check in ``Modes.agreement``.
 AMLS_CHECK = "amls-residual"
@@ -72,12 +80,17 @@ class AmlsOptions:
         iterations: subspace iterations with the full factorization after the reduction.
         omega_max: the wanted circular frequency (every mode below it); ``None``: found from
             the count.
+        tasks: runs the independent blocks of each tree level as tasks
+            (:data:`~substruct.linalg.amls_block.TaskMap`: a Dask client's map from
+            ``substruct run --workers N``); ``None``: in this process.  The modes are the
+            same bit for bit.
     """
 
     cutoff: float = 5.0
     leaf_size: int = 1000
     iterations: int = 0
     omega_max: float | None = None
+    tasks: TaskMap | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.cutoff) and self.cutoff > 1):
@@ -93,11 +106,18 @@ class AmlsOptions:
 def _solve(K: sp.csr_array, M: sp.csr_array, count: int | None, opts: AmlsOptions,
            say: Phase | None) -> tuple[AMLSModes, float]:
     """AMLS at ``opts.omega_max``, or at a growing wanted frequency until ``count`` modes."""
+    def line(text: str) -> None:
+        if say is not None:
+            say("amls", f"modes: {text}", K.shape[0])
+
+    tree = dissection_tree(K, opts.leaf_size)     # one dissection for every pass
+
     def run(w: float) -> AMLSModes:
         if say is not None:
             say("sparse-eigen", f"modes: AMLS up to {w:.4g} rad/s (cut-off {opts.cutoff:g})", K.shape[0])
         return amls_modes(K, M, w, cutoff=opts.cutoff, leaf_size=opts.leaf_size,
-                          iterations=opts.iterations, ritz_ratio=min(2.0, opts.cutoff))
+                          iterations=opts.iterations, ritz_ratio=min(2.0, opts.cutoff),
+                          progress=line, map=opts.tasks, tree=tree)
 
     if opts.omega_max is not None:
         return run(opts.omega_max), opts.omega_max
@@ -166,3 +186,78 @@ def amls_coupled_modes(M: Matrix, C: Matrix | None, K: Matrix, A: Matrix | None,
              f"coordinates of {Kt.shape[0]}, {r.n_blocks} blocks, {r.iterations} "
              f"iteration(s); largest residual {agreement[AMLS_CHECK]:.1e})")
     return main, agreement, label
+
+
+#: Roots closer than this fraction of their modulus are one repeated root.
+REPEATED_ROOT = 1e-8
+
+
+def _biorthogonal(lam: np.ndarray, Z: np.ndarray, Cr: np.ndarray) -> np.ndarray:
+    r"""The vectors of each repeated root recombined so that
+    :math:`z_r^T (2\lambda I + C_r) z_s = 0` for :math:`r \ne s`: with
+    :math:`G = Z_c^T (2\lambda I + C_r) Z_c` (complex symmetric) and its eigenvectors
+    :math:`V` (complex-orthogonal, :math:`v_i^T v_j = 0`), :math:`Z_c \leftarrow Z_c V`.
+    Distinct roots are bi-orthogonal already (:math:`(\lambda_r + \lambda_s) z_r^T z_s +
+    z_r^T C_r z_s = 0`)."""
+    Z = Z.copy()
+    k = 0
+    while k < lam.size:
+        j = k + 1
+        while j < lam.size and abs(lam[j] - lam[k]) <= REPEATED_ROOT * abs(lam[k]):
+            j += 1
+        if j - k > 1:
+            Zc = Z[:, k:j]
+            B = 2 * lam[k:j].mean() * Zc + Cr @ Zc
+            _, V = np.linalg.eig(Zc.T @ B)
+            Z[:, k:j] = Zc @ V
+        k = j
+    return Z
+
+
+def amls_damped_basis(M: Matrix, C: Matrix | None, K: Matrix, A: Matrix | None,
+                      count: int | None, opts: AmlsOptions, events: Phase | None = None
+                      ) -> tuple[Modes, str]:
+    r"""The roots of :math:`(\lambda^2 M + \lambda C + K) u = 0`, :math:`A u = 0` on the AMLS
+    basis: the undamped modes :math:`\Phi` (:func:`amls_coupled_modes`, ``C`` left out, every
+    mode below ``opts.omega_max`` or the lowest ``count``), then the damping projected on them,
+
+    .. math::  \big(\lambda^2 I + \lambda\, \Phi^T C \Phi + \Omega^2\big) z = 0,
+               \qquad u = \Phi z,
+
+    solved densely in first-order form (``2N`` roots); one root of each conjugate pair is kept
+    (``Im > 0``), and each real (over-damped) root, with ``u^H M u = 1``.  The vectors of a
+    repeated root (the two bending modes of a square section) are made bi-orthogonal
+    (:func:`_biorthogonal`), as the modal sum :math:`\sum_r u_r u_r^T / a_r` needs.  For damping that the
+    modes diagonalize (Rayleigh, :math:`C = \alpha M + \beta K`) the roots are those of each
+    mode, :math:`\lambda = -\zeta\omega \pm i\omega\sqrt{1 - \zeta^2}`,
+    :math:`2\zeta\omega = \alpha + \beta\omega^2`; otherwise they are the Rayleigh-Ritz
+    roots of the projected pencil.  Without damping: the undamped modes.
+
+    Returns:
+        ``(modes, label)``: the roots (method ``"null-space/amls"``) and the AMLS label.
+    """
+    main, agreement, label = amls_coupled_modes(M, None, K, A, count, opts, (), events)
+    if not has_damping(C) or not len(main):
+        return main, label
+    assert C is not None
+    Phi = main.shapes.real
+    n = len(main)
+    Cr = Phi.T @ (sp.csr_array(C) @ Phi)
+    Cr = (Cr + Cr.T) / 2
+    first = np.block([[np.zeros((n, n)), np.eye(n)], [-np.diag(main.omega ** 2), -Cr]])
+    lam, V = np.linalg.eig(first)
+    real = np.abs(lam.imag) <= REAL_ROOT * np.abs(lam)
+    lam = np.where(real, lam.real, lam)
+    keep = real | (lam.imag > 0)
+    lam, Z = lam[keep], V[:n, keep]
+    order = np.lexsort((lam.real, np.abs(lam)))
+    lam, Z = lam[order], Z[:, order]
+    Z = _biorthogonal(lam, Z, Cr)
+    U = normalize_shapes(Phi @ Z, sp.csr_array(M))
+    omega = np.abs(lam)
+    zeta = np.where(omega > 0, -lam.real / np.where(omega > 0, omega, 1.0), 0.0)
+    As = sp.csr_array(A) if A is not None else sp.csr_array((0, U.shape[0]))
+    damped = Modes(eigenvalues=lam, omega=omega, damping_ratio=zeta, shapes=U,
+                   residual=constraint_residuals(As, U),
+                   method="null-space/amls")
+    return damped, f"{label}; damping projected on its {n} modes"

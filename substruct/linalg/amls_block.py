@@ -1,0 +1,188 @@
+r"""One block of the AMLS reduction as a task: a pure function of picklable data, so that the
+blocks of one tree level (independent of each other once their children are reduced) run
+through any ``map`` (in this process, or as Dask tasks on other workers) and give the same
+numbers bit for bit.
+
+A block ``b`` with boundary :math:`B` (the separators above it that its subtree touches) is one
+Craig-Bampton step on the local pencil :math:`(\hat K, \hat M)` of the coordinates
+:math:`b \cup B` (:mod:`substruct.linalg.amls_reduce` for the whole method):
+
+.. math::
+
+    \Psi_b = -\hat K_{bb}^{-1} \hat K_{bB}, \qquad
+    \hat K_{bb} \Phi_b = \hat M_{bb} \Phi_b \Lambda_b \ (\lambda \le \lambda_c), \qquad
+    \tilde K_{BB} = \hat K_{BB} + \hat K_{Bb} \Psi_b, \\
+    \tilde M_{BB} = \hat M_{BB} + \hat M_{Bb}\Psi_b + \Psi_b^T (\hat M_{bB} + \hat M_{bb}\Psi_b),
+    \qquad G_b = \Phi_b^T (\hat M_{bB} + \hat M_{bb} \Psi_b),
+
+and for every child ``c`` of a separator, whose subtree's modes couple to :math:`b \cup B` by
+the mass :math:`G_c = [G_{cb}, G_{cB}]`: the reduced mass block :math:`G_{cb} \Phi_b` and the
+coupling :math:`G_{cb} \Psi_b + G_{cB}` passed up.
+
+A subdomain's task factorizes its sparse :math:`K_{bb}` itself (the factorization never leaves
+the task); its constraint modes are applied again at the expansion by
+:func:`expand_leaf`, which factorizes once more (a subdomain's factorization costs a fraction
+of its eigen solve).  Peak memory of a task: its subdomain's factor, its modes and the dense
+:math:`b \times B` constraint modes; a separator's: its dense local pencil.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Callable, Sequence
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+
+from substruct.linalg.factorize import Solve, factorizer
+from substruct.linalg.lanczos import shift_invert_lanczos
+
+__all__ = ["DENSE_LEAF", "TaskMap", "serial_map", "BlockJob", "BlockResult", "LeafExpansion",
+           "block_modes", "reduce_block", "expand_leaf"]
+
+#: Subdomains up to this many coordinates get their fixed-interface modes by a dense ``eigh``;
+#: larger ones by shift-invert Lanczos on their sparse factorization.
+DENSE_LEAF = 2000
+
+#: ``map(function, jobs) -> [function(job) for job in jobs]``, in the order of ``jobs``: how the
+#: independent blocks of a level run (:func:`serial_map`, or a Dask client's map).
+TaskMap = Callable[[Callable[[Any], Any], Sequence[Any]], Sequence[Any]]
+
+
+def serial_map(function: Callable[[Any], Any], jobs: Sequence[Any]) -> list[Any]:
+    """``[function(job) for job in jobs]``: the tasks one after the other, in this process."""
+    return [function(job) for job in jobs]
+
+
+@dataclass
+class BlockJob:
+    """The data of one block's task.
+
+    Attributes:
+        leaf: a subdomain (sparse ``K``, ``M`` rows) or a separator (dense local pencil).
+        K, M: a subdomain's ``K_bb``, ``M_bb`` (sparse); a separator's local
+            :math:`\\hat K`, :math:`\\hat M` on :math:`b \\cup B` (dense, ``b`` first).
+        K_bB, M_bB: a subdomain's coupling to its boundary (sparse; ``None`` for a separator).
+        ns: the number of the block's own coordinates (the first ``ns`` of the local pencil).
+        children: each child's mass coupling :math:`G_c` scattered onto the columns of
+            :math:`b \\cup B` (separators only).
+        lam_cut: the cut-off eigenvalue.
+        factorization: a registry name (:mod:`substruct.linalg.factorize`).
+    """
+
+    leaf: bool
+    K: Any
+    M: Any
+    ns: int
+    lam_cut: float
+    factorization: str = "auto"
+    K_bB: sp.csr_array | None = None
+    M_bB: sp.csr_array | None = None
+    children: list[np.ndarray] = field(default_factory=list)
+
+
+@dataclass
+class BlockResult:
+    """What a block's task returns.
+
+    Attributes:
+        lam, Phi: its fixed-interface eigenpairs up to the cut-off, ``M``-normalized.
+        Psi: a separator's constraint modes (``ns x |B|``); ``None`` for a subdomain.
+        CK, CM: the static condensation onto its boundary (symmetric, ``|B| x |B|``).
+        G: the mass coupling of its subtree's modes onto its boundary: its own modes first,
+            then each child's subtree in order.
+        cross: per child, the reduced mass block of the child's subtree's modes against this
+            block's modes.
+    """
+
+    lam: np.ndarray
+    Phi: np.ndarray
+    Psi: np.ndarray | None
+    CK: np.ndarray
+    CM: np.ndarray
+    G: np.ndarray
+    cross: list[np.ndarray]
+
+
+def block_modes(Kb: np.ndarray | sp.sparray, Mb: np.ndarray | sp.sparray, lam_cut: float,
+                solve: Solve | None = None) -> tuple[np.ndarray, np.ndarray]:
+    r"""The eigenpairs :math:`K_b \phi = \lambda M_b \phi` with :math:`\lambda \le` ``lam_cut``,
+    ``M``-normalized: dense ``eigh`` (subset by value) for small or dense blocks, else
+    shift-invert Lanczos with ``solve`` (:math:`K_b^{-1}`), doubling the number of pairs until
+    one exceeds the cut-off (or the block is small enough for ``eigh``)."""
+    n = Kb.shape[0]
+    if n == 0:
+        return np.zeros(0), np.zeros((0, 0))
+    if sp.issparse(Kb) and n > DENSE_LEAF and solve is not None:
+        k = min(32, n // 4)
+        v0 = np.asarray(np.random.default_rng(0).standard_normal(n))
+        while k < n // 4:
+            lam, V = shift_invert_lanczos(sp.csr_array(Kb), sp.csr_array(Mb), k, 0.0, solve,
+                                          v0=v0)
+            if lam.max() > lam_cut:
+                order = np.argsort(lam)
+                keep = order[lam[order] <= lam_cut]
+                return lam[keep], V[:, keep]
+            k *= 2
+    Kd = sp.csr_array(Kb).toarray() if sp.issparse(Kb) else np.asarray(Kb)
+    Md = sp.csr_array(Mb).toarray() if sp.issparse(Mb) else np.asarray(Mb)
+    lam, V = sla.eigh(Kd, Md, subset_by_value=(-np.inf, lam_cut), driver="gvx")
+    return lam, V
+
+
+def _sym(A: np.ndarray) -> np.ndarray:
+    return (A + A.T) / 2
+
+
+def reduce_block(job: BlockJob) -> BlockResult:
+    """The reduction of one block (module docstring); a pure function of ``job``."""
+    if job.leaf:
+        assert job.K_bB is not None and job.M_bB is not None
+        Kdd, Mdd = sp.csr_array(job.K), sp.csr_array(job.M)
+        nd, nb = Kdd.shape[0], job.K_bB.shape[1]
+        solve = factorizer(job.factorization)(sp.csc_array(Kdd))
+        Psi = -np.asarray(solve(job.K_bB.toarray())).reshape(nd, nb)
+        lam, Phi = block_modes(Kdd, Mdd, job.lam_cut, solve)
+        MdBt = job.M_bB.toarray() + Mdd @ Psi
+        CK = job.K_bB.T @ Psi
+        CM = job.M_bB.T @ Psi + Psi.T @ MdBt
+        return BlockResult(lam, Phi, None, _sym(CK), _sym(CM), Phi.T @ MdBt, [])
+    Kl, Ml, ns = np.asarray(job.K), np.asarray(job.M), job.ns
+    nb = Kl.shape[0] - ns
+    Kss, Mss = Kl[:ns, :ns], Ml[:ns, :ns]
+    if nb and ns:
+        Psi = -sla.cho_solve(sla.cho_factor(Kss), Kl[:ns, ns:])
+    else:
+        Psi = np.zeros((ns, nb))
+    lam, Phi = block_modes(Kss, Mss, job.lam_cut)
+    MsBt = Ml[:ns, ns:] + Mss @ Psi
+    CK = Kl[ns:, ns:] + Kl[ns:, :ns] @ Psi
+    CM = Ml[ns:, ns:] + Ml[ns:, :ns] @ Psi + Psi.T @ MsBt
+    G = [Phi.T @ MsBt]
+    cross = []
+    for Gf in job.children:
+        cross.append(Gf[:, :ns] @ Phi)
+        G.append(Gf[:, :ns] @ Psi + Gf[:, ns:])
+    return BlockResult(lam, Phi, Psi, _sym(CK), _sym(CM), np.vstack(G), cross)
+
+
+@dataclass
+class LeafExpansion:
+    r"""A subdomain's part of the expansion :math:`x_b = \Phi_b y_b - K_{bb}^{-1} K_{bB} x_B`."""
+
+    K: sp.csr_array
+    K_bB: sp.csr_array
+    Phi: np.ndarray
+    y: np.ndarray
+    xB: np.ndarray
+    factorization: str = "auto"
+
+
+def expand_leaf(job: LeafExpansion) -> np.ndarray:
+    r""":math:`x_b = \Phi_b y_b - K_{bb}^{-1} (K_{bB} x_B)` (the subdomain factorized again)."""
+    xb = job.Phi @ job.y
+    if job.xB.shape[0]:
+        solve = factorizer(job.factorization)(sp.csc_array(job.K))
+        xb -= np.asarray(solve(job.K_bB @ job.xB)).reshape(xb.shape)
+    return xb

@@ -1,0 +1,128 @@
+"""The AMLS reduction's blocks as tasks: the same eigenpairs bit for bit whether each tree
+level runs in this process or on a 2-worker Dask LocalCluster (127.0.0.1); ``substruct run
+--workers 2`` with ``solver: amls`` prints each level and writes the same modes as the
+in-process run; ``--workers`` on a case without AMLS is refused (exit 2, nothing written).
+
+The Dask runs are in a subprocess of their own (Dask's threads stay out of pytest), with one
+BLAS thread in the subprocess and in the workers."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+ENV = {**os.environ, "PYTHONPATH": str(ROOT), "OMP_NUM_THREADS": "1",
+       "OPENBLAS_NUM_THREADS": "1", "MKL_NUM_THREADS": "1", "MPLBACKEND": "Agg"}
+
+SCRIPT = """
+import sys
+import numpy as np
+import scipy.sparse as sp
+from substruct.linalg.amls import amls_modes
+from substruct.models.solid import BoxGrid, solid_box
+from substruct.studies.study_backend import Backend, Session
+b = solid_box("b", BoxGrid((4.0, 1.0, 1.0), (16, 4, 4)), 2.1e11, 0.3, 7850.0,
+              fixed=[{"box": [[0, 0, 0], [0, 1, 1]]}])
+K, M = sp.csr_array(b.K), sp.csr_array(b.M)
+kw = dict(cutoff=3.0, leaf_size=100, iterations=1, ritz_ratio=2.0)
+serial = amls_modes(K, M, 3000.0, **kw)
+calls = []
+with Session(Backend(workers=2)) as s:
+    def where(f, jobs):
+        calls.append(len(jobs))
+        return s.map(f, jobs)
+    dask = amls_modes(K, M, 3000.0, map=where, **kw)
+np.savez(sys.argv[1], lam_s=serial.lam, U_s=serial.U, res_s=serial.residual,
+         lam_d=dask.lam, U_d=dask.U, res_d=dask.residual, calls=np.array(calls))
+"""
+
+
+def test_dask_local_cluster_gives_the_same_bits(tmp_path):
+    out = tmp_path / "amls.npz"
+    done = subprocess.run([sys.executable, "-c", SCRIPT, str(out)], capture_output=True,
+                          text=True, env=ENV, timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
+    r = np.load(out)
+    assert r["lam_s"].size >= 6
+    assert np.array_equal(r["lam_s"], r["lam_d"])
+    assert np.array_equal(r["U_s"], r["U_d"])
+    assert np.array_equal(r["res_s"], r["res_d"])
+    # one map per tree level (5 for this tree) and one for the subdomains' expansion
+    calls = r["calls"]
+    assert calls.size >= 4 and calls.max() >= 4
+
+
+CASE = """\
+name: tied
+substructures:
+  - name: left
+    type: solid
+    box: {lengths: [2.0, 0.5, 0.5], divisions: [8, 3, 3]}
+    E: 2.1e11
+    nu: 0.3
+    rho: 7850
+    fixed: [xmin]
+  - name: right
+    type: solid
+    box: {lengths: [2.0, 0.5, 0.5], divisions: [8, 3, 3], origin: [2, 0, 0]}
+    E: 2.1e11
+    nu: 0.3
+    rho: 7850
+interfaces:
+  - {name: a, between: [left, right], nodes: {box: [[2, 0, 0], [2, 0.5, 0.5]]}}
+analysis:
+  modes: {count: 8, solver: SOLVER, tolerance: 0.05, amls: AMLS}
+output: {pictures: false}
+"""
+
+
+def _cli(tmp_path: Path, name: str, extra: list[str], solver: str = "amls"):
+    case = tmp_path / f"{name}.yaml"
+    amls = "{leaf_size: 100, iterations: 1}" if solver == "amls" else "null"
+    case.write_text(CASE.replace("SOLVER", solver).replace("AMLS", amls))
+    args = [sys.executable, "-m", "substruct.cli", "run", str(case), "--out",
+            str(tmp_path / name), *extra]
+    return subprocess.run(args, capture_output=True, text=True, timeout=600,
+                          env={**ENV, "SUBSTRUCT_PROGRESS": "1"}, cwd=tmp_path)
+
+
+def test_run_with_workers_prints_levels_and_writes_the_same_modes(tmp_path):
+    h5py = pytest.importorskip("h5py")
+    serial = _cli(tmp_path, "serial", [])
+    assert serial.returncode == 0, serial.stderr[-3000:]
+    dask = _cli(tmp_path, "dask", ["--workers", "2"])
+    assert dask.returncode == 0, dask.stderr[-3000:]
+    levels = [line for line in dask.stderr.splitlines() if "AMLS level" in line]
+    assert levels and levels[-1].split("AMLS level ")[1].startswith("0 (")
+    assert "AMLS tasks on LocalCluster (2 workers)" in dask.stderr
+    assert [line for line in serial.stderr.splitlines() if "AMLS level" in line]
+
+    def modes(name):
+        with h5py.File(tmp_path / name / "tied.h5", "r") as f:
+            return {k: f["modes"][k][()] for k in ("omega", "shapes")}
+    a, b = modes("serial"), modes("dask")
+    assert np.array_equal(a["omega"], b["omega"]) and np.array_equal(a["shapes"], b["shapes"])
+
+
+def test_workers_without_amls_is_refused(tmp_path):
+    done = _cli(tmp_path, "sparse", ["--workers", "2"], solver="sparse")
+    assert done.returncode == 2
+    assert done.stderr.strip() == ("substruct: error: --workers: runs the blocks of an AMLS "
+                                   "reduction as tasks; the case's analysis.modes.solver is "
+                                   "not amls, got sparse")
+    assert not (tmp_path / "sparse").exists()
+
+
+def test_run_checks_the_scheduler_address_before_anything(tmp_path):
+    done = _cli(tmp_path, "bad", ["--scheduler", "http://127.0.0.1:8786"])
+    assert done.returncode == 2
+    assert done.stderr.startswith("substruct: error: --scheduler: protocol http:// is not "
+                                  "supported"), done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "bad").exists()
