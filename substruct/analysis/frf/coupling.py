@@ -90,16 +90,18 @@ def common_grid(parts: Sequence[FrfPart], interpolate: str | None = None
     return w, out
 
 
-def stack(parts: Sequence[FrfPart]) -> tuple[np.ndarray, list[str]]:
-    """``Y = diag(Y^(s))`` and the stacked labels ``"<part>@<label>"``."""
+def stack(parts: Sequence[FrfPart], frequencies: slice = slice(None)
+          ) -> tuple[np.ndarray, list[str]]:
+    """``Y = diag(Y^(s))`` (at the grid's ``frequencies``, all by default) and the stacked
+    labels ``"<part>@<label>"``."""
     n = sum(len(p.labels) for p in parts)
-    k = len(parts[0].omega)
+    k = len(range(*frequencies.indices(len(parts[0].omega))))
     Y = np.zeros((k, n, n), dtype=complex)
     labels: list[str] = []
     at = 0
     for p in parts:
         m = len(p.labels)
-        Y[:, at:at + m, at:at + m] = p.Y
+        Y[:, at:at + m, at:at + m] = p.Y[frequencies]
         labels += [f"{p.name}@{lab}" for lab in p.labels]
         at += m
     return Y, labels
@@ -211,18 +213,18 @@ def couple(parts: Sequence[FrfPart], pairs: Sequence[tuple[str, str]],
         :func:`generalized_inverse_fbs`.
     """
     w, same = common_grid(parts, interpolate)
-    Y, labels = stack(same)
+    labels = [f"{p.name}@{lab}" for p in same for lab in p.labels]
     B = boolean_rows(labels, pairs)
-    Bn, nz, BYBt, BY = _interface_rows(Y, B)
-    X = _solve_interface(BYBt, BY)
-    Xg = np.linalg.pinv(BYBt, rcond=GENERALIZED_RTOL) @ BY
-    Yc = np.empty(Y.shape, dtype=np.result_type(Y, X))
+    Yc = np.empty((len(w), len(labels), len(labels)), dtype=complex)
     worst, scale = 0.0, 0.0
-    for sl in _blocks(Y):  # both forms a block at a time; the same numbers as lm_fbs and
-        # generalized_inverse_fbs of the whole stack, without a second sweep-sized array
-        YBt = Y[sl][:, :, nz] @ Bn.T  # read while the block is in cache
-        np.subtract(Y[sl], YBt @ X[sl], out=Yc[sl])
-        Yg = Y[sl] - YBt @ Xg[sl]
+    for sl in _blocks(Yc):  # the stack, both forms and their difference a block at a time:
+        # the numbers of lm_fbs and generalized_inverse_fbs on the whole stack (the same
+        # operations a frequency), with one sweep-sized array (the answer) instead of three
+        Y, _ = stack(same, sl)
+        Bn, nz, BYBt, BY = _interface_rows(Y, B)
+        YBt = Y[:, :, nz] @ Bn.T
+        np.subtract(Y, YBt @ _solve_interface(BYBt, BY), out=Yc[sl])
+        Yg = Y - YBt @ (np.linalg.pinv(BYBt, rcond=GENERALIZED_RTOL) @ BY)
         worst = max(worst, float(np.abs(Yg - Yc[sl]).max(initial=0.0)))
         scale = max(scale, float(np.abs(Yc[sl]).max(initial=0.0)))
     return w, Yc, labels, worst / max(scale, 1e-300)
