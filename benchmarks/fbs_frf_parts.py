@@ -77,7 +77,8 @@ def case_text(files: tuple[str, str], w: np.ndarray, n: int, m: int) -> str:
             f"  - {{name: A, type: frf, file: {files[0]}}}\n"
             f"  - {{name: B, type: frf, file: {files[1]}}}\n"
             f"connections: [{conns}]\n"
-            f"analysis:\n  frf:\n    omega: {{start: {float(w[0])!r}, stop: {float(w[-1])!r}, num: {len(w)}}}\n"
+            f"analysis:\n  frf:\n    omega: {{start: {float(w[0])!r}, "
+            f"stop: {float(w[-1])!r}, num: {len(w)}}}\n"
             f"    inputs: [{pts}]\n    outputs: [{pts}]\n"
             f"output: {{pictures: false}}\n")
 
