@@ -12,6 +12,7 @@ from substruct.analysis.api import receptance_sweep
 from substruct.analysis.frf.coupling import (
     boolean_rows,
     common_grid,
+    couple,
     decouple,
     generalized_inverse_fbs,
     lm_fbs,
@@ -159,6 +160,36 @@ def test_lm_fbs_and_generalized_inverse_equal_the_direct_solve():
     B2 = np.vstack([B, B[:1]])
     Yg = generalized_inverse_fbs(Y, B2)
     assert np.abs(Yg[:, keep][:, :, keep] - Y_ab).max() / np.abs(Y_ab).max() < 1e-9
+
+
+def test_blocked_coupling_gives_the_numbers_of_the_whole_stack(monkeypatch):
+    """lm_fbs and couple form Y - Y B^T X a block of frequencies at a time: every entry and
+    the generalized-inverse agreement equal those of the expression on the whole stack (the
+    same products a frequency, so equal, not merely close), with blocks of 1, 3 and all 40
+    frequencies."""
+    import substruct.analysis.frf.coupling as coupling
+
+    w, _, Y_a, Y_b = _assembly_parts()
+    parts = [FrfPart("A", w, [f"q{i}" for i in range(1, 7)], Y_a),
+             FrfPart("B", w, B_LABELS, Y_b)]
+    pairs = [("A@q6", "B@1:x"), ("A@q4", "B@3:x")]
+    Y, labels = stack(parts)
+    B = boolean_rows(labels, pairs)
+    nz = np.flatnonzero(np.any(B != 0, axis=0))
+    YBt, BY = Y[:, :, nz] @ B[:, nz].T, B[:, nz] @ Y[:, nz, :]
+    BYBt = BY[:, :, nz] @ B[:, nz].T
+    whole = Y - YBt @ np.linalg.solve(BYBt, BY)
+    whole_g = Y - YBt @ (np.linalg.pinv(BYBt, rcond=1e-12) @ BY)
+    agreement = np.abs(whole_g - whole).max() / np.abs(whole).max()
+    assert len(w) > 3
+    for per in (1, 3, len(w)):
+        monkeypatch.setattr(coupling, "BLOCK_BYTES", per * 16 * Y.shape[1] * Y.shape[2])
+        assert len(coupling._blocks(Y)) == -(-len(w) // per)
+        assert np.array_equal(lm_fbs(Y, B), whole)
+        _, Yc, got_labels, got = couple(parts, pairs)
+        assert got_labels == labels
+        assert np.array_equal(Yc, whole)
+        assert got == agreement
 
 
 def test_decoupling_recovers_the_removed_part():

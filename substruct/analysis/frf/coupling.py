@@ -41,6 +41,12 @@ __all__ = ["FrfPart", "stack", "boolean_rows", "lm_fbs", "generalized_inverse_fb
 #: Two grids are the same if they agree to this relative tolerance (the precision of a UFF 58
 #: ASCII abscissa: 6 significant digits); the first part's grid is then used.
 GRID_RTOL = GRID_DIGITS_RTOL
+#: Singular values of ``B Y B^T`` below this fraction of the largest are dropped by the
+#: generalized inverse (:func:`generalized_inverse_fbs`).
+GENERALIZED_RTOL = 1e-12
+#: About this many bytes of receptances a block of frequencies in :func:`lm_fbs` and
+#: :func:`couple`.
+BLOCK_BYTES = 16 << 20
 
 
 def common_grid(parts: Sequence[FrfPart], interpolate: str | None = None
@@ -84,16 +90,18 @@ def common_grid(parts: Sequence[FrfPart], interpolate: str | None = None
     return w, out
 
 
-def stack(parts: Sequence[FrfPart]) -> tuple[np.ndarray, list[str]]:
-    """``Y = diag(Y^(s))`` and the stacked labels ``"<part>@<label>"``."""
+def stack(parts: Sequence[FrfPart], frequencies: slice = slice(None)
+          ) -> tuple[np.ndarray, list[str]]:
+    """``Y = diag(Y^(s))`` (at the grid's ``frequencies``, all by default) and the stacked
+    labels ``"<part>@<label>"``."""
     n = sum(len(p.labels) for p in parts)
-    k = len(parts[0].omega)
+    k = len(range(*frequencies.indices(len(parts[0].omega))))
     Y = np.zeros((k, n, n), dtype=complex)
     labels: list[str] = []
     at = 0
     for p in parts:
         m = len(p.labels)
-        Y[:, at:at + m, at:at + m] = p.Y
+        Y[:, at:at + m, at:at + m] = p.Y[frequencies]
         labels += [f"{p.name}@{lab}" for lab in p.labels]
         at += m
     return Y, labels
@@ -130,10 +138,41 @@ def _interface(Y: np.ndarray, B: np.ndarray) -> tuple[np.ndarray, np.ndarray, np
     return YBt, BY[:, :, nz] @ Bn.T, BY
 
 
+def _interface_rows(Y: np.ndarray, B: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The rows' side of :func:`_interface`: ``B`` on its non-zero columns ``nz``, those
+    columns, ``B Y B^T`` and ``B Y`` (``Y B^T`` is formed a block at a time by the callers,
+    the same products a frequency)."""
+    nz = np.flatnonzero(np.any(B != 0, axis=0))
+    Bn = B[:, nz]
+    BY = Bn @ Y[:, nz, :]  # (k, m, n)
+    return Bn, nz, BY[:, :, nz] @ Bn.T, BY
+
+
+def _blocks(Y: np.ndarray) -> list[slice]:
+    """Slices of the frequencies of ``Y``, each about :data:`BLOCK_BYTES` of ``n x n``
+    receptances (at least one frequency): the products and differences of a block stay small
+    (cache-sized temporaries instead of arrays as large as the whole sweep)."""
+    k, n = Y.shape[0], Y.shape[1] * Y.shape[2]
+    step = max(1, BLOCK_BYTES // max(1, 16 * n))
+    return [slice(s, s + step) for s in range(0, k, step)]
+
+
+def _solve_interface(BYBt: np.ndarray, BY: np.ndarray) -> np.ndarray:
+    """``(B Y B^T)^{-1} B Y`` at every frequency (one batched LU solve)."""
+    try:
+        return np.linalg.solve(BYBt, BY)
+    except np.linalg.LinAlgError:
+        raise AnalysisInputError("the interface receptance B Y B^T is singular (redundant "
+                                 "interface rows?)") from None
+
+
 def lm_fbs(Y: np.ndarray, B: np.ndarray) -> np.ndarray:
     r"""LM-FBS coupling at every frequency, by a linear solve:
 
     .. math::  Y_c = Y - Y B^T (B Y B^T)^{-1} B Y
+
+    (``Y B^T`` times the solution formed a block of frequencies at a time, :func:`_blocks`).
 
     Args:
         Y: ``(n_omega, n, n)`` stacked (block-diagonal) receptances.
@@ -143,16 +182,16 @@ def lm_fbs(Y: np.ndarray, B: np.ndarray) -> np.ndarray:
         ValueError: ``B Y B^T`` singular at a frequency (redundant rows: use
             :func:`generalized_inverse_fbs`).
     """
-    YBt, BYBt, BY = _interface(Y, B)
-    try:
-        X = np.linalg.solve(BYBt, BY)
-    except np.linalg.LinAlgError:
-        raise AnalysisInputError("the interface receptance B Y B^T is singular (redundant interface "
-                         "rows?)") from None
-    return Y - YBt @ X
+    Bn, nz, BYBt, BY = _interface_rows(Y, B)
+    X = _solve_interface(BYBt, BY)
+    out = np.empty(Y.shape, dtype=np.result_type(Y, X))
+    for sl in _blocks(Y):
+        np.subtract(Y[sl], (Y[sl][:, :, nz] @ Bn.T) @ X[sl], out=out[sl])
+    return out
 
 
-def generalized_inverse_fbs(Y: np.ndarray, B: np.ndarray, rtol: float = 1e-12) -> np.ndarray:
+def generalized_inverse_fbs(Y: np.ndarray, B: np.ndarray, rtol: float = GENERALIZED_RTOL
+                            ) -> np.ndarray:
     r"""The same coupling with the Moore-Penrose inverse of the interface receptance:
 
     .. math::  Y_c = Y - Y B^T (B Y B^T)^{+} B Y
@@ -174,12 +213,21 @@ def couple(parts: Sequence[FrfPart], pairs: Sequence[tuple[str, str]],
         :func:`generalized_inverse_fbs`.
     """
     w, same = common_grid(parts, interpolate)
-    Y, labels = stack(same)
+    labels = [f"{p.name}@{lab}" for p in same for lab in p.labels]
     B = boolean_rows(labels, pairs)
-    Yc = lm_fbs(Y, B)
-    Yg = generalized_inverse_fbs(Y, B)
-    scale = max(float(np.abs(Yc).max(initial=0.0)), 1e-300)
-    return w, Yc, labels, float(np.abs(Yg - Yc).max(initial=0.0) / scale)
+    Yc = np.empty((len(w), len(labels), len(labels)), dtype=complex)
+    worst, scale = 0.0, 0.0
+    for sl in _blocks(Yc):  # the stack, both forms and their difference a block at a time:
+        # the numbers of lm_fbs and generalized_inverse_fbs on the whole stack (the same
+        # operations a frequency), with one sweep-sized array (the answer) instead of three
+        Y, _ = stack(same, sl)
+        Bn, nz, BYBt, BY = _interface_rows(Y, B)
+        YBt = Y[:, :, nz] @ Bn.T
+        np.subtract(Y, YBt @ _solve_interface(BYBt, BY), out=Yc[sl])
+        Yg = Y - YBt @ (np.linalg.pinv(BYBt, rcond=GENERALIZED_RTOL) @ BY)
+        worst = max(worst, float(np.abs(Yg - Yc[sl]).max(initial=0.0)))
+        scale = max(scale, float(np.abs(Yc[sl]).max(initial=0.0)))
+    return w, Yc, labels, worst / max(scale, 1e-300)
 
 
 def decouple(assembly: FrfPart, known: FrfPart, pairs: Sequence[tuple[str, str]],
