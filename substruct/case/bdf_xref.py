@@ -7,7 +7,7 @@ card, its id and the field.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -170,7 +170,9 @@ def cross_reference(cards: Cards) -> BulkData:
         for card, cell in by.get(kind, []):
             for k, g in enumerate(cell.nodes):
                 grid(card, g, f"G{k + 1}")
-            out.solids.append((cell, _solid_material(card, cell.pid, cards, systems)))
+            mat = _solid_material(card, cell.pid, cards, systems)
+            bubble = cell.kind == "CHEXA" and cards.psolid[cell.pid][1].bubble
+            out.solids.append((replace(cell, bubble=bubble), mat))
     for card, b in by.get("CBUSH", []):
         grid(card, b.ga, "GA")
         if b.gb is not None:
