@@ -65,7 +65,8 @@ BASE = ["BEGIN BULK", "MAT1,1,3.+7,1.1628+7,,7.4851-4", "GRID,1,,0.,0.,0.", "GRI
       "PARAM,K6ROT,100."], "PARAM K6ROT: K6ROT (the drilling stiffness"),
     (["CBAR,1,1,1,2,0.,1.,0.", "PBARL,1,1,,ROD", ",1.", "EIGRL,1,,,4,,,,POINT"],
      "EIGRL 1: NORM: must be MASS or MAX"),
-    (["CBAR,1,1,1,2,0.,1.,0.", "PBARL,1,1,,ROD", ",1.", "USET,U2"], "USET U2: ID1: a set needs a grid"),
+    (["CBAR,1,1,1,2,0.,1.,0.", "PBARL,1,1,,ROD", ",1.", "USET,U2"],
+     "USET U2: ID1: a set needs a grid"),
 ])
 def test_bad_new_cards_are_refused_naming_card_and_field(lines, message):
     with pytest.raises(BdfError, match=re.escape(message)):

@@ -33,8 +33,8 @@ from pathlib import Path
 from typing import Any, Callable
 
 from substruct.case.bdf_cards import (
-    read_bar, read_conm2, read_cord2r, read_grid, read_mat1, read_pbar, read_pbarl, read_pbeam, read_prod,
-    read_rod,
+    read_bar, read_conm2, read_cord2r, read_grid, read_mat1, read_pbar, read_pbarl, read_pbeam,
+    read_prod, read_rod,
 )
 from substruct.case.bdf_constraints import read_mpc, read_rbe2, read_rbe3, read_spc, read_spc1
 from substruct.case.bdf_control import CASE_CONTROL, OUTPUT_PARAMS, PARAMS, read_control, \

@@ -117,7 +117,10 @@ def _bubble_stiffness(X: np.ndarray, local: np.ndarray, nv: int, E: float, nu: f
                       ) -> sp.coo_array:
     """The condensed hexahedra of :func:`bubble_hex_stiffness` assembled on the coordinates
     ``3 * vertex + component`` of ``nv`` vertices."""
-    Ke = bubble_hex_stiffness(X, isotropic_D(E, nu))
+    D = isotropic_D(E, nu)
+    # in blocks of elements: the strain matrices take 8 x 6 x 33 numbers an element
+    Ke = np.concatenate([bubble_hex_stiffness(X[k:k + 4096], D)
+                         for k in range(0, len(X), 4096)]) if len(X) else np.zeros((0, 24, 24))
     dofs = (3 * local[:, :, None] + np.arange(3)).reshape(len(local), 24)
     rows = np.repeat(dofs, 24, axis=1).ravel()
     cols = np.tile(dofs, (1, 24)).ravel()
