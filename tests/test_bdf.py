@@ -202,7 +202,7 @@ def test_rigid_elements_and_mpc_are_the_library_rows(tmp_path):
     ("GRID,1,,0.,0.,0.\nGRID,1,,1.,0.,0.", "line 2: GRID 1: duplicate grid id (also GRID on "
                                             "line 1)"),
     ("GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nCBAR,4,7,1,2,0.,1.,0.",
-     "line 3: CBAR 4: PID: no PBAR of that id, got 7"),
+     "line 3: CBAR 4: PID: no PBAR or PBARL of that id, got 7"),
     ("GRID,1,,0,0.,0.", "line 1: GRID 1: X1: must be a real number with a decimal point"),
     ("SOL 103\nCEND\nSPC = 1\nBEGIN BULK\nGRID,1,,0.,0.,0.\nSPC1,2,1,1",
      "SPC: the case control chooses SPC set 1, which the bulk data does not have"),
@@ -212,8 +212,8 @@ def test_rigid_elements_and_mpc_are_the_library_rows(tmp_path):
      "RBE3,9,,4,12,1.,123,1,2,3\nEIGRL,1,,,2",
      "line 10: RBE3 9: model@{'node': 4, 'component': 'ux'} is already dependent in model: "
      "RBE2 8"),
-    ("GRID,1,,0.,0.,0.\nRBE3,5,,1,123456,1.,123,1\nPARAM,POST,-1",
-     "line 3: PARAM POST: PARAM POST is not supported"),
+    ("GRID,1,,0.,0.,0.\nRBE3,5,,1,123456,1.,123,1\nPARAM,LGDISP,1",
+     "line 3: PARAM LGDISP: PARAM LGDISP is not supported"),
 ])
 def test_bad_bulk_data_is_one_line(tmp_path, capsys, text, fragment):
     code, out = run_bdf(tmp_path, text + "\n")

@@ -1,7 +1,7 @@
 """Nastran solids (CHEXA, CPENTA, CTETRA with PSOLID and MAT1), against independent references.
 
-* a CHEXA block with COUPMASS gives the ``K`` and ``M`` of substruct's own ``solid_box`` (the
-  same trilinear hexahedra) to round-off; CTETRA the ``K`` and ``M`` of ``solid_from_mesh`` on
+* a CHEXA block with COUPMASS and full integration (IN 2, ISOP FULL) gives the ``K`` and ``M``
+  of substruct's own ``solid_box`` (the same trilinear hexahedra) to round-off; CTETRA the ``K`` and ``M`` of ``solid_from_mesh`` on
   the same tetrahedra;
 * CPENTA on a distorted mesh passes the patch test (a linear displacement field leaves no
   force at the inner grids and stores the closed-form energy of its constant strain), has
@@ -10,7 +10,8 @@
 * a mixed file (a CHEXA block, a CBAR beam joined to its face by an RBE3) run with
   ``substruct run X.bdf`` has the modes of the same joint assembled from a frame beam and an
   interpolation link, and as a case whose RBE3 takes the face of the Nastran block by a box;
-* mid-side grids, reduced integration, fluids, a missing PSOLID: one line, exit 2.
+* mid-side grids, IN = 3, reduced shear without bubbles, fluids, a missing PSOLID: one
+  line, exit 2.
 """
 
 from __future__ import annotations
@@ -79,6 +80,7 @@ def same(A: np.ndarray, B: np.ndarray) -> float:
 def test_chexa_block_is_the_solid_box_to_round_off():
     L = (1.0, 0.2, 0.3)
     text, _ = hex_bdf(4, 2, 3, L, ["PARAM,COUPMASS,1"])
+    text = text.replace("PSOLID,1,1", "PSOLID,1,1,,2,,FULL")  # standard isoparametric
     sub = nastran_substructure("n", nastran_matrices(parse_bulk(text, "b.bdf")))
     box = solid_box("s", BoxGrid(L, (4, 2, 3)), E, NU, RHO)
     P = translations(sub, box.geometry.points, box.dof_labels)
@@ -231,8 +233,10 @@ def test_mixed_solid_and_beam_file_runs_and_is_the_linked_assembly(tmp_path):
 
 @pytest.mark.parametrize("change, message", [
     (None, None),
-    (("PSOLID,1,1", "PSOLID,1,1,,,,REDUCED"), "PSOLID 1: ISOP: only full integration"),
-    (("PSOLID,1,1", "PSOLID,1,1,,BUBBLE"), "PSOLID 1: IN: only the 2 x 2 x 2 Gauss"),
+    (("PSOLID,1,1", "PSOLID,1,1,,2"), "PSOLID 1: ISOP: 2 x 2 x 2 reduced shear integration"),
+    (("PSOLID,1,1", "PSOLID,1,1,,THREE,,FULL"), "PSOLID 1: IN: only bubble functions"),
+    (("PSOLID,1,1", "PSOLID,1,1,,BUBBLE,,FULL"), "PSOLID 1: ISOP: bubble functions"),
+    (("PSOLID,1,1", "PSOLID,1,1,,,,SHEAR"), "PSOLID 1: ISOP: must be blank, REDUCED"),
     (("PSOLID,1,1", "PSOLID,1,1,,,,,PFLUID"), "PSOLID 1: FCTN: only structural solids"),
     (("PSOLID,1,1", "PSOLID,2,1"), "CHEXA 1: PID: no PSOLID of that id"),
     (("PSOLID,1,1", "PSOLID,1,1,7"), "PSOLID 1: CORDM: no such coordinate system"),

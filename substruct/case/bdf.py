@@ -33,11 +33,12 @@ from pathlib import Path
 from typing import Any, Callable
 
 from substruct.case.bdf_cards import (
-    read_bar, read_conm2, read_cord2r, read_grid, read_mat1, read_pbar, read_pbeam, read_prod,
-    read_rod,
+    read_bar, read_conm2, read_cord2r, read_grid, read_mat1, read_pbar, read_pbarl, read_pbeam,
+    read_prod, read_rod,
 )
 from substruct.case.bdf_constraints import read_mpc, read_rbe2, read_rbe3, read_spc, read_spc1
-from substruct.case.bdf_control import CASE_CONTROL, PARAMS, read_control, read_eigrl
+from substruct.case.bdf_control import CASE_CONTROL, OUTPUT_PARAMS, PARAMS, read_control, \
+    read_eigrl, read_uset
 from substruct.case.bdf_fields import RawCard, split_bdf
 from substruct.case.bdf_include import bdf_lines
 from substruct.case.bdf_model import BulkData, BdfSection
@@ -50,7 +51,8 @@ __all__ = ["BulkData", "BdfSection", "read_bulk", "parse_bulk", "CARDS", "PARAMS
            "CASE_CONTROL"]
 
 #: Bulk data cards read (docs/structures.md has what is read of each).
-CARDS = ("GRID", "CORD2R", "CROD", "PROD", "CBAR", "PBAR", "CBEAM", "PBEAM", "CQUAD4",
+CARDS = ("GRID", "CORD2R", "CROD", "PROD", "CBAR", "PBAR", "PBARL", "CBEAM", "PBEAM",
+         "PBEAML", "USET", "CQUAD4",
          "CTRIA3", "PSHELL", "CHEXA", "CPENTA", "CTETRA", "PSOLID", "CONM2", "CELAS1", "CELAS2", "PELAS", "CBUSH", "PBUSH", "RBE2",
          "RBE3", "MPC", "SPC", "SPC1", "MAT1", "EIGRL", "PARAM")
 
@@ -98,9 +100,10 @@ def parse_bulk(text: str | list[tuple[str, int, str]], source: str) -> BulkData:
             c = read_cord2r(card)
             rd.unique("coordinate system", c.id, card)
             coords[c.id] = c
-        elif name in ("PROD", "PBAR", "PBEAM"):
+        elif name in ("PROD", "PBAR", "PBEAM", "PBARL", "PBEAML"):
             values: tuple[Any, ...] = {"PROD": read_prod, "PBAR": read_pbar,
-                                       "PBEAM": read_pbeam}[name](card)
+                                       "PBEAM": read_pbeam, "PBARL": read_pbarl,
+                                       "PBEAML": read_pbarl}[name](card)
             rd.unique("property", int(values[0]), card)
             props[int(values[0])] = (card, values)
         elif name == "PSHELL":
@@ -129,8 +132,13 @@ def parse_bulk(text: str | list[tuple[str, int, str]], source: str) -> BulkData:
         elif name == "SPC1":
             sid, comp, gl = read_spc1(card)
             spc1.append((card, sid, comp, gl))
+        elif name == "USET":  # a user set for output or DMAP: read, no effect on the modes
+            read_uset(card)
         elif name == "PARAM":
             key = card.text(0)
+            if key in OUTPUT_PARAMS:  # output requests: read, no effect on the modes
+                card.blank_after(2, "PARAM has a name and a value")
+                continue
             if key not in PARAMS:
                 raise card.error(f"PARAM {key} is not supported (read: {', '.join(PARAMS)})")
             if key in params:
@@ -145,6 +153,9 @@ def parse_bulk(text: str | list[tuple[str, int, str]], source: str) -> BulkData:
             elif name == "EIGRL":
                 rd.unique("EIGRL", item.sid, card)
             by.setdefault(name, []).append((card, item))
+    if "K6ROT" in params and (by.get("CQUAD4") or by.get("CTRIA3")):
+        raise params["K6ROT"][0].error("K6ROT (the drilling stiffness of CQUAD4 and CTRIA3) is "
+                                       "not supported in a model with shells", "K6ROT")
     return cross_reference(cards)
 
 

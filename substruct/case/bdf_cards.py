@@ -9,9 +9,7 @@ line, ``fields[8 k + j]`` field ``j + 2`` of continuation ``k``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
-import numpy as np
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -19,8 +17,8 @@ import numpy as np
 from substruct.case.bdf_fields import RawCard, nastran_int, nastran_real
 
 __all__ = ["components", "GridCard", "Coord", "Rod", "Bar", "Mat1", "Conm2", "read_grid",
-           "read_cord2r", "read_prod", "read_pbar", "read_pbeam", "read_mat1", "read_rod",
-           "read_bar", "read_conm2"]
+           "read_cord2r", "read_prod", "read_pbar", "read_pbeam", "read_pbarl", "read_mat1",
+           "read_rod", "read_bar", "read_conm2"]
 
 
 def components(card: RawCard, i: int, name: str, blank_ok: bool = False) -> str:
@@ -167,6 +165,26 @@ def read_pbeam(c: RawCard) -> tuple[int, int, float, float, float, float, float]
         raise c.error("unsymmetric sections (I12) are not supported", c.text(5), "I12")
     return (c.integer(0, "PID"), c.integer(1, "MID"), c.real(2, "A"), c.real(3, "I1", 0.0),
             c.real(4, "I2", 0.0), c.real(6, "J", 0.0), c.real(7, "NSM", 0.0))
+
+
+def read_pbarl(c: RawCard) -> tuple[int, int, float, float, float, float, float]:
+    r"""PBARL / PBEAML PID MID GROUP TYPE / DIM1 NSM of the ``ROD`` section only (a solid
+    circle of radius ``r = DIM1``): ``(pid, mid, A, I1, I2, J, nsm)`` with
+    :math:`A = \pi r^2`, :math:`I_1 = I_2 = \pi r^4 / 4`, :math:`J = \pi r^4 / 2`, the
+    PBAR/PBEAM Nastran puts in their place (its shear factors ``K1 = K2 = 0.9`` are set where
+    the property is cross-referenced).  GROUP blank or ``MSCBML0``; other sections, and a
+    PBEAML's tapered stations, are refused."""
+    group = c.text(2) or "MSCBML0"
+    if group != "MSCBML0":
+        raise c.error("only the section library MSCBML0 is supported", group, "GROUP")
+    if c.text(3) != "ROD":
+        raise c.error("only the ROD section (a solid circle) is supported", c.text(3), "TYPE")
+    c.blank_after(10, f"{c.name} ROD of one constant section: DIM1 and NSM")
+    r = c.real(8, "DIM1")
+    if not r > 0:
+        raise c.error("the radius must be positive", r, "DIM1")
+    A, I = math.pi * r ** 2, math.pi * r ** 4 / 4
+    return c.integer(0, "PID"), c.integer(1, "MID"), A, I, I, 2 * I, c.real(9, "NSM", 0.0)
 
 
 def read_mat1(c: RawCard) -> Mat1:

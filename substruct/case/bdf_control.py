@@ -15,35 +15,44 @@ from typing import Any
 
 from substruct.case.bdf_fields import BdfError, BdfText, RawCard
 
-__all__ = ["PARAMS", "CASE_CONTROL", "Eigrl", "read_eigrl", "read_control", "param",
-           "select_sets"]
+__all__ = ["PARAMS", "OUTPUT_PARAMS", "CASE_CONTROL", "Eigrl", "read_eigrl", "read_control",
+           "param", "select_sets", "read_uset"]
 
-#: PARAM names read.
-PARAMS = ("WTMASS", "COUPMASS", "AUTOSPC")
-#: Case control commands read (titles and the displacement request have no effect: the mode
-#: shapes are always written).
+#: PARAM names read (K6ROT only in a model without shells, where it has no effect).
+PARAMS = ("WTMASS", "COUPMASS", "AUTOSPC", "K6ROT")
+#: PARAM names of output requests: read, no effect on the modes.
+OUTPUT_PARAMS = ("POST", "POSTEXT", "OUGCORD", "GRDPNT", "PRTMAXIM")
+#: Case control commands read (titles and output requests have no effect: the mode shapes are
+#: always written).  ``OUTPUT(...)`` starts a plot subpackage: its lines (XYPRINT, ...) up
+#: to BEGIN BULK are output requests too.
 CASE_CONTROL = ("METHOD", "SPC", "MPC", "SUBCASE", "TITLE", "SUBTITLE", "LABEL", "ECHO",
-                "DISPLACEMENT", "DISP", "VECTOR")
+                "DISPLACEMENT", "DISP", "VECTOR", "ELFORCE", "ELFOR", "FORCE", "STRESS",
+                "STRAIN", "SPCFORCES", "MPCFORCES", "OLOAD", "GPFORCE", "ESE", "GPKE",
+                "OUTPUT")
 _EXECUTIVE = ("SOL", "ID", "TIME", "DIAG")
 
 
 @dataclass(frozen=True)
 class Eigrl:
-    """EIGRL: set ``sid``, frequency range ``v1``-``v2`` (Hz, ``None`` when blank), ``nd``."""
+    """EIGRL: set ``sid``, frequency range ``v1``-``v2`` (Hz, ``None`` when blank), ``nd``,
+    the shapes' normalisation ``norm`` (``MASS`` or ``MAX``)."""
 
     sid: int
     v1: float | None
     v2: float | None
     nd: int | None
     line: int
+    norm: str = "MASS"
 
 
 def read_eigrl(c: RawCard) -> Eigrl:
-    """EIGRL SID V1 V2 ND MSGLVL MAXSET SHFSCL NORM (V1, V2 in Hz; NORM MASS only)."""
+    """EIGRL SID V1 V2 ND MSGLVL MAXSET SHFSCL NORM (V1, V2 in Hz; NORM MASS or MAX: ``substruct
+    run`` of the file refuses MAX, which its shapes would not honour; a file used as a
+    substructure does not use its EIGRL)."""
     c.blank_after(8, "EIGRL option lines are not supported")
     norm = c.text(7) or "MASS"
-    if norm != "MASS":
-        raise c.error("modes are normalised to unit modal mass (NORM MASS)", norm, "NORM")
+    if norm not in ("MASS", "MAX"):
+        raise c.error("must be MASS or MAX", norm, "NORM")
     v1 = c.real(1, "V1") if c.text(1) else None
     v2 = c.real(2, "V2") if c.text(2) else None
     nd = c.integer(3, "ND") if c.text(3) else None
@@ -53,7 +62,7 @@ def read_eigrl(c: RawCard) -> Eigrl:
         raise c.error("EIGRL needs ND or V2 (the modes wanted)", name="ND")
     if v1 is not None and v2 is not None and v2 <= v1:
         raise c.error("V2 must be above V1", v2, "V2")
-    return Eigrl(c.integer(0, "SID"), v1, v2, nd, c.line)
+    return Eigrl(c.integer(0, "SID"), v1, v2, nd, c.line, norm)
 
 
 def read_control(text: BdfText) -> dict[str, Any]:
@@ -68,12 +77,18 @@ def read_control(text: BdfText) -> dict[str, Any]:
             raise BdfError(src, "only normal modes, SOL 103, are run", t, line=line)
     chosen: dict[str, Any] = {}
     subcases = 0
+    plots = False
     for line, t in text.case_control:
+        if plots:  # the plot subpackage's requests: no effect on the modes
+            continue
         m = re.match(r"^([A-Z]+)\s*(\([^)]*\))?\s*(?:=\s*(.*))?$", t)
         word = m.group(1) if m else t.split()[0]
         if not m or word not in CASE_CONTROL:
             raise BdfError(src, f"case control {word} is not supported (read: "
                            f"{', '.join(CASE_CONTROL)})", t, line=line)
+        if word == "OUTPUT":
+            plots = True
+            continue
         if word == "SUBCASE":
             subcases += 1
             if subcases > 1:
@@ -85,6 +100,21 @@ def read_control(text: BdfText) -> dict[str, Any]:
             chosen[word] = int(value)
     chosen["case_control"] = bool(text.case_control or text.executive)
     return chosen
+
+
+def read_uset(c: RawCard) -> tuple[str, list[tuple[int, str]]]:
+    """USET SNAME ID1 C1 ID2 C2 ...: a user set (output, DMAP); read, no effect on the modes."""
+    name = c.text(0)
+    if not re.fullmatch(r"[A-Z][A-Z0-9]{0,7}", name):
+        raise c.error("must be a set name", name, "SNAME")
+    pairs = []
+    for k in range(1, 7, 2):
+        if c.text(k) or c.text(k + 1):
+            pairs.append((c.integer(k, f"ID{k // 2 + 1}"), c.text(k + 1)))
+    c.blank_after(7, "USET has one line")
+    if not pairs:
+        raise c.error("a set needs a grid", name="ID1")
+    return name, pairs
 
 
 def param(params: dict[str, tuple[RawCard, str]], key: str, kind: str, default: Any) -> Any:

@@ -23,7 +23,9 @@ __all__ = ["BdfSection", "ShellSection", "BushSpring", "BulkData"]
 @dataclass(frozen=True)
 class BdfSection:
     """A line element's property with its material: ``A, I1, I2, J, nsm`` and ``E, G, rho``
-    (``I1``, ``I2`` zero for a rod); ``shear``: CBEAM's shear factors ``K1 = K2 = 1``."""
+    (``I1``, ``I2`` zero for a rod); ``shear``: shear flexibility, with the factor ``kshear``
+    (``K1 = K2``): CBEAM's default 1, 0.9 for a PBARL/PBEAML ``ROD``; ``beam``: a CBEAM
+    (whose lumped mass has the torsional inertia)."""
 
     A: float
     I1: float
@@ -32,6 +34,8 @@ class BdfSection:
     nsm: float
     mat: Mat1
     shear: bool
+    kshear: float = 1.0
+    beam: bool = False
 
 
 @dataclass

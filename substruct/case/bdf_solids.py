@@ -3,10 +3,14 @@ PSOLID property, read from the fields of a :class:`~substruct.case.bdf_fields.Ra
 indices as in :mod:`substruct.case.bdf_cards`).  Every field is read or refused.
 
 The elements are the linear isoparametric solids (trilinear hexahedron, linear wedge, linear
-tetrahedron) integrated with 2 x 2 x 2 Gauss points (hexahedron; 3 x 2 on the wedge): PSOLID's
-``IN = 2`` and ``ISOP = FULL``.  Mid-side grids (CHEXA with 20, CPENTA with 15, CTETRA with
-10), the reduced or bubble-function integration (``ISOP = REDUCED``, ``IN = BUBBLE``/``3``) and
-fluid elements (``FCTN`` other than ``SMECH``) are refused.
+tetrahedron).  PSOLID's integration fields are read as MSC Nastran's QRG defines them for
+elements without mid-side grids: ``IN`` blank/``0``/``BUBBLE`` with ``ISOP`` blank/``REDUCED``
+(the default) gives the 8-grid CHEXA its bubble functions (incompatible modes,
+:mod:`substruct.models.nastran_bubble`); ``IN`` ``2``/``TWO`` with ``ISOP`` ``1``/``FULL`` is the
+standard 2 x 2 x 2 isoparametric integration.  The wedge is fully integrated (3 x 2) with
+either; the linear tetrahedron is exact with either.  Other combinations (reduced shear only,
+``IN = 3``), mid-side grids (CHEXA with 20, CPENTA with 15, CTETRA with 10) and fluid elements
+(``FCTN`` other than ``SMECH``) are refused.
 """
 
 from __future__ import annotations
@@ -26,24 +30,28 @@ SOLID_CORNERS: dict[str, tuple[int, int, str]] = {
 
 @dataclass(frozen=True)
 class SolidCell:
-    """CHEXA / CPENTA / CTETRA: its corner grids in Nastran's order."""
+    """CHEXA / CPENTA / CTETRA: its corner grids in Nastran's order; ``bubble``: a CHEXA whose
+    PSOLID asks for bubble functions (set when the property is cross-referenced)."""
 
     kind: str
     id: int
     pid: int
     nodes: tuple[int, ...]
     line: int
+    bubble: bool = False
 
 
 @dataclass(frozen=True)
 class Psolid:
-    """PSOLID: material ``mid`` and the material coordinate system ``cordm`` (no effect with
-    an isotropic MAT1; checked to exist)."""
+    """PSOLID: material ``mid``, the material coordinate system ``cordm`` (no effect with
+    an isotropic MAT1; checked to exist) and ``bubble``: the hexahedra's bubble functions
+    (IN blank/BUBBLE, ISOP blank/REDUCED) rather than full integration (IN 2, ISOP FULL)."""
 
     id: int
     mid: int
     cordm: int
     line: int
+    bubble: bool = True
 
 
 def read_solid(c: RawCard) -> SolidCell:
@@ -62,21 +70,23 @@ def read_solid(c: RawCard) -> SolidCell:
     return SolidCell(c.name, eid, c.integer(1, "PID"), nodes, c.line)
 
 
-def _choice(c: RawCard, i: int, name: str, allowed: tuple[str, ...], why: str) -> None:
+def _choice(c: RawCard, i: int, name: str, allowed: tuple[str, ...], why: str) -> str:
     value = c.text(i).upper()
     if value not in allowed:
         raise c.error(why, c.text(i), name)
+    return value
 
 
 def read_psolid(c: RawCard) -> Psolid:
     """PSOLID PID MID CORDM IN STRESS ISOP FCTN.
 
     * ``CORDM`` (blank: 0): the material axes, no effect with an isotropic MAT1;
-    * ``IN``: blank (the element's default) or ``2``/``TWO`` (2 x 2 x 2 Gauss points); ``0``/
-      ``BUBBLE`` and ``3``/``THREE`` are refused;
+    * ``IN`` and ``ISOP`` together (QRG PSOLID, remarks 6 and 10): ``IN`` blank, ``0`` or
+      ``BUBBLE`` with ``ISOP`` blank or ``REDUCED``: the default, bubble functions in the
+      8-grid CHEXA; ``IN`` ``2``/``TWO`` with ``ISOP`` ``1``/``FULL``: standard 2 x 2 x 2
+      integration.  ``IN = 3``/``THREE``, ``IN = 2`` with reduced shear (``ISOP`` blank or
+      ``REDUCED``) and the combinations outside Nastran's table are refused;
     * ``STRESS`` (where stresses are output): read and not used;
-    * ``ISOP``: blank, ``1`` or ``FULL``; ``0``/``REDUCED`` (reduced shear integration) is
-      refused;
     * ``FCTN``: blank or ``SMECH``; fluids (``PFLUID``, ``FFLUID``) are refused.
     """
     c.blank_after(7, "PSOLID has one line")
@@ -84,14 +94,21 @@ def read_psolid(c: RawCard) -> Psolid:
     if mid <= 0:
         raise c.error("must be a positive material id", mid, "MID")
     cordm = c.integer(2, "CORDM", 0)
-    _choice(c, 3, "IN", ("", "2", "TWO"), "only the 2 x 2 x 2 Gauss integration (IN blank, 2 "
-            "or TWO) is supported")
+    network = _choice(c, 3, "IN", ("", "0", "BUBBLE", "2", "TWO"), "only bubble functions "
+                      "(IN blank, 0 or BUBBLE) or 2 x 2 x 2 Gauss points (2 or TWO) are supported")
     _choice(c, 4, "STRESS", ("", "0", "1", "GRID", "GAUSS"), "must be blank, 0, 1, GRID or "
             "GAUSS")
-    _choice(c, 5, "ISOP", ("", "1", "FULL"), "only full integration (ISOP blank, 1 or FULL) "
-            "is supported")
+    scheme = _choice(c, 5, "ISOP", ("", "REDUCED", "1", "FULL"), "must be blank, REDUCED, 1 or "
+                     "FULL")
+    bubble = network in ("", "0", "BUBBLE")
+    if bubble and scheme in ("1", "FULL"):
+        raise c.error("bubble functions (IN blank, 0 or BUBBLE) go with reduced shear "
+                      "integration (ISOP blank or REDUCED) only", c.text(5), "ISOP")
+    if not bubble and scheme in ("", "REDUCED"):
+        raise c.error("2 x 2 x 2 reduced shear integration without bubble functions is not "
+                      "supported (IN 2 needs ISOP 1 or FULL)", c.text(5) or "blank", "ISOP")
     _choice(c, 6, "FCTN", ("", "SMECH"), "only structural solids (FCTN blank or SMECH) are "
             "supported")
     if c.text(2) and nastran_int(c.text(2)) is None:
         raise c.error("must be an integer", c.text(2), "CORDM")
-    return Psolid(pid, mid, cordm, c.line)
+    return Psolid(pid, mid, cordm, c.line, bubble)

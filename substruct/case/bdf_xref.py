@@ -7,7 +7,7 @@ card, its id and the field.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -124,9 +124,12 @@ def cross_reference(cards: Cards) -> BulkData:
             raise pcard.error("no MAT1 of that id", v[1], "MID")
         if pcard.name == "PROD":
             return BdfSection(v[2], 0.0, 0.0, v[3], v[4], mats[v[1]], False)
-        sec = BdfSection(v[2], v[3], v[4], v[5], v[6], mats[v[1]], pcard.name == "PBEAM")
+        shear = pcard.name in ("PBEAM", "PBARL", "PBEAML")
+        kshear = 0.9 if pcard.name in ("PBARL", "PBEAML") else 1.0  # Nastran's for ROD
+        sec = BdfSection(v[2], v[3], v[4], v[5], v[6], mats[v[1]], shear, kshear,
+                         card.name == "CBEAM")
         if sec.shear and sec.mat.G == 0 and sec.A > 0:
-            raise pcard.error("CBEAM shear flexibility (K1 = K2 = 1) needs G > 0 in the "
+            raise pcard.error(f"shear flexibility (K1 = K2 = {kshear}) needs G > 0 in the "
                               "material", v[1], "MID")
         return sec
 
@@ -140,7 +143,7 @@ def cross_reference(cards: Cards) -> BulkData:
                 grid(card, bar.nodes[k], name)
             if bar.g0 is not None:
                 grid(card, bar.g0, "G0")
-            prop = ("PBAR",) if kind == "CBAR" else ("PBEAM",)
+            prop = ("PBAR", "PBARL") if kind == "CBAR" else ("PBEAM", "PBEAML")
             out.bars.append((bar, section(card, bar.pid, prop)))
     for card, m in by.get("CONM2", []):
         grid(card, m.g, "G")
@@ -170,7 +173,9 @@ def cross_reference(cards: Cards) -> BulkData:
         for card, cell in by.get(kind, []):
             for k, g in enumerate(cell.nodes):
                 grid(card, g, f"G{k + 1}")
-            out.solids.append((cell, _solid_material(card, cell.pid, cards, systems)))
+            mat = _solid_material(card, cell.pid, cards, systems)
+            bubble = cell.kind == "CHEXA" and cards.psolid[cell.pid][1].bubble
+            out.solids.append((replace(cell, bubble=bubble), mat))
     for card, b in by.get("CBUSH", []):
         grid(card, b.ga, "GA")
         if b.gb is not None:

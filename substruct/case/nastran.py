@@ -80,6 +80,9 @@ def bdf_case(path: Path, source: str) -> str:
     if eig is None:
         raise BdfError(source, "no EIGRL: substruct run of a bulk data file computes the "
                        "normal modes its EIGRL asks for")
+    if eig.norm != "MASS":
+        raise BdfError(source, "substruct run writes shapes of unit modal mass (EIGRL NORM "
+                       "MASS)", eig.norm, line=eig.line, card="EIGRL", ident=eig.sid)
     name = re.sub(r"[^A-Za-z0-9_.-]", "_", path.stem)[:100] or "model"
     modes: dict[str, Any] = {"count": eig.nd if eig.nd is not None else MAX_COUNT}
     if eig.v1 is not None or eig.v2 is not None:

@@ -14,9 +14,11 @@ offsets of its ends (:math:`u_{end} = u_{grid} + \theta \times w`).
 * **CBAR / CBEAM**: the beam of :mod:`substruct.models.beam` with ``I1`` bending in the plane
   of the orientation vector (local ``x-y``) and ``I2`` in the other; CBAR is Euler-Bernoulli
   (PBAR's ``K1``, ``K2`` blank), CBEAM has PBEAM's default shear factors ``K1 = K2 = 1``
-  (:math:`\phi = 12 E I / (G A L^2)`).  Pin flags ``PA``, ``PB`` are condensed out
+  (:math:`\phi = 12 E I / (K G A L^2)`, ``K = 1``); a PBARL/PBEAML ``ROD`` has Nastran's
+  ``K = 0.9`` on either.  Pin flags ``PA``, ``PB`` are condensed out
   (:func:`~substruct.models.beam.release`), offsets ``WA``, ``WB`` are rigid.  Lumped mass is
-  :math:`\mu L/2` on the translations of each end, no rotary inertia; coupled mass is the
+  :math:`\mu L/2` on the translations of each end, no rotary inertia, and for CBEAM the
+  torsional inertia :math:`\rho (I_1 + I_2) L/2` at each end; coupled mass is the
   element's consistent mass (axial ``[2, 1; 1, 2]/6``, bending with the element's own shape
   functions, torsion :math:`\rho (I_1 + I_2) L/6\,[2, 1; 1, 2]`, no rotary inertia of bending),
   equal to a ``type: frame`` Euler-Bernoulli member with consistent mass for CBAR.
@@ -91,7 +93,7 @@ def bar_matrices(xa: np.ndarray, xb: np.ndarray, v: np.ndarray, s: BdfSection, c
         M[np.ix_([0, 6], [0, 6])] = mu * L * pair
         M[np.ix_([3, 9], [3, 9])] = s.mat.rho * (s.I1 + s.I2) * L * pair
     for vv, t, I, sign in ((1, 5, s.I1, 1.0), (2, 4, s.I2, -1.0)):
-        kga = G * s.A if shear else None
+        kga = s.kshear * G * s.A if shear else None
         Kb, Mb = bending_matrices(L, E * I, kga if kga else None, mu, 0.0)
         D = np.diag([1.0, sign, 1.0, sign])
         idx = np.ix_([vv, t, vv + 6, t + 6], [vv, t, vv + 6, t + 6])
@@ -100,6 +102,8 @@ def bar_matrices(xa: np.ndarray, xb: np.ndarray, v: np.ndarray, s: BdfSection, c
             M[idx] = D @ Mb @ D
     if not coupled:
         M[[0, 1, 2, 6, 7, 8], [0, 1, 2, 6, 7, 8]] = mu * L / 2
+        if s.beam:  # CBEAM's lumped mass holds the torsional inertia, CBAR's does not
+            M[[3, 9], [3, 9]] = s.mat.rho * (s.I1 + s.I2) * L / 2
     K, M = release(K, M, released)
     T = np.kron(np.eye(4), R)
     Eo = np.eye(12)

@@ -14,7 +14,9 @@ hexahedron and the wedge (Nastran's ``IN = 2``, ``ISOP = FULL``): scikit-fem's o
 the hexahedron, and on the wedge the 3 x 2 rule of :func:`wedge_quadrature` (scikit-fem
 12.0.2's wedge rules have weights summing to 1/4, not to the reference wedge's volume 1/2, so
 they halve every matrix).  Elements of one kind and
-one material make one mesh.
+one material make one mesh.  The 8-grid CHEXA whose PSOLID asks for bubble functions (IN and
+ISOP blank, Nastran's default) takes its stiffness from
+:func:`substruct.models.nastran_bubble.bubble_hex_stiffness` instead, its mass as above.
 
 Mass, as in Nastran: lumped by default, the element's mass :math:`\rho V_e` in equal shares on
 the translations of its corners; coupled (``PARAM,COUPMASS`` positive), the consistent
@@ -38,6 +40,7 @@ from skfem.models.elasticity import linear_elasticity
 from substruct.case.bdf_fields import BdfError
 from substruct.case.bdf_model import BulkData
 from substruct.case.bdf_solids import SOLID_CORNERS
+from substruct.models.nastran_bubble import bubble_hex_stiffness, isotropic_D
 
 __all__ = ["solid_blocks", "wedge_quadrature"]
 
@@ -54,10 +57,10 @@ def solid_blocks(bulk: BulkData, index: dict[int, int]
         BdfError: an element of zero volume, naming its card.
     """
     N = 6 * len(index)
-    groups: dict[tuple[str, int], list] = {}
+    groups: dict[tuple[str, int, bool], list] = {}
     for cell, mat in bulk.solids:
-        groups.setdefault((cell.kind, mat.id), []).append((cell, mat))
-    for (card, _), items in groups.items():
+        groups.setdefault((cell.kind, mat.id, cell.bubble), []).append((cell, mat))
+    for (card, _, bubble), items in groups.items():
         kind = SOLID_CORNERS[card][2]
         mat = items[0][1]
         conn = np.array([[index[g] for g in cell.nodes] for cell, _ in items], dtype=np.int64)
@@ -71,7 +74,10 @@ def solid_blocks(bulk: BulkData, index: dict[int, int]
             else Basis(mesh, ElementVector(ElementWedge1()), quadrature=wedge_quadrature())
         nu = mat.E / (2 * mat.G) - 1
         lam = mat.E * nu / ((1 + nu) * (1 - 2 * nu))
-        K = asm(linear_elasticity(lam, mat.G), basis)
+        if bubble:  # the 8-grid CHEXA with bubble functions, IN blank or BUBBLE
+            K = _bubble_stiffness(xyz[local], local, len(used), mat.E, nu)
+        else:
+            K = asm(linear_elasticity(lam, mat.G), basis)
         if bulk.coupled:
             M = asm(BilinearForm(lambda u, v, w: mat.rho * dot(u, v)), basis)
         else:
@@ -83,12 +89,16 @@ def solid_blocks(bulk: BulkData, index: dict[int, int]
         target = np.empty(basis.N, dtype=np.int64)
         for c in range(3):
             target[basis.nodal_dofs[c]] = 6 * used + c
+        if bubble:  # assembled on the coordinates 3 * vertex + component
+            target_K = np.repeat(6 * used, 3) + np.tile(np.arange(3), len(used))
+        else:
+            target_K = target
         if bulk.coupled:
-            yield kind, conn, _moved(K, target, N), _moved(M, target, N)
+            yield kind, conn, _moved(K, target_K, N), _moved(M, target, N)
         else:
             lumped = sp.coo_array(M)
             order = np.repeat(6 * used, 3) + np.tile(np.arange(3), len(used))
-            yield kind, conn, _moved(K, target, N), sp.coo_array(
+            yield kind, conn, _moved(K, target_K, N), sp.coo_array(
                 (lumped.data, (order[lumped.row], order[lumped.col])), shape=(N, N))
 
 
@@ -101,6 +111,20 @@ def wedge_quadrature() -> tuple[np.ndarray, np.ndarray]:
     line = 0.5 + np.array([-0.5, 0.5]) / np.sqrt(3.0)
     X = np.array([[a, b, z] for z in line for a, b in tri]).T
     return X, np.full(6, 1 / 12)
+
+
+def _bubble_stiffness(X: np.ndarray, local: np.ndarray, nv: int, E: float, nu: float
+                      ) -> sp.coo_array:
+    """The condensed hexahedra of :func:`bubble_hex_stiffness` assembled on the coordinates
+    ``3 * vertex + component`` of ``nv`` vertices."""
+    D = isotropic_D(E, nu)
+    # in blocks of elements: the strain matrices take 8 x 6 x 33 numbers an element
+    Ke = np.concatenate([bubble_hex_stiffness(X[k:k + 4096], D)
+                         for k in range(0, len(X), 4096)]) if len(X) else np.zeros((0, 24, 24))
+    dofs = (3 * local[:, :, None] + np.arange(3)).reshape(len(local), 24)
+    rows = np.repeat(dofs, 24, axis=1).ravel()
+    cols = np.tile(dofs, (1, 24)).ravel()
+    return sp.coo_array((Ke.ravel(), (rows, cols)), shape=(3 * nv, 3 * nv))
 
 
 def _moved(A: sp.sparray | sp.spmatrix, target: np.ndarray, N: int) -> sp.coo_array:
