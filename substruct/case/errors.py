@@ -114,7 +114,7 @@ def show_value(value: Any) -> str:
     return text if len(text) <= SHOWN else text[:SHOWN - 3] + "..."
 
 
-def _rebuild(cls: type, message: str, state: dict[str, Any]) -> Exception:
+def _rebuild(cls: type[Exception], message: str, state: dict[str, Any]) -> Exception:
     """An error of class ``cls`` with its message and attributes, without calling its
     ``__init__`` (whose arguments differ from class to class): the other half of
     :meth:`CaseError.__reduce__`."""
