@@ -284,7 +284,7 @@ def test_compare_two_runs_peaks(runs, tmp_path: Path, capsys) -> None:
     rec_a = runs[6][3].recovery[0 if first["recovery"] == "a.dtm" else 1]
     rec_b = runs[24][3].recovery[0 if first["recovery"] == "a.dtm" else 1]
     ea, eb = rec_a.peaks().extreme()[k], rec_b.peaks().extreme()[k]
-    assert first["change"] == pytest.approx((eb - ea) / abs(ea), rel=1e-12)
+    assert first["change"] == pytest.approx((abs(eb) - abs(ea)) / abs(ea), rel=1e-12)
     assert abs(first["change"]) >= max(abs(r["change"]) for r in rows[1:] if r["change"])
     assert cli.main(["compare", str(tmp_path / "a.h5"), str(tmp_path / "b.h5")]) == 0
     text = capsys.readouterr().out

@@ -75,7 +75,7 @@ def build_superelement(case: Any, i: int, spec: SuperelementSpec) -> Substructur
 
     n_modes = sum(1 for lab in labels if lab.startswith("mode:"))
     meta: dict[str, Any] = {"n_dof": n, "n_modes": n_modes, "n_boundary": n - n_modes,
-                            "file": spec.file}
+                            "file": spec.file if spec.file is not None else spec.K}
     if spec.rigid_body() is not None:
         meta["rigid_body"] = spec.rigid_body()
     return Substructure(name=spec.name, M=as_csr(spec.matrix("M")), K=as_csr(spec.matrix("K")),

@@ -114,8 +114,21 @@ def show_value(value: Any) -> str:
     return text if len(text) <= SHOWN else text[:SHOWN - 3] + "..."
 
 
+def _rebuild(cls: type[Exception], message: str, state: dict[str, Any]) -> Exception:
+    """An error of class ``cls`` with its message and attributes, without calling its
+    ``__init__`` (whose arguments differ from class to class): the other half of
+    :meth:`CaseError.__reduce__`."""
+    err = cls.__new__(cls)
+    Exception.__init__(err, message)
+    err.__dict__.update(state)
+    return err
+
+
 class CaseError(ValueError):
     """A problem with a case file, as one line ``<file>: <field.path>: <problem>, got <value>``.
+
+    Picklable (a run's child process and Dask workers send it back): it is rebuilt from its
+    message and attributes, whatever the arguments of a subclass's ``__init__``.
 
     Attributes:
         source: the case file (or ``"<string>"``).
@@ -132,15 +145,36 @@ class CaseError(ValueError):
             message += f", got {show_value(value)}"
         super().__init__(printable(message))
 
+    def __reduce__(self) -> tuple[Any, ...]:
+        return _rebuild, (type(self), str(self), dict(self.__dict__))
+
 
 class FieldError(ValueError):
-    """Raised inside validators: a problem at ``loc`` relative to the validated object."""
+    """Raised inside validators: a problem at ``loc`` relative to the validated object
+    (picklable like :class:`CaseError`)."""
 
     def __init__(self, loc: str | int | Sequence[str | int], problem: str,
                  value: Any = MISSING):
         self.loc = (loc,) if isinstance(loc, (str, int)) else tuple(loc)
         self.problem, self.value = problem, value
         super().__init__(problem)
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        state = dict(self.__dict__)
+        if state.get("value") is MISSING:  # the sentinel is this process's own object
+            state["value"] = _Missing()
+        return _rebuild, (type(self), str(self), state)
+
+
+class _Missing:
+    """Stands for :data:`MISSING` in a pickle; turned back into it on loading."""
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return _missing, ()
+
+
+def _missing() -> Any:
+    return MISSING
 
 
 # ------------------------------------------------------------------------ field paths

@@ -135,7 +135,8 @@ def _labels(spec: RecoverySpec, base: Path, member: Any, loc: tuple) -> list[str
     return [_grid_label(float(g), float(c), where) for g, c in table.tolist()]
 
 
-def load_recovery(specs: list[RecoverySpec], base: Path, default_file: str, n: int) -> None:
+def load_recovery(specs: list[RecoverySpec], base: Path, default_file: str | None, n: int
+                  ) -> None:
     """Read and check each recovery matrix of a superelement of ``n`` coordinates (its
     matrices and labels are kept on the spec).
 
@@ -154,6 +155,9 @@ def load_recovery(specs: list[RecoverySpec], base: Path, default_file: str, n: i
             raise FieldError((*loc, "of"), "each history once", list(of))
         key = spec.labels.get("key") if isinstance(spec.labels, dict) else None
         file = spec.file or default_file
+        if file is None:
+            raise FieldError((*loc, "file"), "the file of the recovery matrix (.op4 or .npz) is "
+                             "required beside Abaqus matrix files", spec.matrix)
         got = read_matrix_file(file, base, (*loc, "file") if spec.file else "file",
                                {"R": spec.matrix}, [key] if isinstance(key, str) else [],
                                {"R": (*loc, "matrix")}, (".op4", ".npz"))

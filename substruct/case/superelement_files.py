@@ -1,6 +1,7 @@
 """The files a superelement's matrices come from: OP4 (:mod:`substruct.case.op4`), NPZ
 (:mod:`substruct.case.npz_files`) or Nastran bulk data holding DMIG entries
-(:mod:`substruct.case.dmig`, which also gives the DOF map).
+(:mod:`substruct.case.dmig`, which also gives the DOF map), or one Abaqus ``.mtx`` file per
+matrix (:mod:`substruct.case.abaqus_mtx`, :func:`read_abaqus_files`).
 
 Every problem is a :class:`~substruct.case.errors.FieldError` at the field that names the
 file or the matrix, one line naming the file, the matrix and what is wrong.
@@ -15,17 +16,21 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from substruct.case.abaqus_mtx import abaqus_matrices
 from substruct.case.dmig import dmig_matrices
 from substruct.case.errors import CaseError, FieldError
 from substruct.case.npz_files import read_npz
 from substruct.case.op4 import Op4Error, read_op4
 
-__all__ = ["MatrixFile", "read_matrix_file", "MATRIX_SUFFIXES", "BULK_SUFFIXES"]
+__all__ = ["MatrixFile", "read_matrix_file", "read_abaqus_files", "MATRIX_SUFFIXES",
+           "BULK_SUFFIXES", "ABAQUS_SUFFIXES"]
 
 #: Endings of the bulk data files read for DMIG entries.
 BULK_SUFFIXES = (".bdf", ".dat", ".nas", ".blk", ".pch")
 #: Endings of the files a superelement's matrices are read from.
 MATRIX_SUFFIXES = (".op4", ".npz") + BULK_SUFFIXES
+#: Endings of Abaqus matrix files (one matrix a file).
+ABAQUS_SUFFIXES = (".mtx",)
 
 
 @dataclass
@@ -115,3 +120,26 @@ def read_matrix_file(file: str, base: Path, loc: Any, names: Mapping[str, str],
     except CaseError as err:
         raise FieldError(loc, str(err)) from None
     return MatrixFile(path, {k: mats[n] for k, n in names.items()}, nbytes, {}, dofs)
+
+
+def read_abaqus_files(files: Mapping[str, str], base: Path,
+                      dofs: Sequence[tuple[int, int]] | None) -> MatrixFile:
+    """Read one Abaqus matrix file per key (a field name: ``M``, ``K`` ...; the file as
+    written in the case, relative to ``base``).
+
+    Args:
+        dofs: the DOF map of files in the coordinate layout (``None`` for the nodes layout,
+            whose DOF map is read from the files and returned as ``dofs``).
+
+    Raises:
+        FieldError: at the key of the file at fault, one line naming the file, the line and
+            the problem.
+    """
+    paths = {key: _path(file, base, key, ABAQUS_SUFFIXES) for key, file in files.items()}
+    try:
+        table, mats = abaqus_matrices(paths, {k: p.name for k, p in paths.items()}, dofs)
+    except CaseError as err:
+        key = next((k for k, p in paths.items() if p.name == err.source), next(iter(paths)))
+        raise FieldError(key, str(err)) from None
+    first = next(iter(paths.values()))
+    return MatrixFile(first, mats, 8, {}, table if dofs is None else None)

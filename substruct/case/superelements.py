@@ -24,7 +24,9 @@ labelled ``mode:<k>`` in order.  A CSV file has one ``grid, component`` line per
 (an optional header line and ``#`` comments); a member (OP4 matrix or NPZ array) is ``n x 2``.
 Points are ``sc@100:uz`` (or ``sc@100:3``) and ``sc@mode:2``.  From bulk data the map is
 that of the DMIG entries (:mod:`substruct.case.dmig`: rows and columns in ascending ``(grid,
-component)``, scalar points modal), and ``dofs`` is left out.  ``recovery`` lists output
+component)``, scalar points modal), and ``dofs`` is left out.  Without ``file``, ``M``, ``K``
+(``C``, ``K4``) name Abaqus ``.mtx`` files (:mod:`substruct.case.abaqus_mtx`), whose DOF map is
+their ``(node, dof)`` pairs, or ``dofs`` for files of equation numbers.  ``recovery`` lists output
 transformation matrices (:mod:`substruct.case.recovery`).
 
 Checked while the case is read (:mod:`substruct.case.rigid_body`): the matrices square, of one
@@ -61,7 +63,7 @@ from substruct.case.rigid_body import (
     rigid_body_frequency_ratio,
     rigid_body_vectors,
 )
-from substruct.case.superelement_files import read_matrix_file
+from substruct.case.superelement_files import read_abaqus_files, read_matrix_file
 
 __all__ = ["SuperelementSpec", "SE_COMPONENTS", "SYMMETRY_RTOL", "MAX_DOF_FILE"]
 
@@ -86,7 +88,7 @@ class SuperelementSpec(StrictModel):
 
     name: Name
     type: Literal["superelement"]
-    file: Annotated[str, Field(min_length=1)]
+    file: Annotated[str, Field(min_length=1)] | None = None
     M: Annotated[str, Field(min_length=1)]
     K: Annotated[str, Field(min_length=1)]
     C: str | None = None
@@ -109,6 +111,8 @@ class SuperelementSpec(StrictModel):
         """The named matrices (dense float64), the bytes per number of the data, the DOF-map
         member if ``dofs: {key: ...}`` and the DOF map of DMIG entries."""
         names = {f: getattr(self, f) for f in _MATRICES if getattr(self, f) is not None}
+        if self.file is None:
+            return self._read_abaqus(base, names)
         member = self.dofs.get("key") if isinstance(self.dofs, dict) else None
         got = read_matrix_file(self.file, base, "file", names,
                                [member] if isinstance(member, str) else [])
@@ -120,6 +124,22 @@ class SuperelementSpec(StrictModel):
                              "file ({file: map.csv}, {key: <member>} or a list)")
         extra = got.members[member] if isinstance(member, str) else None
         return got.matrices, got.nbytes, extra, got.dofs
+
+    def _read_abaqus(self, base: Path, names: dict[str, str]
+                     ) -> tuple[dict[str, np.ndarray], int, Any, list[tuple[int, int]] | None]:
+        """Without ``file``: ``M``, ``K`` (``C``, ``K4``) name Abaqus ``.mtx`` files."""
+        for field, value in names.items():
+            if not value.lower().endswith(".mtx"):
+                raise FieldError("file", "the file of the matrices is required (.op4, .npz or "
+                                 "bulk data); without it M, K, C and K4 name Abaqus matrix "
+                                 f"files (.mtx), but {field} is {value!r}")
+        if isinstance(self.dofs, dict) and "key" in self.dofs:
+            raise FieldError(("dofs", "key"), "names a member of file; Abaqus matrix files "
+                             "hold one matrix each (give {file: map.csv} or a list)",
+                             self.dofs["key"])
+        given = self._dof_rows(base, None) if self.dofs is not None else None
+        got = read_abaqus_files(names, base, given)
+        return got.matrices, got.nbytes, None, got.dofs
 
     def _check_matrices(self, mats: dict[str, np.ndarray], nbytes: int) -> None:
         n = mats["M"].shape[0] if mats["M"].ndim == 2 else -1
