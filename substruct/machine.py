@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import os
 
-__all__ = ["available_memory"]
+__all__ = ["available_memory", "gigabytes"]
 
 
 def available_memory() -> float | None:
@@ -27,3 +27,10 @@ def available_memory() -> float | None:
         return float(os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
     except (ValueError, OSError, AttributeError):
         return None
+
+
+def gigabytes(nbytes: float) -> str:
+    """``"6 GB"`` / ``"250 MB"`` / ``"3.2e+03 TB"``: a memory figure for a message."""
+    if nbytes >= 1e12:
+        return f"{nbytes / 1e12:.3g} TB"
+    return f"{nbytes / 1e9:.3g} GB" if nbytes >= 1e8 else f"{nbytes / 1e6:.3g} MB"

@@ -36,6 +36,7 @@ from typing import Final, Literal, get_args
 
 __all__ = [
     "DEFAULT_TOLERANCE",
+    "DERIVATIVE_ORDER",
     "FORMULATIONS",
     "FRF_METHODS",
     "FormulationName",
@@ -98,6 +99,11 @@ SUPPORTS: tuple[Support, ...] = get_args(Support)
 #: What a receptance is shown as.
 Quantity = Literal["receptance", "mobility", "accelerance"]
 QUANTITIES: tuple[Quantity, ...] = get_args(Quantity)
+
+#: The order of the time derivative of each response history (the power of the root
+#: :math:`\lambda` of a mode, or of :math:`i \omega` of a receptance, that turns a
+#: displacement into it).
+DERIVATIVE_ORDER: Final = {"displacement": 0, "velocity": 1, "acceleration": 2}
 
 #: The default relative tolerance of every cross-check.
 DEFAULT_TOLERANCE: Final = 1e-6

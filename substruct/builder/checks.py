@@ -17,7 +17,7 @@ from substruct.linalg.constraints import independent_rows
 from substruct.linalg.scaling import row_scale
 from substruct.substructure import Substructure
 
-__all__ = ["check_connection_row", "warn_free_springs", "check_consistent"]
+__all__ = ["check_connection_row", "warn_free_springs", "check_connections_consistent"]
 
 #: Largest constraint matrix (entries) whose consistency is checked densely before computing.
 CONSISTENCY_LIMIT = 5_000_000
@@ -67,7 +67,7 @@ def warn_free_springs(case: Case) -> None:
             sys.stderr.write(f"substruct: warning: {message}\n")
 
 
-def check_consistent(case: Case, asm: Assembly, n_connections: int) -> None:
+def check_connections_consistent(case: Case, asm: Assembly, n_connections: int) -> None:
     r"""Refuse nonhomogeneous constraints that cannot hold, before anything is computed.
 
     A row of ``A`` that is a combination ``W`` of independent rows must have the same
@@ -75,7 +75,7 @@ def check_consistent(case: Case, asm: Assembly, n_connections: int) -> None:
 
     .. math::  A_d = W A_k \;\Rightarrow\; b_d = W b_k,\; R_d = W R_k
 
-    (the check :func:`substruct.linalg.constraints.check_consistent` makes again when the receptances
+    (the check :func:`substruct.linalg.constraints.check_connections_consistent` makes again when the receptances
     are computed; here it names the constraint in the case file).
     """
     A = asm.A

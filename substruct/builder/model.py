@@ -24,7 +24,7 @@ from substruct.assembly.stack import (
 )
 from substruct.builder.checks import (
     check_connection_row,
-    check_consistent,
+    check_connections_consistent,
     warn_free_springs,
 )
 from substruct.builder.drawing import Drawing
@@ -147,6 +147,6 @@ def assemble_case(case: Case, prebuilt: Mapping[str, Substructure] | None = None
             raise case.error(("constraints",), str(err)) from None
         raise case.error(("constraints", k, "terms"), str(err),
                          dict(case.constraints[k].terms)) from None
-    check_consistent(case, asm, len(connections))
+    check_connections_consistent(case, asm, len(connections))
     warn_free_springs(case)
     return Model(asm, active, layout_drawings(asm, chains) + link_spiders(case, asm), points)

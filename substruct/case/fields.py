@@ -30,7 +30,7 @@ from substruct.case.numbers import (
     digits_problem,
     number_problem,
 )
-from substruct.machine import available_memory
+from substruct.machine import available_memory, gigabytes
 
 __all__ = [
     "MEMORY_LIMIT", "MAX_ASSUMED_MODES", "MAX_ELEMENTS", "MAX_FREQUENCIES", "MAX_MATRIX_SIZE",
@@ -175,13 +175,6 @@ def _spec(value: Any) -> Any:
 
 #: A distribution along a rod; evaluated by :func:`substruct.case.expressions.profile`.
 Distribution = Annotated[Any, AfterValidator(_spec)]
-
-
-def gigabytes(nbytes: float) -> str:
-    """``"6 GB"`` / ``"250 MB"`` / ``"3.2e+03 TB"``: a memory estimate for a message."""
-    if nbytes >= 1e12:
-        return f"{nbytes / 1e12:.3g} TB"
-    return f"{nbytes / 1e9:.3g} GB" if nbytes >= 1e8 else f"{nbytes / 1e6:.3g} MB"
 
 
 class StrictModel(BaseModel):

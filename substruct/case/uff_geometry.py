@@ -36,7 +36,7 @@ import numpy as np
 from substruct.case.channels import ChannelTable, parse_channels
 from substruct.case.uff_records import UffFile, UffSystem, read_uff_records
 
-__all__ = ["coordinate_systems", "node_positions", "channels_from_uff"]
+__all__ = ["uff_coordinate_systems", "node_positions", "channels_from_uff"]
 
 _AXES = ("x", "y", "z")
 
@@ -61,7 +61,7 @@ def _from_18(s: UffSystem, known: dict[int, tuple[np.ndarray, np.ndarray]]
     return np.array([ex, np.cross(ez, ex), ez]), o
 
 
-def coordinate_systems(uff: UffFile) -> dict[int, tuple[np.ndarray, np.ndarray]]:
+def uff_coordinate_systems(uff: UffFile) -> dict[int, tuple[np.ndarray, np.ndarray]]:
     """Every coordinate system of the file, label -> ``(A, o)`` (module docstring), with the
     global system 0.
 
@@ -123,7 +123,7 @@ def channels_from_uff(path: str | os.PathLike) -> ChannelTable:
     p = Path(path)
     uff = read_uff_records(p)
     try:
-        where = node_positions(uff, coordinate_systems(uff))
+        where = node_positions(uff, uff_coordinate_systems(uff))
     except ValueError as err:
         raise ValueError(f"{p.name}: {err}") from None
     if not uff.functions:

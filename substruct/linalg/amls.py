@@ -37,7 +37,7 @@ import scipy.sparse.linalg as spla
 
 from substruct.linalg.amls_block import TaskMap
 from substruct.linalg.amls_reduce import ReducedModel, amls_reduce
-from substruct.linalg.amls_tree import Node, dissection_tree
+from substruct.linalg.amls_tree import DissectionNode, dissection_tree
 from substruct.linalg.factorize import factorizer
 from substruct.linalg.lanczos import rayleigh_ritz
 
@@ -90,6 +90,10 @@ def relative_residuals(K: sp.sparray, M: sp.sparray, lam: np.ndarray, U: np.ndar
         return np.where(den > 0, num / np.where(den > 0, den, 1.0), np.inf)
 
 
+#: The factorization of the subdomains and of the full matrix: the registry's choice
+#: (:mod:`substruct.linalg.factorize`), the fastest backend installed.
+AUTO = "auto"
+
 #: Reduced pencils up to this size are solved by a dense ``eigh``; larger ones by Lanczos.
 DENSE_REDUCED = 3000
 
@@ -132,9 +136,8 @@ def reduced_eigenpairs(red: ReducedModel, lam_max: float) -> tuple[np.ndarray, n
 
 def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_max: float,
                cutoff: float = 5.0, leaf_size: int = 1000, iterations: int = 0,
-               ritz_ratio: float = 1.5, factorization: str = "auto",
-               progress: Callable[[str], None] | None = None,
-               map: TaskMap | None = None, tree: Node | None = None) -> AMLSModes:
+               ritz_ratio: float = 1.5, progress: Callable[[str], None] | None = None,
+               map: TaskMap | None = None, tree: DissectionNode | None = None) -> AMLSModes:
     r"""The eigenpairs of :math:`K u = \omega^2 M u` with :math:`\omega \le` ``omega_max`` by
     AMLS (module docstring).
 
@@ -147,8 +150,6 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
         iterations: subspace iterations with the full factorization after the reduction.
         ritz_ratio: with iterations, the Ritz vectors iterated are those up to
             ``ritz_ratio * omega_max`` (capped by the cut-off).
-        factorization: registry name (:mod:`substruct.linalg.factorize`) for the subdomains'
-            and the full factorization.
         progress: receives one line per stage and tree level.
         map: runs the independent blocks of each tree level, and the subdomains'
             expansions, as tasks (:data:`~substruct.linalg.amls_block.TaskMap`, e.g. a Dask
@@ -174,7 +175,7 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
     times["tree"] = time.perf_counter() - t
     say(f"AMLS tree: {n_blocks} blocks, {max(b.level for b in root.postorder()) + 1} levels")
     t = time.perf_counter()
-    red = amls_reduce(K, M, root, lam_c, factorization, say, map)
+    red = amls_reduce(K, M, root, lam_c, AUTO, say, map)
     times["reduce"] = time.perf_counter() - t
     say(f"AMLS reduced: {red.size} coordinates from {red.n}")
     t = time.perf_counter()
@@ -186,7 +187,7 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
     times["expand"] = time.perf_counter() - t
     t = time.perf_counter()
     if iterations and U.shape[1]:
-        solve = factorizer(factorization)(sp.csc_array(K - SHIFT_FRACTION * lam_w * M))
+        solve = factorizer(AUTO)(sp.csc_array(K - SHIFT_FRACTION * lam_w * M))
         for it in range(iterations):
             W = np.asarray(solve(M @ U)).reshape(U.shape)
             lam, U = rayleigh_ritz(K, M, W)

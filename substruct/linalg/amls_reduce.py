@@ -62,7 +62,7 @@ from substruct.linalg.amls_block import (
     reduce_block,
     serial_map,
 )
-from substruct.linalg.amls_tree import Node
+from substruct.linalg.amls_tree import DissectionNode
 
 __all__ = ["ReducedModel", "amls_reduce"]
 
@@ -136,7 +136,7 @@ def _positions(I: np.ndarray, sub: np.ndarray) -> np.ndarray:
     return order[np.searchsorted(I, sub, sorter=order)]
 
 
-def _boundaries(P: sp.csr_array, order: list[Node]) -> list[np.ndarray]:
+def _boundaries(P: sp.csr_array, order: list[DissectionNode]) -> list[np.ndarray]:
     """Each block's boundary (post-order): the coordinates of later blocks (its ancestors'
     separators) coupled to its own rows or passed up by its children."""
     n = P.shape[0]
@@ -154,7 +154,7 @@ def _boundaries(P: sp.csr_array, order: list[Node]) -> list[np.ndarray]:
     return out
 
 
-def _job(K: sp.csr_array, M: sp.csr_array, b: Node, B: np.ndarray, lam_cut: float,
+def _job(K: sp.csr_array, M: sp.csr_array, b: DissectionNode, B: np.ndarray, lam_cut: float,
          factorization: str, below: list[tuple[np.ndarray, BlockResult]]) -> BlockJob:
     r"""The task of block ``b``: a subdomain's sparse rows, or a separator's dense local pencil
     on :math:`b \cup B` with its children's condensations added (``below``: each child's
@@ -182,7 +182,7 @@ def _job(K: sp.csr_array, M: sp.csr_array, b: Node, B: np.ndarray, lam_cut: floa
     return BlockJob(False, Kl, Ml, ns, lam_cut, factorization, children=children)
 
 
-def amls_reduce(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, root: Node,
+def amls_reduce(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, root: DissectionNode,
                 lam_cut: float, factorization: str = "auto",
                 progress: Callable[[str], None] | None = None,
                 map: TaskMap | None = None) -> ReducedModel:
@@ -231,7 +231,7 @@ def amls_reduce(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, root: 
     return _assemble(K, order, bounds, results, n, factorization)
 
 
-def _assemble(K: sp.csr_array, order: list[Node], bounds: list[np.ndarray],
+def _assemble(K: sp.csr_array, order: list[DissectionNode], bounds: list[np.ndarray],
               results: list[BlockResult | None], n: int, factorization: str) -> ReducedModel:
     """The reduced pencil: the reduced coordinates numbered block by block in post-order,
     :math:`M_r` from the identity blocks and every separator's cross blocks."""

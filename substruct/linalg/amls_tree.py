@@ -26,11 +26,11 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import maximum_bipartite_matching
 
-__all__ = ["Node", "dissection_tree", "supervariables", "vertex_separator"]
+__all__ = ["DissectionNode", "dissection_tree", "supervariables", "vertex_separator"]
 
 
 @dataclass
-class Node:
+class DissectionNode:
     """One block of the tree: a subdomain (leaf, no children) or a separator.
 
     Attributes:
@@ -40,7 +40,7 @@ class Node:
     """
 
     dofs: np.ndarray
-    children: list["Node"] = field(default_factory=list)
+    children: list["DissectionNode"] = field(default_factory=list)
     level: int = 0
 
     @property
@@ -48,9 +48,9 @@ class Node:
         """Whether the block is a subdomain (no children)."""
         return not self.children
 
-    def postorder(self) -> list["Node"]:
+    def postorder(self) -> list["DissectionNode"]:
         """The blocks of the subtree, every block after its descendants."""
-        out: list[Node] = []
+        out: list[DissectionNode] = []
         for c in self.children:
             out.extend(c.postorder())
         out.append(self)
@@ -123,7 +123,7 @@ def _bisect(G: sp.csr_array) -> np.ndarray:
     return np.asarray(parts, dtype=np.int64)
 
 
-def dissection_tree(K: sp.sparray | sp.spmatrix, leaf_size: int, max_levels: int = 30) -> Node:
+def dissection_tree(K: sp.sparray | sp.spmatrix, leaf_size: int, max_levels: int = 30) -> DissectionNode:
     """The nested-dissection tree of the graph of ``K``: a block is split (two subdomains and
     their vertex separator) while it has more than ``leaf_size`` rows and is less than
     ``max_levels`` deep.
@@ -140,17 +140,17 @@ def dissection_tree(K: sp.sparray | sp.spmatrix, leaf_size: int, max_levels: int
     def rows(vertices: np.ndarray) -> np.ndarray:
         return np.sort(members[vertices].indices)
 
-    def build(vertices: np.ndarray, level: int) -> Node:
+    def build(vertices: np.ndarray, level: int) -> DissectionNode:
         dofs = rows(vertices)
         if dofs.size <= leaf_size or level >= max_levels or vertices.size < 3:
-            return Node(dofs, level=level)
+            return DissectionNode(dofs, level=level)
         sub = sp.csr_array(G[vertices][:, vertices])
         parts = _bisect(sub)
         sep = vertex_separator(sub, parts)
         halves = [vertices[(parts == p) & ~sep] for p in (0, 1)]
         if sep.all() or min(h.size for h in halves) == 0:
-            return Node(dofs, level=level)
+            return DissectionNode(dofs, level=level)
         children = [build(h, level + 1) for h in halves]
-        return Node(rows(vertices[sep]), children, level)
+        return DissectionNode(rows(vertices[sep]), children, level)
 
     return build(np.arange(G.shape[0]), 0)

@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import scipy.sparse as sp
 
-from substruct.machine import available_memory
+from substruct.machine import available_memory, gigabytes
 
 __all__ = [
     "CHOLMOD_FILL",
@@ -35,7 +35,6 @@ __all__ = [
     "SUPERLU_FILL",
     "factor_entries",
     "factor_memory",
-    "gigabytes",
     "require_memory",
 ]
 
@@ -81,13 +80,6 @@ def factor_memory(A: sp.sparray | sp.spmatrix, kind: str, *, complex_factor: boo
     b0, c, p = PEAK.get((kind, which)) or PEAK[("superlu", which)]
     n = float(max(A.shape[0], 1))
     return b0 + c * float(sp.csr_array(A).nnz) * n ** p
-
-
-def gigabytes(nbytes: float) -> str:
-    """``"3.2 GB"`` (one decimal; ``"0.05 GB"`` below 0.1 GB)."""
-    g = float(nbytes) / 1e9
-    return f"{g:.2f} GB" if g < 0.1 else f"{g:.1f} GB"
-
 
 
 def require_memory(need: float, what: str, available: float | None = None) -> None:

@@ -37,7 +37,7 @@ from skfem.io.meshio import to_meshio
 from substruct.models.elasticity import MESH_KIND, elasticity_matrices, lame, rayleigh
 from substruct.models.mesh_io import mesh_label, read_mesh
 from substruct.models.selection import COMPONENTS, node_tolerance
-from substruct.models.solid_nodes import Nodes, basis_nodes, fixed_dofs, parse_point, set_nodes
+from substruct.models.solid_nodes import Nodes, basis_nodes, fixed_dofs, locate_point, set_nodes
 from substruct.substructure import Geometry, PointError, Substructure, as_csr
 
 __all__ = ["BoxGrid", "RectangleGrid", "solid_from_mesh", "solid_box", "solid_rectangle"]
@@ -83,7 +83,7 @@ def _build(name: str, mesh: Mesh, sets: Mapping[str, np.ndarray], E: float, nu: 
         return sp.csr_array(([1.0], ([0], [j])), shape=(1, n))
 
     def locate(where: Any) -> sp.csr_array:
-        x, c, node = parse_point(name, where, nodes)
+        x, c, node = locate_point(name, where, nodes)
         if node is None:
             dist, k = tree.query(x)
             node = int(k) if dist <= tol else None
@@ -99,7 +99,7 @@ def _build(name: str, mesh: Mesh, sets: Mapping[str, np.ndarray], E: float, nu: 
                                                 cols[keep])), shape=(1, n))
 
     def position(where: Any) -> np.ndarray:
-        x, _, _ = parse_point(name, where, nodes)
+        x, _, _ = locate_point(name, where, nodes)
         return np.pad(np.asarray(x, dtype=float), (0, 3 - dim))
 
     geometry = _geometry(mesh, nodes, col, n)

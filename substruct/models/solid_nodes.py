@@ -29,7 +29,7 @@ from substruct.models.selection import (
 )
 from substruct.substructure import PointError
 
-__all__ = ["Nodes", "basis_nodes", "set_nodes", "select_nodes", "fixed_dofs", "parse_point"]
+__all__ = ["Nodes", "basis_nodes", "set_nodes", "select_nodes", "fixed_dofs", "locate_point"]
 
 
 @dataclass(frozen=True)
@@ -122,7 +122,7 @@ def fixed_dofs(name: str, fixed: Sequence[Any], nodes: Nodes, sets: Mapping[str,
     return np.unique(np.concatenate(out))
 
 
-def parse_point(name: str, where: Any, nodes: Nodes) -> tuple[np.ndarray, int, int | None]:
+def locate_point(name: str, where: Any, nodes: Nodes) -> tuple[np.ndarray, int, int | None]:
     """``(xyz (dim,), component, node or None)`` of a point reference.
 
     Raises:

@@ -21,12 +21,11 @@ from substruct.analysis.results import Modes
 from substruct.analysis.transient.results import Transient
 from substruct.case.superelements import SuperelementSpec
 from substruct.run.recovered import Recovered
+from substruct.vocabulary import DERIVATIVE_ORDER
 
 __all__ = ["RecoveryPlan", "recovery_plan", "recover_modes", "recovery_rows",
-           "split_recovered", "POWER"]
+           "split_recovered"]
 
-#: The power of the root :math:`\lambda` that turns a shape into each history.
-POWER = {"displacement": 0, "velocity": 1, "acceleration": 2}
 
 
 @dataclass
@@ -67,7 +66,7 @@ def recover_modes(plan: RecoveryPlan, modes: Modes, out: list[Recovered]) -> Non
         n = x.shape[0]
         y = np.zeros((R.shape[0], x.shape[1]), dtype=complex)
         for i, s in enumerate(spec.histories()):
-            y += (R[:, i * n:(i + 1) * n] @ x) * lam[None, :] ** POWER[s]
+            y += (R[:, i * n:(i + 1) * n] @ x) * lam[None, :] ** DERIVATIVE_ORDER[s]
         rec.modes = y.real.copy() if not np.any(y.imag) else y
 
 

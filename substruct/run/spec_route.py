@@ -48,12 +48,11 @@ from substruct.case.analysis import LossFactorSpec
 from substruct.case.loader import Case
 from substruct.case.random_cross import cross_matrix
 from substruct.run.spec_results import RandomResponse, ShockSpectra
+from substruct.vocabulary import DERIVATIVE_ORDER
 
 __all__ = ["loss_parts", "loss_frf_result", "grounding_column", "random_result",
-           "srs_result", "POWER"]
+           "srs_result"]
 
-#: The power of ``i omega`` of each random-response quantity.
-POWER = {"displacement": 0, "velocity": 1, "acceleration": 2}
 
 
 def loss_parts(case: Case, model: Model, spec: LossFactorSpec, loc: tuple) -> list[LossFactor]:
@@ -186,7 +185,7 @@ def random_result(case: Case, model: Model) -> RandomResponse:
         raise case.error(loc, " ".join(str(err).split())) from None
     except CheckError as err:
         raise CheckError(f"{err}; to accept it, raise analysis.random.tolerance") from None
-    H = rec.H * ((1j * w) ** POWER[spec.quantity])[:, None, None]
+    H = rec.H * ((1j * w) ** DERIVATIVE_ORDER[spec.quantity])[:, None, None]
     Sy = response_psd(H, S)
     auto = np.real(np.einsum("kii->ki", Sy))
     return RandomResponse(f=f, outputs=list(spec.outputs), inputs=list(names),
