@@ -10,7 +10,7 @@ from __future__ import annotations
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import Field, field_validator, model_validator
+from pydantic import Discriminator, Field, Tag, field_validator, model_validator
 
 from substruct.case.errors import FieldError
 from substruct.case.fields import (
@@ -285,8 +285,11 @@ class Output(StrictModel):
 
 # ------------------------------------------------------------ specification analyses
 
-#: One loss factor on all of K, or one per substructure (by name).
-LossFactorSpec = NonNegative | dict[Name, NonNegative]
+#: One loss factor on all of K, or one per substructure (by name); a mapping is validated as
+#: one, so that a bad value is named by its substructure.
+LossFactorSpec = Annotated[
+    Annotated[NonNegative, Tag("all")] | Annotated[dict[Name, NonNegative], Tag("each")],
+    Discriminator(lambda v: "each" if isinstance(v, dict) else "all")]
 
 
 class PsdTable(StrictModel):
