@@ -23,7 +23,7 @@ def print_random(r: RandomResponse, out: TextIO) -> None:
         out.write(f"  {name:<{width}}  {value:11.4e}  {3 * value:11.4e}\n")
     out.write(f"  (a Gaussian response exceeds 3 rms {100 * THREE_SIGMA_EXCEEDANCE:.2f} % of "
               f"the time)\n")
-    if r.quantity == "acceleration" and r.inputs == ["base"]:
+    if r.quantity == "acceleration" and r.base and len(r.inputs) == 1:
         out.write("  Miles' check, sqrt(pi/2 f_n Q W) at each output's highest transmissibility "
                   "peak (one dominant mode: close to rms):\n")
         out.write(f"  {'output':<{width}}  {'f_n (Hz)':>9}  {'Q':>8}  {'W':>11}  "
