@@ -78,3 +78,26 @@ def test_box_beam_qualification_rms_against_the_direct_computation(capsys, tmp_p
     assert abs(np.sqrt(np.trapezoid(s_in, f)) / exact - 1) < 1e-3
     # the tip responds above the table in g rms, the joint below the tip
     assert rms[0] > exact and rms[1] < rms[0]
+
+
+def test_miles_check_of_a_single_dof_oscillator():
+    """On a single-DOF oscillator (f_n = 50 Hz, zeta = 0.05) under a white base acceleration,
+    the check finds the absolute transmissibility's peak, at f_n (sqrt(1 + 8 zeta^2) - 1)^(1/2)
+    / (2 zeta) and of height |T|max from the closed form, and Miles' value is the exact RMS
+    sqrt(pi/2 f_n Q W (1 + 1/Q^2)) divided by sqrt(1 + 1/Q^2) with Q = 1 / (2 zeta), up to
+    |T|max / Q - 1 = 0.5 % and the grid's resolution of the peak (0.01 Hz)."""
+    from substruct.analysis.frf.random import miles_absolute_rms, miles_check
+
+    fn, zeta, W = 50.0, 0.05, 3.0
+    f = np.arange(0.01, 2000.0, 0.01)
+    r = f / fn
+    T2 = (1 + (2 * zeta * r) ** 2) / ((1 - r ** 2) ** 2 + (2 * zeta * r) ** 2)
+    m = miles_check(f, np.full(len(f), W), T2 * W)
+    peak = fn * np.sqrt(np.sqrt(1 + 8 * zeta ** 2) - 1) / (2 * zeta)
+    rp = peak / fn
+    tmax = np.sqrt((1 + (2 * zeta * rp) ** 2) / ((1 - rp ** 2) ** 2 + (2 * zeta * rp) ** 2))
+    assert abs(m.fn - peak) <= 0.01 and m.W == W
+    assert abs(m.Q / tmax - 1) < 1e-5
+    Q = 1 / (2 * zeta)
+    exact = miles_absolute_rms(fn, Q, W)
+    assert abs(m.miles * np.sqrt(1 + 1 / Q ** 2) / exact - 1) < 1.2 * (tmax / Q - 1) / 2 + 1e-5
