@@ -159,7 +159,7 @@ def test_parseval_random_phase_transient(capsys, tmp_path):
      ("analysis.random.cross", "not positive semidefinite at 0.5 Hz",
       "smallest eigenvalue -2")),
     ("[{between: [a@mass, a@boundary], coherence: 0.5}]", None,
-     ("analysis.random.cross[0].between[1]", "not one of the force inputs")),
+     ("analysis.random.cross[0].between[1]", "not one of the inputs")),
     ("[{between: [a@mass, a@mass], coherence: 0.5}]", None,
      ("analysis.random.cross[0].between", "two different inputs")),
     ("[{between: [a@mass, b@mass], coherence: 0.5}, {between: [b@mass, a@mass], "

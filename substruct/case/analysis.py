@@ -10,7 +10,7 @@ from __future__ import annotations
 from typing import Annotated, Any, Literal
 
 import numpy as np
-from pydantic import Field, field_validator, model_validator
+from pydantic import Discriminator, Field, Tag, field_validator, model_validator
 
 from substruct.case.errors import FieldError
 from substruct.case.fields import (
@@ -42,7 +42,8 @@ from substruct.vocabulary import (
 
 __all__ = ["ConstraintSpec", "Variant", "ModesBand", "AmlsSpec", "ModesAnalysis", "Omega",
            "ModalFrf", "FrfAnalysis", "Analysis", "Output", "LossFactorSpec", "PsdTable",
-           "ForcePsd", "BasePsd", "RandomAnalysis", "SrsFrequencies", "SrsAnalysis"]
+           "ForcePsd", "BasePsd", "NamedBasePsd", "RandomAnalysis", "SrsFrequencies",
+           "SrsAnalysis"]
 
 
 
@@ -293,8 +294,11 @@ class Output(StrictModel):
 
 # ------------------------------------------------------------ specification analyses
 
-#: One loss factor on all of K, or one per substructure (by name).
-LossFactorSpec = NonNegative | dict[Name, NonNegative]
+#: One loss factor on all of K, or one per substructure (by name); a mapping is validated as
+#: one, so that a bad value is named by its substructure.
+LossFactorSpec = Annotated[
+    Annotated[NonNegative, Tag("all")] | Annotated[dict[Name, NonNegative], Tag("each")],
+    Discriminator(lambda v: "each" if isinstance(v, dict) else "all")]
 
 
 class PsdTable(StrictModel):
@@ -344,16 +348,24 @@ class BasePsd(StrictModel):
     psd: PsdTable
 
 
+class NamedBasePsd(BasePsd):
+    """One of several base acceleration inputs (``bases``): a name for ``cross``, its grounded
+    supports ``at`` (moved together, by no other input) and its PSD."""
+
+    name: Name
+
+
 class RandomAnalysis(StrictModel):
     """Response PSDs ``S_y = H S_f H^H`` and RMS values at ``outputs`` over ``frequencies``
-    (Hz) for force PSDs ``forces`` (uncorrelated, or pairs correlated by ``cross``) or one
-    base acceleration PSD ``base``."""
+    (Hz) for force PSDs ``forces``, one base acceleration PSD ``base`` or several named ones
+    ``bases`` (uncorrelated, or pairs correlated by ``cross``)."""
 
     frequencies: Omega
     forces: list[ForcePsd] = Field(default_factory=list)
-    #: correlated pairs of forces (:mod:`substruct.case.random_cross`)
+    #: correlated pairs of inputs (:mod:`substruct.case.random_cross`)
     cross: list[CrossPsd] = Field(default_factory=list)
     base: BasePsd | None = None
+    bases: list[NamedBasePsd] = Field(default_factory=list)
     outputs: Annotated[list[Point], Field(min_length=1)]
     #: what the outputs' PSDs are of (absolute motion)
     quantity: Literal["displacement", "velocity", "acceleration"] = "acceleration"
@@ -365,16 +377,22 @@ class RandomAnalysis(StrictModel):
 
     @model_validator(mode="after")
     def _inputs(self) -> "RandomAnalysis":
-        if (not self.forces) == (self.base is None):
-            raise FieldError("forces", "give force PSDs (forces) or a base acceleration PSD "
-                             "(base), one of the two")
-        check_cross([ld.at for ld in self.forces], self.cross)
+        given = [k for k, v in (("forces", self.forces), ("base", self.base),
+                                ("bases", self.bases)) if v]
+        if len(given) != 1:
+            raise FieldError(given[1] if len(given) > 1 else "forces", "give force PSDs "
+                             "(forces), a base acceleration PSD (base) or several (bases), one "
+                             "of the three")
+        for k, b in enumerate(self.bases):
+            if b.name in [c.name for c in self.bases[:k]]:
+                raise FieldError(("bases", k, "name"), "a base input named twice", b.name)
+        check_cross(self.input_names() if self.base is None else [], self.cross)
         f = self.frequencies.grid()
         if np.any(f <= 0):
             raise FieldError("frequencies", "must be > 0 Hz", float(f[f <= 0][0]))
         if np.any(np.diff(f) <= 0):
             raise FieldError("frequencies", "must increase", self.frequencies.values)
-        p = max(len(self.forces), 1)
+        p = max(len(self.forces), len(self.bases), 1)
         need = 16.0 * len(f) * len(self.outputs) * (p + len(self.outputs))
         if need > memory_limit():
             raise FieldError((), f"the response PSDs would need about {gigabytes(need)} of "
@@ -384,6 +402,16 @@ class RandomAnalysis(StrictModel):
     def hertz(self) -> np.ndarray:
         """The frequency grid (Hz)."""
         return self.frequencies.grid()
+
+    def input_names(self) -> list[str]:
+        """The inputs' names: the force points, ``base``, or the names of ``bases``."""
+        if self.forces:
+            return [ld.at for ld in self.forces]
+        return ["base"] if self.base is not None else [b.name for b in self.bases]
+
+    def base_inputs(self) -> list[BasePsd]:
+        """The base acceleration inputs (``[base]``, ``bases``, or none for forces)."""
+        return [self.base] if self.base is not None else list(self.bases)
 
 
 class SrsFrequencies(StrictModel):

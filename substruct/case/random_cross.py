@@ -1,7 +1,7 @@
 r"""Correlated inputs of ``analysis.random``: the off-diagonal terms of the input cross-spectral
 matrix, given pair by pair as an ordinary coherence and a phase.
 
-For force PSDs :math:`S_{ii}(f)`, :math:`S_{jj}(f)` (their tables) and a pair ``[i, j]`` with
+For force or base acceleration PSDs :math:`S_{ii}(f)`, :math:`S_{jj}(f)` (their tables) and a pair ``[i, j]`` with
 coherence :math:`\gamma^2 = |S_{ij}|^2 / (S_{ii} S_{jj})` in [0, 1] and phase :math:`\theta`
 (degrees, input ``i`` leading ``j``),
 
@@ -28,7 +28,8 @@ __all__ = ["CrossPsd", "check_cross", "cross_matrix"]
 
 
 class CrossPsd(StrictModel):
-    """One correlated pair of force inputs: ``between: [P@a, Q@b]`` (two of ``forces``' points),
+    """One correlated pair of inputs: ``between: [P@a, Q@b]`` (two of ``forces``' points, or two
+    names of ``bases``),
     ``coherence`` :math:`\\gamma^2` in [0, 1] and ``phase`` in degrees (default 0)."""
 
     between: Annotated[list[Point], Field(min_length=2, max_length=2)]
@@ -37,7 +38,7 @@ class CrossPsd(StrictModel):
 
 
 def check_cross(points: Sequence[str], cross: Sequence[CrossPsd]) -> None:
-    """Refuse a pair naming a point that is not one of the force inputs (or is two of them), a
+    """Refuse a pair naming an input (a force point, a base's name) that is not one of ``points`` (or is two of them), a
     point paired with itself, or a pair given twice.
 
     Raises:
@@ -47,8 +48,9 @@ def check_cross(points: Sequence[str], cross: Sequence[CrossPsd]) -> None:
     for k, c in enumerate(cross):
         for i, p in enumerate(c.between):
             if p not in points:
-                raise FieldError(("cross", k, "between", i), "not one of the force inputs ("
-                                 f"{', '.join(points) or 'none: cross needs forces'})", p)
+                raise FieldError(("cross", k, "between", i), "not one of the inputs ("
+                                 f"{', '.join(points) or 'none: cross needs forces or bases'})",
+                                 p)
             if list(points).count(p) > 1:
                 raise FieldError(("cross", k, "between", i), "a point with two force PSDs "
                                  "(give it one table)", p)

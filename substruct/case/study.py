@@ -288,19 +288,22 @@ class StudySpec(StrictModel):
             total *= s
         return total
 
-    def memory(self, n_omega: int = 0) -> int:
+    def memory(self, n_omega: int = 0, n_dof: int = 0) -> int:
         r"""Bytes the study holds for its samples, from the declared counts: per sample its
         parameters and time (8 bytes each), :data:`SAMPLE_OVERHEAD`, 8 bytes a collected real
         (frequencies, damping ratios, MAC, peaks and where they are, the sweep's
-        ``n_omega`` frequencies) and 16 a complex (``n_omega`` per collected curve),
+        ``n_omega`` frequencies), 16 a complex (``n_omega`` per collected curve) and, with
+        ``track``, the shapes of the ``f`` collected modes over the model's ``n_dof``
+        coordinates (complex; 0 until the model is built),
 
         .. math::  S \left(8 (p + 1) + o + 8 (3 f + 2 q + n_\omega)
-                   + 16\, c\, n_\omega\right) .
+                   + 16\, c\, n_\omega + 16\, t\, n\, f\right) .
         """
         c = self.collect
         per = 8 * (len(self.parameter_names()) + 1) + SAMPLE_OVERHEAD \
             + 8 * (3 * c.frequencies + 2 * len(c.frf_peaks)) \
-            + (8 * n_omega + 16 * len(c.frf) * n_omega if c.frf else 0)
+            + (8 * n_omega + 16 * len(c.frf) * n_omega if c.frf else 0) \
+            + (16 * n_dof * c.frequencies if c.track else 0)
         return self.size() * per
 
 

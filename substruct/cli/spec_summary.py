@@ -7,6 +7,7 @@ from typing import Any, TextIO
 
 import numpy as np
 
+from substruct.analysis.frf.random import miles_check
 from substruct.run.spec_results import THREE_SIGMA_EXCEEDANCE, RandomResponse, ShockSpectra
 
 __all__ = ["print_random", "print_srs", "random_json", "srs_json"]
@@ -22,6 +23,19 @@ def print_random(r: RandomResponse, out: TextIO) -> None:
         out.write(f"  {name:<{width}}  {value:11.4e}  {3 * value:11.4e}\n")
     out.write(f"  (a Gaussian response exceeds 3 rms {100 * THREE_SIGMA_EXCEEDANCE:.2f} % of "
               f"the time)\n")
+    if r.quantity == "acceleration" and r.base and len(r.inputs) == 1:
+        out.write("  Miles' check, sqrt(pi/2 f_n Q W) at each output's highest transmissibility "
+                  "peak (one dominant mode: close to rms):\n")
+        out.write(f"  {'output':<{width}}  {'f_n (Hz)':>9}  {'Q':>8}  {'W':>11}  "
+                  f"{'Miles':>11}  {'Miles/rms':>9}\n")
+        for i, name in enumerate(r.outputs):
+            m = miles_check(r.f, r.input_psd[:, 0], r.psd[:, i, i])
+            if m.Q < 1.5:
+                out.write(f"  {name:<{width}}  (no resonant peak: |T| <= {m.Q:.3g})\n")
+                continue
+            ratio = m.miles / r.rms[i] if r.rms[i] > 0 else float("nan")
+            out.write(f"  {name:<{width}}  {m.fn:9.4g}  {m.Q:8.4g}  {m.W:11.4e}  "
+                      f"{m.miles:11.4e}  {ratio:9.3f}\n")
 
 
 def print_srs(s: ShockSpectra, out: TextIO) -> None:

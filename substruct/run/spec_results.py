@@ -26,6 +26,7 @@ class RandomResponse:
         psd: ``n_f x q x q``, the response cross-spectral matrix (auto-PSDs on the diagonal).
         rms: ``q``, :math:`\sqrt{\int S_{ii}\, df}` (trapezoid rule on the grid).
         method, agreement, tolerance: of the receptance sweep behind it.
+        base: the inputs are base accelerations (``base`` or ``bases``), not forces.
     """
 
     f: np.ndarray
@@ -39,6 +40,7 @@ class RandomResponse:
     agreement: dict[str, float] = field(default_factory=dict)
     tolerance: float = 0.0
     input_csd: np.ndarray | None = None
+    base: bool = False
 
 
 @dataclass

@@ -11,7 +11,8 @@ loss factors of ``analysis.frf``, a thin adapter to :mod:`substruct.analysis.frf
   (:func:`~substruct.analysis.frf.base_drive.base_drive_sweep`, ``A q = E g``), times
   :math:`(i \omega)^p` for velocity (``p = 1``) or acceleration (``p = 2``); the input PSDs are
   log-log interpolated (:func:`~substruct.analysis.frf.random.interpolate_psd`), several
-  forces uncorrelated (a diagonal :math:`S_f`) or correlated pair by pair by ``cross``
+  forces or several named ``bases`` (one column of ``E`` each) uncorrelated (a diagonal
+  :math:`S_f`) or correlated pair by pair by ``cross``
   (:func:`~substruct.case.random_cross.cross_matrix`, checked Hermitian positive semidefinite
   at every frequency);
 * srs: Smallwood's filter on each output's absolute acceleration, sampled every recorded step.
@@ -158,8 +159,9 @@ def random_result(case: Case, model: Model) -> RandomResponse:
     parts = loss_parts(case, model, spec.loss_factor, (*loc, "loss_factor")) \
         if spec.loss_factor is not None else []
     outputs = asm.rows([model.points[p] for p in spec.outputs])
-    tables = [spec.base.psd] if spec.base is not None else [ld.psd for ld in spec.forces]
-    names = ["base"] if spec.base is not None else [ld.at for ld in spec.forces]
+    bases = spec.base_inputs()
+    tables = [b.psd for b in bases] if bases else [ld.psd for ld in spec.forces]
+    names = spec.input_names()
     columns = [t.columns() for t in tables]
     S_in = np.column_stack([interpolate_psd(list(ft), list(st), f) for ft, st in columns])
     S = cross_matrix(names, spec.cross, S_in)
@@ -171,8 +173,16 @@ def random_result(case: Case, model: Model) -> RandomResponse:
                 "a cross-spectral", "the input cross-spectral"),
                 [list(c.between) for c in spec.cross]) from None
     try:
-        if spec.base is not None:
-            E = grounding_column(case, model, spec.base.at, (*loc, "base", "at"))
+        if bases:
+            where = [(*loc, "base", "at")] if spec.base is not None else \
+                [(*loc, "bases", k, "at") for k in range(len(bases))]
+            E = np.hstack([grounding_column(case, model, b.at, at)
+                           for b, at in zip(bases, where)])
+            shared = np.flatnonzero(np.count_nonzero(E, axis=1) > 1)
+            if len(shared):
+                j = int(np.flatnonzero(E[shared[0]])[1])
+                raise case.error(where[j], "a support that another base input already moves "
+                                 "(each grounded row follows one table)", bases[j].at)
             rec = base_drive_sweep(asm.K, asm.M, asm.C, asm.A, w, E, outputs,
                                    per="acceleration", loss=parts,
                                    options=SweepOptions(**_sweep_kw(spec, names, spec.outputs),
@@ -192,7 +202,7 @@ def random_result(case: Case, model: Model) -> RandomResponse:
                           quantity=spec.quantity, input_psd=S_in, psd=Sy, rms=rms(f, auto),
                           input_csd=S if spec.cross else None,
                           method=rec.method, agreement=dict(rec.agreement),
-                          tolerance=spec.tolerance)
+                          tolerance=spec.tolerance, base=bool(bases))
 
 
 def srs_result(case: Case, tr: Transient) -> ShockSpectra | None:

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from substruct.case.fields import gigabytes, memory_limit
 from substruct.case.loader import Case
 from substruct.case.study import StudySpec
 from substruct.run.runner import build_model, run_case
@@ -31,7 +32,8 @@ from substruct.studies.study_task import (
     record_fields,
 )
 
-__all__ = ["StudyResult", "study_tasks", "gather", "run_study", "study_of"]
+__all__ = ["StudyResult", "study_tasks", "gather", "run_study", "study_of",
+           "check_tracked_memory"]
 
 
 @dataclass
@@ -91,6 +93,29 @@ def study_of(case: Case) -> StudySpec:
     return case.study
 
 
+def check_tracked_memory(case: Case, n_dof: int) -> None:
+    r"""Refuse a tracked study (``collect: track``) whose samples, each keeping the shapes of
+    its ``f`` collected modes over the model's ``n_dof`` coordinates (16 bytes a value:
+    :math:`S\, n\, f \cdot 16` more than :meth:`StudySpec.memory` counts without them), would
+    not fit the memory the machine has available
+    (:func:`~substruct.case.fields.memory_limit`).
+
+    Raises:
+        CaseError: at ``study.collect.track``, with the estimate.
+    """
+    spec = study_of(case)
+    frf = case.analysis.frf
+    n_omega = len(frf.omega.grid()) if frf is not None and spec.collect.frf else 0
+    need = spec.memory(n_omega, n_dof)
+    limit = memory_limit()
+    if need > limit:
+        raise case.error(("study", "collect", "track"), f"{spec.size():,} samples keeping the "
+                         f"shapes of {spec.collect.frequencies} modes over {n_dof:,} "
+                         f"coordinates would need about {gigabytes(need)} of memory, more than "
+                         f"the {gigabytes(limit)} available: fewer samples or modes, or no "
+                         "track", True)
+
+
 def study_tasks(case: Case, reference: np.ndarray | None = None) -> tuple[list[str], np.ndarray,
                                                                           list[SampleTask]]:
     """The parameter names, the table and one task per sample of the case's study."""
@@ -146,12 +171,19 @@ def run_study(case: Case, backend: Backend = Backend(), tick: Tick | None = None
     case as written is run first, here, when the MAC is collected: its mode shapes are the
     reference set, sent with every task.
 
+    With ``collect: track`` the case as written is built first and the study refused if the
+    shapes its samples keep would not fit (:func:`check_tracked_memory`), before any sample.
+
     Raises:
         CaseError: no study block, or the case as written cannot be run for the reference,
-            or a shared part cannot be made.
+            or a shared part cannot be made, or a tracked study too large for the memory.
         BackendError: the backend cannot be used.
     """
     spec = study_of(case)
+    built = None
+    if spec.collect.track:  # the shapes kept depend on the model's size: build it first
+        built = build_model(case)
+        check_tracked_memory(case, built.assembly.n_dof)
     names, table, tasks = study_tasks(case)
     names_shared = shared_parts(case, names) if share else []
     jobs = [PartJob(case.text, case.source, str(case.base_dir), n) for n in names_shared]
@@ -161,7 +193,7 @@ def run_study(case: Case, backend: Backend = Backend(), tick: Tick | None = None
         made = time.perf_counter() - start
         reference: dict[str, np.ndarray] = {}
         if spec.collect.mac:
-            model = build_model(case, prebuilt=shared) if shared else None
+            model = build_model(case, prebuilt=shared) if shared else built
             base = run_case(case, model=model)
             shapes = base.modes.shapes if base.modes is not None else None
             reference = collect(base, spec.collect, shapes)

@@ -40,13 +40,14 @@ acceleration, with :math:`|T|^2 = (\omega_n^4 + 4\zeta^2\omega_n^2\omega^2)/|\cd
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
 
 __all__ = ["THREE_SIGMA_EXCEEDANCE", "check_spectral_matrix", "check_psd_table",
            "interpolate_psd", "response_psd", "mean_square", "rms", "miles_rms",
-           "miles_absolute_rms"]
+           "miles_absolute_rms", "MilesCheck", "miles_check"]
 
 #: The fraction of time a zero-mean Gaussian response exceeds :math:`3\sigma` in magnitude.
 THREE_SIGMA_EXCEEDANCE = 0.0027
@@ -200,3 +201,42 @@ def miles_absolute_rms(fn: float, Q: float, W: float) -> float:
     r"""The exact RMS absolute acceleration of the same oscillator:
     :math:`\sqrt{\tfrac{\pi}{2} f_n Q W (1 + 1/Q^2)}` (module docstring)."""
     return float(np.sqrt(np.pi / 2 * fn * Q * W * (1 + 1 / Q ** 2)))
+
+
+@dataclass(frozen=True)
+class MilesCheck:
+    r"""Miles' estimate of one output's RMS from its highest transmissibility peak.
+
+    Attributes:
+        fn: the peak's frequency (Hz); ``Q`` the transmissibility's magnitude there;
+        W: the input PSD there; ``miles``: :math:`\sqrt{\tfrac{\pi}{2} f_n Q W}`.
+    """
+
+    fn: float
+    Q: float
+    W: float
+    miles: float
+
+
+def miles_check(f: np.ndarray, input_psd: np.ndarray, output_psd: np.ndarray) -> MilesCheck:
+    r"""Miles' equation applied to the peak of :math:`|T|^2 = S_y / S_{in}` (one base input):
+    :math:`f_n` where :math:`|T|^2` is largest on the grid, :math:`Q = |T(f_n)|`,
+    :math:`W = S_{in}(f_n)` and :func:`miles_rms`.  For a response dominated by one
+    well-separated single-DOF-like mode on a locally flat input this is its RMS to within
+    :math:`1/\sqrt{1 + 1/Q^2}` and the grid's resolution of the peak; several modes, or a
+    steep input under the peak, make it an estimate only.
+
+    Raises:
+        ValueError: no frequency where the input is positive.
+    """
+    f = np.asarray(f, dtype=float)
+    s_in = np.asarray(input_psd, dtype=float)
+    s_out = np.real(np.asarray(output_psd))
+    live = s_in > 0
+    if not np.any(live):
+        raise ValueError("the input PSD is 0 on the whole grid")
+    t2 = np.where(live, s_out / np.where(live, s_in, 1.0), -np.inf)
+    k = int(np.argmax(t2))
+    Q = float(np.sqrt(max(t2[k], 0.0)))
+    return MilesCheck(fn=float(f[k]), Q=Q, W=float(s_in[k]),
+                      miles=miles_rms(float(f[k]), Q, float(s_in[k])))
