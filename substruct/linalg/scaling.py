@@ -33,6 +33,7 @@ __all__ = [
     "ZeroRowError",
     "equilibrate",
     "mass_column_scale",
+    "definite_mass",
     "massless_coordinates",
     "row_scale",
     "spectral_norm",
@@ -228,3 +229,29 @@ def spectral_norm(A: sp.sparray | sp.spmatrix | np.ndarray) -> float:
         return float(np.sqrt(max(np.linalg.eigvalsh(AAt.toarray()).max(), 0.0))) or 1.0
     lam = spla.eigsh(AAt, k=1, which="LA", tol=1e-4, return_eigenvectors=False)[0]
     return float(np.sqrt(max(lam, 0.0))) or 1.0
+
+
+def definite_mass(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix) -> sp.csr_array:
+    r""":math:`M_d` of the paper's eq (6): ``M`` with a mass put on each massless coordinate,
+
+    .. math::  (M_d)_{ii} = c\, K_{ii}, \qquad
+               c = \operatorname{median}_{j:\, m_{jj} > 0,\, k_{jj} > 0} \frac{m_{jj}}{k_{jj}},
+
+    a mass in the units of the coordinate (a change of units :math:`u = S u'` turns ``K, M`` into
+    ``S K S, S M S`` and the filled mass into :math:`S M_d S`, so nothing computed with
+    :math:`M_d` depends on the units).  A massless coordinate with no stiffness either takes the
+    mean diagonal mass of the others (and 1 if there is none).  ``M`` with no massless
+    coordinate is returned as it is.
+    """
+    Mc = sp.csr_array(M, dtype=float)
+    massless = massless_coordinates(Mc)
+    if not massless.any():
+        return Mc
+    k = np.abs(sp.csr_array(K).diagonal())
+    m = np.abs(Mc.diagonal())
+    both = (m > 0) & (k > 0) & ~massless
+    c = float(np.median(m[both] / k[both])) if both.any() else 0.0
+    mean = float(np.mean(m[~massless])) if (~massless).any() else 1.0
+    fill = np.where(massless, np.where(k > 0, c * k, 0.0), 0.0)
+    fill = np.where(massless & (fill <= 0), mean or 1.0, fill)
+    return sp.csr_array(Mc + sp.diags_array(fill))
