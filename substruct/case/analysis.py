@@ -7,14 +7,13 @@ one formulation and checked by others (:mod:`substruct.analysis.formulations.cou
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal
+from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import Discriminator, Field, Tag, field_validator, model_validator
+from pydantic import Field, model_validator
 
 from substruct.case.errors import FieldError
 from substruct.case.fields import (
-    MAX_FREQUENCIES,
     Coefficient,
     Count,
     Name,
@@ -27,7 +26,17 @@ from substruct.case.fields import (
     memory_limit,
 )
 from substruct.case.numbers import MAX_MAGNITUDE, RANGE
-from substruct.case.random_cross import CrossPsd, check_cross
+from substruct.case.frequency_grid import Omega
+from substruct.case.spec_analysis import (
+    BasePsd,
+    LossFactorSpec,
+    ForcePsd,
+    NamedBasePsd,
+    PsdTable,
+    RandomAnalysis,
+    SrsAnalysis,
+    SrsFrequencies,
+)
 from substruct.case.testlab_analysis import SemmAnalysis, TpaAnalysis, check_against_frf
 from substruct.case.transient import TransientAnalysis
 from substruct.vocabulary import (
@@ -128,58 +137,6 @@ class ModesAnalysis(StrictModel):
         return self
 
 
-class Omega(StrictModel):
-    """A frequency grid: ``values`` or ``start``/``stop``/``num``/``spacing`` (rad/s)."""
-
-    values: Annotated[list[NonNegative], Field(min_length=1)] | None = None
-    start: NonNegative | None = None
-    stop: Positive | None = None
-    num: Count | None = None
-    spacing: Literal["linear", "log"] = "linear"
-
-    @model_validator(mode="before")
-    @classmethod
-    def _list(cls, value: Any) -> Any:
-        if isinstance(value, list):
-            return {"values": value}
-        if isinstance(value, (int, float)) and not isinstance(value, bool):
-            return {"values": [value]}
-        if not isinstance(value, dict):
-            raise ValueError("omega is a list of frequencies (rad/s) or "
-                             "{start: .., stop: .., num: .., spacing: linear|log}")
-        if "values" in value:
-            raise FieldError("values", "unknown key: give omega as a list instead", value)
-        return value
-
-    @model_validator(mode="after")
-    def _grid(self) -> "Omega":
-        if self.values is not None:
-            if len(self.values) > MAX_FREQUENCIES:
-                raise FieldError((), f"at most {MAX_FREQUENCIES} frequencies",
-                                 len(self.values))
-            return self
-        if self.start is None or self.stop is None or self.num is None:
-            key = next(k for k in ("start", "stop", "num") if getattr(self, k) is None)
-            raise FieldError(key, "a frequency grid needs start, stop and num")
-        if self.stop <= self.start:
-            raise FieldError("stop", f"must be > start ({self.start:g})", self.stop)
-        if self.spacing == "log" and self.start <= 0:
-            raise FieldError("start", "must be > 0 for a log grid", self.start)
-        if self.num > MAX_FREQUENCIES:
-            raise FieldError("num", f"at most {MAX_FREQUENCIES} frequencies", self.num)
-        return self
-
-    def grid(self) -> np.ndarray:
-        """The circular frequencies (rad/s)."""
-        if self.values is not None:
-            return np.asarray(self.values, dtype=float)
-        if self.start is None or self.stop is None or self.num is None:  # refused by _grid
-            raise ValueError("a frequency grid needs start, stop and num")
-        if self.spacing == "log":
-            return np.geomspace(self.start, self.stop, self.num)
-        return np.linspace(self.start, self.stop, self.num)
-
-
 class ModalFrf(StrictModel):
     """How ``method: modal`` sums the coupled modes (:mod:`substruct.analysis.frf.modal`)."""
 
@@ -221,7 +178,7 @@ class FrfAnalysis(StrictModel):
     #: largest max |H_check - H| / max |H| a check may have; a larger one fails the run
     tolerance: Positive = DEFAULT_TOLERANCE
     #: structural damping: one loss factor on all of K, or {substructure: eta}
-    loss_factor: "LossFactorSpec | None" = None
+    loss_factor: LossFactorSpec | None = None
 
     def omegas(self) -> np.ndarray:
         """The circular frequencies of the grid (rad/s), converted from Hz if ``units: Hz``."""
@@ -290,179 +247,6 @@ class Output(StrictModel):
     pictures: bool = True
     #: store the assembly's M, K, C (sparse) in the result file (``model/M``, ...)
     matrices: bool = False
-
-
-# ------------------------------------------------------------ specification analyses
-
-#: One loss factor on all of K, or one per substructure (by name); a mapping is validated as
-#: one, so that a bad value is named by its substructure.
-LossFactorSpec = Annotated[
-    Annotated[NonNegative, Tag("all")] | Annotated[dict[Name, NonNegative], Tag("each")],
-    Discriminator(lambda v: "each" if isinstance(v, dict) else "all")]
-
-
-class PsdTable(StrictModel):
-    """A PSD specification table ``[[f (Hz), level], ...]``, log-log interpolated between its
-    rows (0 outside them)."""
-
-    rows: list[tuple[NonNegative, NonNegative]]
-
-    @model_validator(mode="before")
-    @classmethod
-    def _list(cls, value: Any) -> Any:
-        if not isinstance(value, list):
-            raise ValueError("a PSD table is a list of [frequency (Hz), level] rows")
-        return {"rows": value}
-
-    @model_validator(mode="after")
-    def _table(self) -> "PsdTable":
-        if len(self.rows) < 2:
-            raise FieldError((), "a PSD table needs at least two [frequency, level] rows",
-                             len(self.rows))
-        if len(self.rows) > MAX_FREQUENCIES:
-            raise FieldError((), f"at most {MAX_FREQUENCIES} rows", len(self.rows))
-        for i in range(1, len(self.rows)):
-            if self.rows[i][0] <= self.rows[i - 1][0]:
-                raise FieldError((i, 0), f"frequencies must increase (after "
-                                 f"{self.rows[i - 1][0]:g} Hz)", self.rows[i][0])
-        return self
-
-    def columns(self) -> tuple[np.ndarray, np.ndarray]:
-        """``(frequency (Hz), level)``."""
-        table = np.asarray(self.rows, dtype=float)
-        return table[:, 0], table[:, 1]
-
-
-class ForcePsd(StrictModel):
-    """A force PSD (force^2/Hz in the case's units) at a point; several are uncorrelated."""
-
-    at: Point
-    psd: PsdTable
-
-
-class BasePsd(StrictModel):
-    """A base acceleration PSD ((length/s^2)^2/Hz in the case's units) moving the grounded
-    supports ``at`` together (each held by a constraint on it alone, as a transient's base)."""
-
-    at: Annotated[list[Point], Field(min_length=1)]
-    psd: PsdTable
-
-
-class NamedBasePsd(BasePsd):
-    """One of several base acceleration inputs (``bases``): a name for ``cross``, its grounded
-    supports ``at`` (moved together, by no other input) and its PSD."""
-
-    name: Name
-
-
-class RandomAnalysis(StrictModel):
-    """Response PSDs ``S_y = H S_f H^H`` and RMS values at ``outputs`` over ``frequencies``
-    (Hz) for force PSDs ``forces``, one base acceleration PSD ``base`` or several named ones
-    ``bases`` (uncorrelated, or pairs correlated by ``cross``)."""
-
-    frequencies: Omega
-    forces: list[ForcePsd] = Field(default_factory=list)
-    #: correlated pairs of inputs (:mod:`substruct.case.random_cross`)
-    cross: list[CrossPsd] = Field(default_factory=list)
-    base: BasePsd | None = None
-    bases: list[NamedBasePsd] = Field(default_factory=list)
-    outputs: Annotated[list[Point], Field(min_length=1)]
-    #: what the outputs' PSDs are of (absolute motion)
-    quantity: Literal["displacement", "velocity", "acceleration"] = "acceleration"
-    method: FormulationName = GENERALIZED_INVERSE
-    check: list[FormulationName] = Field(default_factory=list)
-    tolerance: Positive = DEFAULT_TOLERANCE
-    #: structural damping: one loss factor on all of K, or {substructure: eta}
-    loss_factor: LossFactorSpec | None = None
-
-    @model_validator(mode="after")
-    def _inputs(self) -> "RandomAnalysis":
-        given = [k for k, v in (("forces", self.forces), ("base", self.base),
-                                ("bases", self.bases)) if v]
-        if len(given) != 1:
-            raise FieldError(given[1] if len(given) > 1 else "forces", "give force PSDs "
-                             "(forces), a base acceleration PSD (base) or several (bases), one "
-                             "of the three")
-        for k, b in enumerate(self.bases):
-            if b.name in [c.name for c in self.bases[:k]]:
-                raise FieldError(("bases", k, "name"), "a base input named twice", b.name)
-        check_cross(self.input_names() if self.base is None else [], self.cross)
-        f = self.frequencies.grid()
-        if np.any(f <= 0):
-            raise FieldError("frequencies", "must be > 0 Hz", float(f[f <= 0][0]))
-        if np.any(np.diff(f) <= 0):
-            raise FieldError("frequencies", "must increase", self.frequencies.values)
-        p = max(len(self.forces), len(self.bases), 1)
-        need = 16.0 * len(f) * len(self.outputs) * (p + len(self.outputs))
-        if need > memory_limit():
-            raise FieldError((), f"the response PSDs would need about {gigabytes(need)} of "
-                             f"memory, more than this machine has available", len(f))
-        return self
-
-    def hertz(self) -> np.ndarray:
-        """The frequency grid (Hz)."""
-        return self.frequencies.grid()
-
-    def input_names(self) -> list[str]:
-        """The inputs' names: the force points, ``base``, or the names of ``bases``."""
-        if self.forces:
-            return [ld.at for ld in self.forces]
-        return ["base"] if self.base is not None else [b.name for b in self.bases]
-
-    def base_inputs(self) -> list[BasePsd]:
-        """The base acceleration inputs (``[base]``, ``bases``, or none for forces)."""
-        return [self.base] if self.base is not None else list(self.bases)
-
-
-class SrsFrequencies(StrictModel):
-    """The natural frequencies of an SRS (Hz): ``start`` to ``stop``, ``num`` log-spaced or
-    ``per_octave`` a factor ``2^(1/per_octave)`` apart."""
-
-    start: Positive
-    stop: Positive
-    num: Count | None = None
-    per_octave: Count | None = None
-
-    @model_validator(mode="after")
-    def _grid(self) -> "SrsFrequencies":
-        if self.stop <= self.start:
-            raise FieldError("stop", f"must be > start ({self.start:g})", self.stop)
-        if (self.num is None) == (self.per_octave is None):
-            raise FieldError("num", "give num or per_octave, one of the two")
-        if len(self.grid()) > MAX_FREQUENCIES:
-            raise FieldError("per_octave" if self.num is None else "num",
-                             f"at most {MAX_FREQUENCIES} frequencies", len(self.grid()))
-        return self
-
-    def grid(self) -> np.ndarray:
-        """The natural frequencies (Hz)."""
-        if self.num is not None:
-            return np.geomspace(self.start, self.stop, self.num)
-        assert self.per_octave is not None
-        count = int(np.floor(self.per_octave * np.log2(self.stop / self.start) + 1e-9)) + 1
-        return self.start * 2.0 ** (np.arange(count) / self.per_octave)
-
-
-class SrsAnalysis(StrictModel):
-    """Shock response spectra of the absolute accelerations of a transient's ``outputs``
-    (all of them if not given), damping ratio ``damping`` or ``Q = 1 / (2 damping)``."""
-
-    frequencies: SrsFrequencies
-    outputs: Annotated[list[Point], Field(min_length=1)] | None = None
-    damping: Annotated[Number, Field(gt=0, lt=1)] | None = None
-    Q: Annotated[Number, Field(gt=0.5)] | None = None
-
-    @model_validator(mode="after")
-    def _damping(self) -> "SrsAnalysis":
-        if self.damping is not None and self.Q is not None:
-            raise FieldError("Q", "give damping or Q, not both", self.Q)
-        return self
-
-    def zeta(self) -> float:
-        """The damping ratio (0.05, Q = 10, if neither is given)."""
-        if self.Q is not None:
-            return 1 / (2 * self.Q)
-        return 0.05 if self.damping is None else float(self.damping)
 
 
 FrfAnalysis.model_rebuild()
