@@ -75,8 +75,10 @@ def print_transient(tr: Transient, out: TextIO, units: str = "") -> None:
                   f"(tolerance {tr.tolerance:.0e})\n")
     data = transient_json(tr)
     if "energy_balance_change" in data:
+        held = (f"tolerance {tr.tolerance:.0e}" if tr.integrator == "newmark" or tr.rho_inf == 1
+                else "not held: the scheme's numerical dissipation")
         out.write(f"  energy balance T + V - W + D: changes by "
-                  f"{data['energy_balance_change']:.1e} of the largest energy\n")
+                  f"{data['energy_balance_change']:.1e} of the largest energy ({held})\n")
     if tr.outputs:
         where = f" ({units})" if units else ""
         out.write(f"  peaks at the output points{where}: value (at t)\n")

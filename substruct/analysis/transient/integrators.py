@@ -141,11 +141,28 @@ class Correction:
 
 @dataclass
 class Work:
-    """Energy flows accumulated over the steps (trapezoidal, exact for average acceleration).
+    r"""Energy flows accumulated over the steps (trapezoidal, exact for average acceleration).
+
+    Newmark's average acceleration has :math:`d_{n+1} - d_n = h \bar v`,
+    :math:`v_{n+1} - v_n = h \bar a` (bars: the averages of the step's ends), so with the
+    equation of motion :math:`M a_k + C v_k + K d_k = F_k + Q^c_k` at both ends of the step
+
+    .. math::  \Delta (\tfrac12 v^T M v + \tfrac12 d^T K d)
+               = h \bar v^T (M \bar a + K \bar d)
+               = (d_{n+1} - d_n)^T \tfrac12 (F_n + F_{n+1} + Q^c_n + Q^c_{n+1})
+               - h \bar v^T C \bar v ,
+
+    exactly: :math:`T + V - W + D` is constant to rounding.  The constraint force
+    :math:`Q^c = A^T \lambda` does no work while :math:`A (d_{n+1} - d_n) = 0`
+    (a constant ``b``); with a moving ground it does, :math:`\bar\lambda^T e\,
+    (g_{n+1} - g_n)`, and is counted in ``external``.  Generalized-alpha with
+    :math:`\rho_\infty < 1` satisfies the equation at shifted instants and removes energy
+    from the high frequencies: there the balance is not constant.
 
     Attributes:
-        external: :math:`\\sum (d_{n+1} - d_n)^T (F_{n+1} + F_n)/2`.
-        dissipated: :math:`\\sum h\\, \\bar v^T C \\bar v`, :math:`\\bar v = (v_n + v_{n+1})/2`.
+        external: :math:`\sum (d_{n+1} - d_n)^T (F_{n+1} + F_n + Q^c_{n+1} + Q^c_n)/2`
+            (:math:`Q^c` counted only with a moving ground).
+        dissipated: :math:`\sum h\, \bar v^T C \bar v`, :math:`\bar v = (v_n + v_{n+1})/2`.
     """
 
     external: float = 0.0
@@ -280,10 +297,19 @@ def integrate(M: Matrix, C: Matrix | None, K: Matrix, B: Matrix, f: np.ndarray |
     sink(0, d, v, a)
     sink.on_work(0, work)
     carried = load.f[0]  # the load factors the acceleration a was computed with
+    moving = correction is not None and correction.e is not None
+
+    def reaction(d: np.ndarray, v: np.ndarray, a: np.ndarray, f: np.ndarray) -> np.ndarray:
+        """:math:`Q^c = M a + C v + K d - B f` (the equation of motion read backwards)."""
+        Q = M @ a + K @ d - B @ f
+        return Q + Cm @ v if damped else Q
+
+    Qc = reaction(d, v, a, load.f[0]) if moving else None
     for n in range(n_steps):
         fs, fe = load.start(n), load.end(n)
         if restart is not None and not np.array_equal(fs, carried):
             a = restart(n, d, v, fs)
+            Qc = reaction(d, v, a, fs) if moving else None
         d_star = d + h * v + c1 * a
         v_star = v + c2 * a
         fa = (1 - af) * fe + af * fs
@@ -301,6 +327,10 @@ def integrate(M: Matrix, C: Matrix | None, K: Matrix, B: Matrix, f: np.ndarray |
         if correction is not None:  # remove the rounding that would drift
             d_new, v_new = correction.apply_both(d_new, target, v_new, correction.rate(n + 1))
         work.external += float((Bt @ (d_new - d)) @ (0.5 * (fs + fe)))
+        if Qc is not None:  # the work of the moving supports' reactions
+            Qn = reaction(d_new, v_new, a_new, fe)
+            work.external += 0.5 * float((d_new - d) @ (Qc + Qn))
+            Qc = Qn
         if damped:
             vm = 0.5 * (v + v_new)
             work.dissipated += h * float(vm @ (Cm @ vm))

@@ -22,7 +22,9 @@ The initial acceleration is eq (10) (:func:`substruct.analysis.formulations.proj
 consistent with the constraints and with the massless coordinates of the absorbers.  Each
 form factorizes its effective matrix once for the run.  The forms named in ``checks`` are
 computed as well and their agreement held to ``tolerance``
-(:func:`substruct.analysis.checks.require_agreement`).
+(:func:`substruct.analysis.checks.require_agreement`), and each run's energy balance
+:math:`T + V - W + D` to the same tolerance
+(:func:`substruct.analysis.transient.record.require_energy_balance`).
 """
 
 from __future__ import annotations
@@ -58,6 +60,7 @@ from substruct.analysis.transient.record import (
     Physical,
     Recorder,
     constraint_force_solver,
+    require_energy_balance,
 )
 from substruct.analysis.transient.options import (
     InitialConditions,
@@ -294,7 +297,9 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
     Raises:
         ValueError: bad input (inconsistent initial conditions, massless coordinates the
             constraints leave undetermined).
-        CheckError: a check disagrees by more than ``options.tolerance``.
+        CheckError: a check disagrees by more than ``options.tolerance``, or a run's energy
+            balance changes by more (gains, for generalized-alpha with
+            :math:`\rho_\infty < 1`).
 
     Examples:
         A unit mass on a unit spring released from ``q = 1``: :math:`q(t) = \cos t`.
@@ -353,9 +358,11 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
                     for_scheme(load.pairs or {}, s))
 
     def run(form: str) -> Recorder:
-        if form == "modal":
-            return modal_run(phys, s, dt, n_steps, d0, v0, opts)
-        return direct_run(phys, form, s, dt, n_steps, d0, v0, a0, opts)
+        rec = (modal_run(phys, s, dt, n_steps, d0, v0, opts) if form == "modal" else
+               direct_run(phys, form, s, dt, n_steps, d0, v0, a0, opts))
+        require_energy_balance(opts.what, form, np.asarray(rec.energy).reshape(-1, 4), s,
+                               tolerance)
+        return rec
 
     main = run(method)
     agreement = {m: _difference(run(m), main) for m in check_methods(method, opts.checks)}

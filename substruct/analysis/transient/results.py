@@ -7,9 +7,12 @@ rows of ``A`` scaled to unit norm (``D``), and the drift figure of a run is
 .. math::  \text{drift} = \frac{\max_k \max_i |(D A q_k - D b)_i|}{\max_k \max_j |q_{k,j}|} .
 
 The energy history holds, per recorded instant, the kinetic energy
-:math:`\tfrac12 \dot q^T M \dot q`, the strain energy :math:`\tfrac12 q^T K q`, the work of the
-loads and the energy dissipated by ``C`` since the start (:mod:`substruct.analysis.transient.integrators`);
-the balance :math:`T + V - W + D` is constant for Newmark's average acceleration.
+:math:`\tfrac12 \dot x^T M_x \dot x`, the strain energy :math:`\tfrac12 x^T K_x x`, the work of
+every load of the integrated equations and the energy dissipated by ``C`` since the start, in
+the coordinates ``x`` the form integrates (``q`` itself for the generalized-inverse form, with
+the work of moving supports' reactions; :mod:`substruct.analysis.transient.integrators`); the
+balance :math:`T + V - W + D` is constant to rounding for Newmark's average acceleration and
+held to the tolerance (:func:`substruct.analysis.transient.record.require_energy_balance`).
 """
 
 from __future__ import annotations
