@@ -204,8 +204,11 @@ def field_path(loc: Sequence[str | int], raw: Any) -> str:
     for i, el in enumerate(loc):
         last = i == len(loc) - 1
         if isinstance(node, dict) and not last and isinstance(el, str) and \
-                any(node.get(key) == el for key in _DISCRIMINATORS):
-            continue  # a union tag pydantic put into the location (``type: mass``)
+                any(node.get(key) == el for key in _DISCRIMINATORS) and \
+                (el not in node or loc[i + 1] in node):
+            # a union tag pydantic put into the location (``type: mass``), unless it is also
+            # the key the location goes on in (``method: modal`` beside ``modal: {..}``)
+            continue
         if isinstance(node, dict) and isinstance(el, str) and el in node:
             out += ("." if out else "") + _key(el)
             node = node[el]

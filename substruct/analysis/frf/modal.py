@@ -50,6 +50,13 @@ from substruct.analysis.checks import (
     require_agreement,
 )
 from substruct.analysis.formulations.coupling import receptance
+from substruct.analysis.frf.clusters import (
+    Cluster,
+    cluster_moment,
+    cluster_terms,
+    root_accuracy,
+    root_clusters,
+)
 from substruct.analysis.modes.amls import AmlsOptions, amls_damped_basis
 from substruct.analysis.modes.eigen import modes
 from substruct.analysis.errors import AnalysisInputError
@@ -121,6 +128,8 @@ class ModalBasis:
         paired: whether a root stands for a conjugate pair (``Im lambda_r > 0``).
         rigid: ``n x r0`` rigid-body shapes, ``Phi_0^T M Phi_0 = I`` (undamped models only).
         highest: the largest ``|lambda_r|`` computed (rad/s).
+        clusters: the repeated roots, summed through their projected pencils
+            (:mod:`substruct.analysis.frf.clusters`) instead of ``1 / a_r``.
     """
 
     eigenvalues: np.ndarray
@@ -129,6 +138,7 @@ class ModalBasis:
     paired: np.ndarray
     rigid: np.ndarray
     highest: float
+    clusters: tuple[Cluster, ...] = ()
 
     @property
     def count(self) -> int:
@@ -153,7 +163,9 @@ def modal_basis(M: sp.csr_array, C: sp.csr_array | None, K: sp.csr_array, A: sp.
     passes the cut-off (the dense solver computes all and keeps those below it).  With
     ``solver="amls"`` one AMLS reduction gives every undamped mode below the cut-off (or the
     lowest ``count``) and the damping is projected on them
-    (:func:`substruct.analysis.modes.amls.amls_damped_basis`, options ``amls``).
+    (:func:`substruct.analysis.modes.amls.amls_damped_basis`, options ``amls``).  Repeated
+    roots are grouped (:func:`substruct.analysis.frf.clusters.root_clusters`), whatever basis
+    of their eigenspace the eigensolver gave.
 
     Raises:
         ValueError: a damped model with rigid-body modes.
@@ -193,7 +205,18 @@ def modal_basis(M: sp.csr_array, C: sp.csr_array | None, K: sp.csr_array, A: sp.
     MU = M @ U
     CU = C @ U if damped and C is not None else np.zeros_like(U)
     norms = np.einsum("ir,ir->r", U, 2 * lam[None, :] * MU + CU)
-    return ModalBasis(lam, U, norms, lam.imag > 0, Phi, highest)
+    Cd = C if damped else None
+    accuracy = root_accuracy(M, Cd, K, A, lam, U, norms)
+    clusters = root_clusters(M, Cd, K, lam, U, lam.imag > 0, accuracy)
+    return ModalBasis(lam, U, norms, lam.imag > 0, Phi, highest, clusters)
+
+
+def _singles(basis: ModalBasis) -> np.ndarray:
+    """Whether each root is summed on its own (in no cluster)."""
+    single = np.ones(basis.count, dtype=bool)
+    for c in basis.clusters:
+        single[c.index] = False
+    return single
 
 
 def static_solver(K: sp.csr_array, M: sp.csr_array, A: sp.csr_array,
@@ -272,14 +295,20 @@ def modal_terms(basis: ModalBasis, P: np.ndarray, Q: np.ndarray,
                + \text{conjugates} - \frac{O \Phi_0 \Phi_0^T E}{\omega^2}
 
     ``P = O U`` (``q x N``), ``Q = U^T E`` (``N x p``); the rigid part needs ``omega > 0``.
+    A cluster of repeated roots is summed through its projected pencil
+    (:func:`substruct.analysis.frf.clusters.cluster_terms`).
     """
     lam, a, pair = basis.eigenvalues, basis.norms, basis.paired
     iw = 1j * np.asarray(omegas, dtype=float)[:, None]
-    f = 1.0 / (a[None, :] * (iw - lam[None, :]))
-    g = np.where(pair[None, :], 1.0 / (np.conj(a)[None, :] * (iw - np.conj(lam)[None, :])), 0)
+    single = _singles(basis)
+    f = np.where(single[None, :], 1.0 / (a[None, :] * (iw - lam[None, :])), 0)
+    g = np.where(pair[None, :] & single[None, :],
+                 1.0 / (np.conj(a)[None, :] * (iw - np.conj(lam)[None, :])), 0)
     out = np.einsum("qr,kr,rp->kqp", P, f, Q, optimize=True)
     if np.any(pair):
         out += np.einsum("qr,kr,rp->kqp", np.conj(P), g, np.conj(Q), optimize=True)
+    if basis.clusters:
+        out += cluster_terms(basis.clusters, pair, P, Q, np.asarray(omegas, dtype=float))
     return out
 
 
@@ -289,11 +318,13 @@ def modal_moment(basis: ModalBasis, P: np.ndarray, Q: np.ndarray, k: int) -> np.
     .. math::  \sum_r -\frac{(O u_r)(u_r^T E)}{a_r \lambda_r^{k+1}} + \text{conjugates}
     """
     lam, a, pair = basis.eigenvalues, basis.norms, basis.paired
-    f = -1.0 / (a * lam ** (k + 1))
+    f = np.where(_singles(basis), -1.0 / (a * lam ** (k + 1)), 0)
     out = (P * f[None, :]) @ Q
     if np.any(pair):
         g = np.where(pair, np.conj(f), 0)
         out = out + (np.conj(P) * g[None, :]) @ np.conj(Q)
+    if basis.clusters:
+        out = out + cluster_moment(basis.clusters, pair, P, Q, k)
     return np.asarray(out)
 
 
