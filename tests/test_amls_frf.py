@@ -162,3 +162,16 @@ def test_modal_amls_from_a_case_file():
     assert r is not None and "(AMLS basis)" in r.method
     (name, value), = r.agreement.items()
     assert name.startswith("kkt") and value < 1e-2
+
+
+def test_a_model_smaller_than_one_leaf_is_one_block_without_a_boundary(tied):
+    """The default leaf size (1000) exceeds this 624-coordinate model: the tree is one block
+    with no separator, whose boundary solve has no column; the basis is then the exact modes
+    below the cut-off (the undamped frequencies of the sparse eigensolver's, to round-off)."""
+    K, M, A, _, _ = tied
+    one = modal_basis(M, None, K, A, 4000.0, cutoff=3.0, solver="amls", amls=AmlsOptions())
+    ref = modal_basis(M, None, K, A, 4000.0, cutoff=3.0, solver="amls",
+                      amls=AmlsOptions(cutoff=1e6, leaf_size=80))
+    assert one.count == ref.count >= 20
+    w1, w2 = one.eigenvalues.imag, ref.eigenvalues.imag
+    assert np.abs(w1 - w2).max() <= 1e-9 * w2.max()

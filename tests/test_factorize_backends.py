@@ -108,6 +108,21 @@ def test_every_installed_backend_solves_to_its_backward_error_and_they_agree(mat
 
 
 @pytest.mark.parametrize("kind", ["spd", "symmetric", "complex-symmetric"])
+def test_every_installed_backend_takes_a_block_of_no_column(matrices, kind):
+    """A block of no right-hand side (an AMLS subdomain without a boundary) gives an empty
+    block of the same height on every backend, and a block of one column its solve."""
+    A = matrices[kind]
+    n = A.shape[0]
+    b = _rhs(A, kind)
+    for name in present(kind):
+        solve = bk.backend_factorizer(name, kind)(A)
+        X = np.asarray(solve(np.zeros((n, 0), dtype=b.dtype)))
+        assert X.shape == (n, 0), name
+        one = np.asarray(solve(b.reshape(n, -1)[:, :1]))
+        assert backward_error(A, one, b.reshape(n, -1)[:, :1]) < bound(A), name
+
+
+@pytest.mark.parametrize("kind", ["spd", "symmetric", "complex-symmetric"])
 def test_auto_uses_the_backend_it_names(matrices, kind, monkeypatch):
     """:func:`auto_backend` is the first installed of AUTO_ORDER, and ``auto`` factorizes with
     it and with no other."""

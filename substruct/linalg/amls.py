@@ -183,7 +183,7 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
     lam, Y = reduced_eigenpairs(red, bound)
     times["reduced"] = time.perf_counter() - t
     t = time.perf_counter()
-    U = red.expand(Y, map) if Y.shape[1] else np.zeros((red.n, 0))  # PARDISO refuses no column
+    U = red.expand(Y, map) if Y.shape[1] else np.zeros((red.n, 0))
     times["expand"] = time.perf_counter() - t
     t = time.perf_counter()
     if iterations and U.shape[1]:

@@ -191,7 +191,8 @@ def pardiso(A: sp.sparray | sp.spmatrix, kind: str) -> Callable[[np.ndarray], np
     def run(B: np.ndarray) -> np.ndarray:
         Bf = np.array(B, dtype=h.dtype, order="F")  # a copy: PARDISO may write to it
         X = np.zeros_like(Bf)
-        h.call(33, Bf, X, Bf.shape[1])
+        if Bf.shape[1]:  # no right-hand side: nothing to solve (PARDISO refuses nrhs = 0)
+            h.call(33, Bf, X, Bf.shape[1])
         return X
 
     if h.iparm[13] > 0:  # pivots below 1e-8 ||A|| replaced: singular or nearly so
