@@ -135,7 +135,7 @@ def _triangle(rec: _Records, ptr: int, neqn: int, nterm: int, what: str) -> sp.c
     if not np.all(np.isfinite(v)):
         k = int(np.flatnonzero(~np.isfinite(v))[0])
         raise rec.error(f"{what} column {int(c[k]) + 1}", f"row {int(r[k]) + 1} holds "
-                        f"{v[k]!r}, not a finite number")
+                        f"{float(v[k])!r}, not a finite number")
     lo, hi = np.minimum(r, c), np.maximum(r, c)
     key = hi * neqn + lo
     order = np.argsort(key, kind="stable")
@@ -163,11 +163,11 @@ def read_full(path: Path, name: str) -> FullMatrices:
     if len(data) < 8 or len(data) % 4:
         raise CaseError(name, "", f"{len(data)} bytes, not a whole number of 4-byte words of "
                         "an Ansys binary file")
-    order = "<" if int.from_bytes(data[:4], "little") == 100 else ">"
+    order = ">" if int.from_bytes(data[:4], "big") == 100 else "<"
     words = np.frombuffer(data, order + "i4")
     if int(words[0]) != 100:
         raise CaseError(name, "standard header", "an Ansys binary file starts with a "
-                        "100-word record", int(words[0]))
+                        "100-word record (either byte order)", int(words[0]))
     rec = _Records(words, name, order)
     std, pos = rec.record(0, "standard header", _INT_FLAG)
     if int(std[0]) != 4:
