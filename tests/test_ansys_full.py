@@ -106,6 +106,8 @@ K_PTR = 536         # the first stiffness column: [1] [int flag] [row 1] [1], th
     ({HEADER + 8: 2**31 - 1}, r"K terms: 2147483647 terms declared, more than the file's "
                               r"212992 words can hold"),
     ({HEADER + 8: 39022}, r"K column 963: more terms than the 39022 the header declares"),
+    ({HEADER + 5: 30}, r"K column \d+ rows: \d+ rows, more than the longest column of the "
+                       r"header \(wfmax 30\)"),
     ({K_PTR + 2: 964}, r"K column 1 rows: row 964 is outside 1..963"),
     ({K_PTR + 5: 0x40000000}, r"K column 1 values: record at word 540 has flags 0x40000000, "
                               r"not double-precision reals"),

@@ -6,8 +6,7 @@ The file is a sequence of Fortran-style binary records, each
 top bit set for integers and is 0 for double-precision reals. What is read:
 
 1. the standard header (100 integers; item 1, the file number, is 4 for a FULL file);
-2. the FULL header: item 1 ``-4``, ``neqn`` (equations), ``nmatrx``, ``wfmax`` (longest
-   column), ``lenbac`` (nodes), ``numdof`` (degrees of freedom a node), ``ntermK`` (terms of
+2. the FULL header: item 1 ``-4``, ``neqn`` (equations), ``wfmax`` (longest column), ``lenbac`` (nodes), ``numdof`` (degrees of freedom a node), ``ntermK`` (terms of
    ``K``, two words), ``lumpm`` (lumped mass), ``keyuns`` (unsymmetric), ``extopt``,
    ``ncefull`` (constraint equations), ``ptrSTF``, ``ptrMAS``, ``ptrDMP``, ``ptrDOF``,
    ``nNodes``, ``ntermM`` (pointers in 4-byte words from the start of the file);
@@ -18,7 +17,8 @@ top bit set for integers and is 0 for double-precision reals. What is read:
 5. at ``ptrDOF``, the degrees of freedom of each node and the constraint table (a negative
    entry marks an equation held by a constraint; MAPDL keeps it with a unit diagonal).
 
-The equations are ``numdof`` per node, in the order of the equivalence table; the result is
+The load vector (``ptrRHS``) and the other tables are not read. The equations are ``numdof``
+per node, in the order of the equivalence table; the result is
 ``A = T + T^T - \operatorname{diag} T`` of the triangle ``T`` read, without the constrained
 equations, sorted by (node, degree of freedom).
 
@@ -101,7 +101,8 @@ def _long(low: int, high: int) -> int:
     return (high << 32) | (low & 0xFFFFFFFF)
 
 
-def _triangle(rec: _Records, ptr: int, neqn: int, nterm: int, what: str) -> sp.csc_matrix:
+def _triangle(rec: _Records, ptr: int, neqn: int, nterm: int, wfmax: int,
+              what: str) -> sp.csc_matrix:
     """The symmetric matrix whose triangle, column by column, starts at word ``ptr``."""
     if not 0 < ptr < len(rec.w):
         raise rec.error(f"{what} pointer", f"word {ptr} lies outside the file "
@@ -117,6 +118,9 @@ def _triangle(rec: _Records, ptr: int, neqn: int, nterm: int, what: str) -> sp.c
         if len(raw) != 2 * len(idx):
             raise rec.error(f"{what} column {j + 1} values", f"{len(raw) // 2} values for "
                             f"{len(idx)} rows")
+        if len(idx) > wfmax:
+            raise rec.error(f"{what} column {j + 1} rows", f"{len(idx)} rows, more than the "
+                            f"longest column of the header (wfmax {wfmax})")
         total += len(idx)
         if total > nterm:
             raise rec.error(f"{what} column {j + 1}", f"more terms than the {nterm} the "
@@ -212,8 +216,8 @@ def read_full(path: Path, name: str) -> FullMatrices:
     const, pos = rec.record(pos, "constraint table", _INT_FLAG)
     if len(const) != neqn:
         raise rec.error("constraint table", f"{len(const)} entries for {neqn} equations")
-    K = _triangle(rec, _long(item[18], item[19]), neqn, _long(item[8], item[9]), "K")
-    M = _triangle(rec, _long(item[26], item[27]), neqn, _long(item[33], item[21]), "M")
+    K = _triangle(rec, _long(item[18], item[19]), neqn, _long(item[8], item[9]), item[5], "K")
+    M = _triangle(rec, _long(item[26], item[27]), neqn, _long(item[33], item[21]), item[5], "M")
     node_of = np.repeat(nodes.astype(np.int64), numdof)
     comp_of = np.tile(labels.astype(np.int64), nnodes)
     free = np.flatnonzero(const >= 0)
