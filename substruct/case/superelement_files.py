@@ -1,6 +1,7 @@
 """The files a superelement's matrices come from: OP4 (:mod:`substruct.case.op4`), NPZ
 (:mod:`substruct.case.npz_files`) or Nastran bulk data holding DMIG entries
-(:mod:`substruct.case.dmig`, which also gives the DOF map), or one Abaqus ``.mtx`` file per
+(:mod:`substruct.case.dmig`, which also gives the DOF map), an Ansys ``.full`` file
+(:mod:`substruct.case.ansys_full`, with its DOF map), or one Abaqus ``.mtx`` file per
 matrix (:mod:`substruct.case.abaqus_mtx`, :func:`read_abaqus_files`).
 
 Every problem is a :class:`~substruct.case.errors.FieldError` at the field that names the
@@ -17,18 +18,23 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from substruct.case.abaqus_mtx import abaqus_matrices
+from substruct.case.ansys_full import read_full
 from substruct.case.dmig import dmig_matrices
 from substruct.case.errors import CaseError, FieldError
+from substruct.case.fields import MEMORY_LIMIT
+from substruct.machine import gigabytes
 from substruct.case.npz_files import read_npz
 from substruct.case.op4 import Op4Error, read_op4
 
 __all__ = ["MatrixFile", "read_matrix_file", "read_abaqus_files", "MATRIX_SUFFIXES",
-           "BULK_SUFFIXES", "ABAQUS_SUFFIXES"]
+           "BULK_SUFFIXES", "ABAQUS_SUFFIXES", "FULL_SUFFIXES"]
 
 #: Endings of the bulk data files read for DMIG entries.
 BULK_SUFFIXES = (".bdf", ".dat", ".nas", ".blk", ".pch")
+#: Endings of Ansys FULL files (assembled stiffness and mass).
+FULL_SUFFIXES = (".full",)
 #: Endings of the files a superelement's matrices are read from.
-MATRIX_SUFFIXES = (".op4", ".npz") + BULK_SUFFIXES
+MATRIX_SUFFIXES = (".op4", ".npz") + BULK_SUFFIXES + FULL_SUFFIXES
 #: Endings of Abaqus matrix files (one matrix a file).
 ABAQUS_SUFFIXES = (".mtx",)
 
@@ -43,8 +49,8 @@ class MatrixFile:
         nbytes: bytes per number of the data (4 single, 8 double precision).
         members: the other members asked for, by name, as stored (numbers or, from an NPZ,
             strings).
-        dofs: the ``(grid, component)`` of each coordinate, from DMIG entries; ``None``
-            otherwise.
+        dofs: the ``(grid, component)`` of each coordinate, from DMIG entries or an Ansys
+            FULL file; ``None`` otherwise.
     """
 
     path: Path
@@ -112,6 +118,8 @@ def read_matrix_file(file: str, base: Path, loc: Any, names: Mapping[str, str],
         if isinstance(err, FieldError):
             raise
         raise FieldError(loc, " ".join(str(err).split()), file) from None
+    if suffix in FULL_SUFFIXES:
+        return _read_full(path, file, loc, names, members, where)
     if members:
         raise FieldError(loc, f"{path.name} is bulk data: its DMIG entries hold square "
                          f"matrices only, not {', '.join(members)}", file)
@@ -120,6 +128,31 @@ def read_matrix_file(file: str, base: Path, loc: Any, names: Mapping[str, str],
     except CaseError as err:
         raise FieldError(loc, str(err)) from None
     return MatrixFile(path, {k: mats[n] for k, n in names.items()}, nbytes, {}, dofs)
+
+
+def _read_full(path: Path, file: str, loc: Any, names: Mapping[str, str],
+               members: Sequence[str], where: Mapping[str, Any]) -> MatrixFile:
+    """The stiffness ``K`` and mass ``M`` of an Ansys FULL file, dense, with its DOF map."""
+    if members:
+        raise FieldError(loc, f"{path.name} is an Ansys FULL file: it holds K and M with "
+                         f"their DOF map, not {', '.join(members)}", file)
+    for key, name in names.items():
+        if key not in ("M", "K") or name.upper() != key:
+            raise FieldError(where.get(key, key), f"an Ansys FULL file holds the matrices K "
+                             f"and M only: {key} of {path.name} must be {key!r}"
+                             if key in ("M", "K") else f"an Ansys FULL file holds the "
+                             f"matrices K and M only, not {key}", name)
+    try:
+        got = read_full(path, path.name)
+    except CaseError as err:
+        raise FieldError(loc, str(err)) from None
+    n = len(got.dofs)
+    need = 2 * 8.0 * n * n
+    if need > MEMORY_LIMIT:
+        raise FieldError(loc, f"{path.name}: {n} coordinates: its dense K and M would need "
+                         f"{gigabytes(need)}, more than the {gigabytes(MEMORY_LIMIT)} allowed",
+                         file)
+    return MatrixFile(path, {"K": got.K.toarray(), "M": got.M.toarray()}, 8, {}, got.dofs)
 
 
 def read_abaqus_files(files: Mapping[str, str], base: Path,

@@ -5,7 +5,7 @@ r"""Case-file superelements: ``type: superelement``, a reduced model delivered a
 
     - name: sc
       type: superelement
-      file: sc.op4              # or .npz, or bulk data with DMIG entries (.bdf, .dat ...)
+      file: sc.op4              # or .npz, bulk data with DMIG entries (.bdf, .dat ...), .full
       M: MAA                    # matrix names in the file (OP4, any case) or keys (NPZ)
       K: KAA
       C: BAA                    # optional viscous damping
@@ -24,7 +24,9 @@ labelled ``mode:<k>`` in order.  A CSV file has one ``grid, component`` line per
 (an optional header line and ``#`` comments); a member (OP4 matrix or NPZ array) is ``n x 2``.
 Points are ``sc@100:uz`` (or ``sc@100:3``) and ``sc@mode:2``.  From bulk data the map is
 that of the DMIG entries (:mod:`substruct.case.dmig`: rows and columns in ascending ``(grid,
-component)``, scalar points modal), and ``dofs`` is left out.  Without ``file``, ``M``, ``K``
+component)``, scalar points modal), and ``dofs`` is left out; so it is from an Ansys ``.full``
+file (:mod:`substruct.case.ansys_full`: ``M: M``, ``K: K``, the free equations by node and
+``UX..ROTZ``).  Without ``file``, ``M``, ``K``
 (``C``, ``K4``) name Abaqus ``.mtx`` files (:mod:`substruct.case.abaqus_mtx`), whose DOF map is
 their ``(node, dof)`` pairs, or ``dofs`` for files of equation numbers.  ``recovery`` lists output
 transformation matrices (:mod:`substruct.case.recovery`).
@@ -63,7 +65,11 @@ from substruct.case.rigid_body import (
     rigid_body_frequency_ratio,
     rigid_body_vectors,
 )
-from substruct.case.superelement_files import read_abaqus_files, read_matrix_file
+from substruct.case.superelement_files import (
+    BULK_SUFFIXES,
+    read_abaqus_files,
+    read_matrix_file,
+)
 
 __all__ = ["SuperelementSpec", "SE_COMPONENTS", "SYMMETRY_RTOL", "MAX_DOF_FILE"]
 
@@ -117,8 +123,11 @@ class SuperelementSpec(StrictModel):
         got = read_matrix_file(self.file, base, "file", names,
                                [member] if isinstance(member, str) else [])
         if got.dofs is not None and self.dofs is not None:
-            raise FieldError("dofs", f"{got.path.name} is bulk data: the DOF map is that of "
-                             "its DMIG entries (leave dofs out)", self._shown_dofs())
+            bulk = got.path.suffix.lower() in BULK_SUFFIXES
+            kind, source = ("bulk data", "its DMIG entries") if bulk else \
+                ("an Ansys FULL file", "its equations")
+            raise FieldError("dofs", f"{got.path.name} is {kind}: the DOF map is that of "
+                             f"{source} (leave dofs out)", self._shown_dofs())
         if got.dofs is None and self.dofs is None:
             raise FieldError("dofs", "a DOF map is required for matrices from an OP4 or NPZ "
                              "file ({file: map.csv}, {key: <member>} or a list)")
