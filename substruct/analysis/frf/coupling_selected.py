@@ -193,9 +193,10 @@ def couple_selected(parts: Sequence[FrfPart], pairs: Sequence[tuple[str, str]],
             raise AnalysisInputError("the interface receptance B Y B^T is singular (redundant "
                                      "interface rows?)") from None
         out = H[sl] if H is not None else buf[:kb]
-        np.matmul(G, X, out=out)
-        np.negative(out, out=out)
-        Y.add(out, sl, diag)  # Y[o, i] - G X (Y's blocks of the parts only)
+        # Y[o, i] - G X as (-G) X + Y[o, i], the parts' blocks of Y only: the same numbers
+        # (negating a factor negates each product and each rounded sum exactly), one pass less
+        np.matmul(-G, X, out=out)
+        Y.add(out, sl, diag)
         YcI = YIi - (YII @ Bn.T) @ X  # the interface rows of Y_c, for the compatibility
         residual = max(residual, float(np.abs(Bn @ YcI).max(initial=0.0)))
         scale = max(scale, float(np.abs(out).max(initial=0.0)),
