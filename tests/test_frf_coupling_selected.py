@@ -146,3 +146,31 @@ def test_read_npz_copies_a_member_of_the_asked_dtype_once(tmp_path):
     assert np.array_equal(got, H)
     # the array read, plus numpy's read buffers (at most a few MB): not a second copy
     assert peak < H.nbytes + H.nbytes // 2
+
+
+def test_a_model_and_an_frf_part_through_the_command_as_mobility(tmp_path, capsys):
+    """The command streams the coupled blocks into the result file (through the quantity
+    conversion); the finite-element coupling of the same models, in memory, gives the same
+    mobilities to the tolerance of the two formulations (the coupled KKT solve against LM-FBS
+    of the parts' receptances: both direct solves of a 10-coordinate model, 1e-9)."""
+    from substruct import cli
+    from substruct.case.loader import load_case
+    from substruct.io.hdf5 import load
+    from substruct.io.uff import uff58_sets, write_uff
+    from substruct.run.runner import build_model, run_case
+    from test_frf_coupling import B_LABELS, _b_matrices_spec, _b_receptance, _case
+
+    w = 2 * np.pi * np.linspace(0.5, 12, 116)
+    write_uff(tmp_path / "b.uff", uff58_sets(w, _b_receptance(w), B_LABELS, B_LABELS))
+    mob = "    method: kkt\n    quantity: mobility\n"
+    path = tmp_path / "fbs.yaml"
+    path.write_text(_case("{name: B, type: frf, file: b.uff}").replace("    method: kkt\n", mob))
+    assert cli.main(["run", str(path), "--out", str(tmp_path / "out"), "--quiet",
+                     "--no-pictures"]) == 0, capsys.readouterr().err
+    frf = load(tmp_path / "out" / "fbs.h5").frf
+    case = load_case(_case(_b_matrices_spec()).replace("    method: kkt\n", mob))
+    fe = run_case(case, model=build_model(case)).frf
+    assert frf.method.startswith("lm-fbs") and frf.quantity == fe.quantity == "mobility"
+    H, He = np.asarray(frf.H), np.asarray(fe.H)
+    assert np.abs(H - He).max() / np.abs(He).max() < 1e-9
+    assert frf.constraint_residual < 1e-12
