@@ -82,7 +82,7 @@ def test_the_cases_run(tmp_path, capsys):
     (transient_run, "transient", TRANSIENT),  # the analysis itself
     (transient_run, "step_pairs", TRANSIENT),  # the jumps of the loads
     (transient_run, "merge_pairs", TRANSIENT),
-    (frf_route, "couple", FRF),  # LM-FBS: the interface is regular, so a ValueError is a bug
+    (frf_route, "couple_selected", FRF),  # LM-FBS: the interface is regular, so a ValueError is a bug
     (builder_model, "assemble", TRANSIENT),  # the stacking of the parts
 ])
 def test_a_plain_value_error_inside_is_an_internal_error(tmp_path, capsys, monkeypatch,

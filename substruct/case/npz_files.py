@@ -20,7 +20,8 @@ refuses, in one line naming the file, the member and the value:
   more than :data:`~substruct.case.fields.MEMORY_LIMIT` (whatever the machine has: an input
   file is accepted or refused the same way everywhere).
 
-Only then are the members read, and never more bytes than their headers declare.
+Only then are the members read, and never more bytes than their headers declare; a member
+already of the type asked for is not copied again.
 """
 
 from __future__ import annotations
@@ -199,7 +200,7 @@ def read_npz(path: str | os.PathLike, keys: Sequence[str],
         with np.load(p, allow_pickle=False) as z:
             for key in keys:
                 arr = np.asarray(z[key])
-                out[key] = arr.astype(conv[key]) if key in conv else arr
+                out[key] = arr.astype(conv[key], copy=False) if key in conv else arr
     except (OSError, EOFError, ValueError, zipfile.BadZipFile) as err:
         raise ValueError(f"{p.name}: cannot read its arrays "
                          f"({' '.join(str(err).split())[:120]})") from None

@@ -147,8 +147,8 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
         elif frf.loss_factor is not None:
             result.frf = loss_frf_result(case, model, progress)
         else:
-            result.frf = coupled_frf_result(case, model, progress) if has_frf_parts(case) \
-                else frf_result(case, model, progress, None if testlab else frf_sink)
+            route = coupled_frf_result if has_frf_parts(case) else frf_result
+            result.frf = route(case, model, progress, None if testlab else frf_sink)
         if testlab:
             from substruct.run.testlab_route import semm_result, tpa_result  # when used
             if case.analysis.tpa is not None:

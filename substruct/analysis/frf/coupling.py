@@ -32,7 +32,7 @@ from typing import Sequence
 import numpy as np
 
 from substruct.analysis.errors import AnalysisInputError
-from substruct.builder.frf_parts import FrfPart
+from substruct.builder.frf_part import FrfPart
 from substruct.case.frf_files import GRID_DIGITS_RTOL
 
 __all__ = ["FrfPart", "stack", "boolean_rows", "lm_fbs", "generalized_inverse_fbs",
