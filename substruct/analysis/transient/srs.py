@@ -34,7 +34,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.signal as ss
 
 __all__ = ["MAX_FN_DT", "Srs", "check_damping", "smallwood_coefficients",
            "relative_displacement", "srs"]
@@ -91,6 +90,8 @@ def relative_displacement(acc: np.ndarray, fn: float, zeta: float, dt: float) ->
     r""":math:`z_k` of :math:`\ddot z + 2\zeta\omega_n\dot z + \omega_n^2 z = -\ddot u`, from
     rest, exact for :math:`\ddot u` linear between samples (the ramp-invariant discretization
     of the state :math:`(z, \dot z)` by :func:`scipy.signal.cont2discrete`, ``foh``)."""
+    import scipy.signal as ss  # on first use: about 0.9 s of start-up for every run otherwise
+
     wn = 2 * np.pi * fn
     A = np.array([[0.0, 1.0], [-wn * wn, -2 * zeta * wn]])
     B = np.array([[0.0], [-1.0]])
@@ -125,6 +126,8 @@ def srs(acc: np.ndarray, dt: float, fn: np.ndarray, zeta: float = 0.05,
     if float(fn.max()) * dt > MAX_FN_DT:
         raise ValueError(f"SRS frequency {fn.max():g} Hz needs a time step <= "
                          f"{MAX_FN_DT / fn.max():.3g} s (10 samples a period), got {dt:g}")
+    import scipy.signal as ss  # on first use (above)
+
     extra = int(np.ceil((1 / fn.min() if pad is None else max(pad, 0.0)) / dt))
     x = np.concatenate([acc, np.zeros(extra)])
     out = np.empty((4, fn.size))
