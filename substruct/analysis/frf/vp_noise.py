@@ -53,7 +53,8 @@ class MeasuredPart:
         Y: the measured receptances, ``(n_omega, rows, columns)``: sensors x impacts of
             ``vpt`` when it is given, else already at the part's coordinates.
         vpt: the virtual point transformation, or ``None``.
-        out_labels, in_labels: the coordinates when ``vpt`` is ``None``.
+        out_labels, in_labels: the coordinates (required when ``vpt`` is ``None``; with it,
+            they rename ``vpt``'s labels, one for one, when given).
         noisy: whether the noise is applied to this part (a finite-element part is not).
     """
 
@@ -68,8 +69,8 @@ class MeasuredPart:
     def part(self, Y: np.ndarray) -> VpPart:
         """The part at its coordinates from receptances ``Y`` (transformed if ``vpt``)."""
         if self.vpt is not None:
-            return VpPart(self.name, self.omega, list(self.vpt.out_labels),
-                          list(self.vpt.in_labels), self.vpt.apply(Y))
+            return VpPart(self.name, self.omega, list(self.out_labels or self.vpt.out_labels),
+                          list(self.in_labels or self.vpt.in_labels), self.vpt.apply(Y))
         return VpPart(self.name, self.omega, list(self.out_labels), list(self.in_labels), Y)
 
 
