@@ -10,6 +10,8 @@ weakening reduce the spread at a given noise level.
 
 from __future__ import annotations
 
+import pickle
+
 import numpy as np
 import pytest
 
@@ -100,12 +102,11 @@ def test_spread_is_first_order_in_the_noise(parts):
 def test_same_seed_same_bits_in_process_and_through_a_map(parts):
     calls = []
 
-    def task_map(function, *args):  # the order of the tasks reversed, as a scheduler may
-        calls.append(len(args[0]))
-        idx = list(range(len(args[0])))[::-1]
-        out = [None] * len(idx)
-        for i in idx:
-            out[i] = function(*(a[i] for a in args))
+    def task_map(function, items):  # the tasks run in reverse order, as a scheduler may
+        calls.append(len(items))
+        out = [None] * len(items)
+        for i in reversed(range(len(items))):
+            out[i] = function(pickle.loads(pickle.dumps(items[i])))  # as sent to a worker
         return out
 
     study = _study(parts, 1e-2)

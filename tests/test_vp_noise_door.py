@@ -4,10 +4,14 @@ and its refusals."""
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import h5py
 import numpy as np
+import pytest
 
 from substruct import cli
 from substruct.io.result_reader import load
@@ -71,3 +75,26 @@ def test_refusals(tmp_path, capsys):
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and field in err[0], err
         assert not (out / "vpt_coupling.h5").exists()
+
+
+def test_samples_as_dask_tasks_give_the_same_bits(tmp_path):
+    """``substruct run --workers 2`` runs the samples on a local Dask cluster: the study is
+    the in-process one bit for bit (each sample seeded by its index)."""
+    pytest.importorskip("distributed")
+    block = "      monte_carlo: {level: 0.01, samples: 4, seed: 3}\n"
+    case = _case(tmp_path, block)
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "OMP_NUM_THREADS": "1",
+           "MPLBACKEND": "Agg", "SUBSTRUCT_PROGRESS": "1"}
+    runs = {}
+    for tag, extra in (("serial", []), ("dask", ["--workers", "2"])):
+        done = subprocess.run([sys.executable, "-m", "substruct.cli", "run", str(case),
+                               "--out", str(tmp_path / tag), "--no-pictures", *extra],
+                              capture_output=True, text=True, timeout=600, env=env,
+                              cwd=tmp_path)
+        assert done.returncode == 0, done.stderr[-3000:]
+        runs[tag] = load(tmp_path / tag / "vpt_coupling.h5").monte_carlo
+        if extra:
+            assert "Monte Carlo samples on LocalCluster (2 workers)" in done.stderr
+    for key in ("nominal", "mean", "std", "bands"):
+        assert np.array_equal(getattr(runs["serial"], key), getattr(runs["dask"], key)), key
+    assert runs["dask"].std.any()

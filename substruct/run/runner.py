@@ -144,7 +144,7 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
                    f"x {len(frf.inputs)} input(s), {asm.n_dof} coordinates", n_omega)
         if has_virtual_points(case):
             result.frf, result.virtual_points, result.monte_carlo = vp_frf_result(
-                case, model, progress)
+                case, model, progress, tasks)
         elif frf.loss_factor is not None:
             result.frf = loss_frf_result(case, model, progress)
         else:

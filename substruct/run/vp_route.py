@@ -18,7 +18,7 @@ indicators of every transformed part are returned with it.
 from __future__ import annotations
 
 import re
-from typing import Any, Callable
+from typing import Callable
 
 import numpy as np
 
@@ -32,7 +32,7 @@ from substruct.analysis.frf.virtual_point import (VirtualPoint, VptResult, check
 from substruct.analysis.frf.vp_coupling import (Regularisation, VpPart,
                                                 couple_virtual_points)
 from substruct.analysis.frf.vp_noise import (MeasuredPart, MonteCarloResult, NoiseStudy,
-                                             monte_carlo_coupling)
+                                             TaskMap, monte_carlo_coupling)
 from substruct.analysis.results import Receptance
 from substruct.builder.frf_parts import MODEL_PART, FrfPart, split_frf_case
 from substruct.builder.model import Model
@@ -141,7 +141,7 @@ def _regularisation(case: Case) -> tuple[Regularisation, float]:
 
 
 def vp_frf_result(case: Case, model: Model, progress: Progress | None = None,
-                  tasks: Callable[..., list[Any]] | None = None
+                  tasks: TaskMap | None = None
                   ) -> tuple[Receptance, dict[str, VptResult], MonteCarloResult | None]:
     """The receptances ``case.analysis.frf`` asks for, of the parts coupled at their virtual
     points (module docstring), the consistency indicators per transformed part, and the
@@ -250,7 +250,7 @@ def vp_frf_result(case: Case, model: Model, progress: Progress | None = None,
 
 def _monte_carlo(case: Case, measured: list[MeasuredPart], pairs: list[tuple[str, str]],
                  drop: list[str], reg: Regularisation, length: float,
-                 stacked: Callable[[str], str], tasks: Callable[..., list[Any]] | None
+                 stacked: Callable[[str], str], tasks: TaskMap | None
                  ) -> MonteCarloResult | None:
     """The study of the one ``monte_carlo:`` block of the case (refused in a second part)."""
     found = [(k, s) for k, s in enumerate(case.substructures) if isinstance(s, FrfSpec)

@@ -32,15 +32,19 @@ import numpy as np
 from substruct.analysis.frf.virtual_point import VirtualPointTransform
 from substruct.analysis.frf.vp_coupling import Regularisation, VpPart, couple_virtual_points
 
-__all__ = ["MeasuredPart", "NoiseStudy", "MonteCarloResult", "add_relative_noise",
+__all__ = ["TaskMap", "sample_task", "MeasuredPart", "NoiseStudy", "MonteCarloResult", "add_relative_noise",
            "coupled_sample", "monte_carlo_coupling", "MAX_SAMPLES"]
 
 #: The largest number of samples a study may ask for.
 MAX_SAMPLES = 100_000
 
 
-def _in_process(function: Callable[..., Any], *args: Sequence[Any]) -> list[Any]:
-    return [function(*a) for a in zip(*args)]
+#: ``map(function, items) -> results`` in order (the Dask study backend's ``Session.map``)
+TaskMap = Callable[[Callable[[Any], Any], Sequence[Any]], Sequence[Any]]
+
+
+def _in_process(function: Callable[[Any], Any], items: Sequence[Any]) -> list[Any]:
+    return [function(a) for a in items]
 
 
 @dataclass(frozen=True)
@@ -127,6 +131,11 @@ def coupled_sample(study: NoiseStudy, seed: int, k: int) -> np.ndarray:
     return _coupled(study, parts)
 
 
+def sample_task(item: tuple[NoiseStudy, int, int]) -> np.ndarray:
+    """:func:`coupled_sample` of ``(study, seed, k)``: one task of a map."""
+    return coupled_sample(*item)
+
+
 @dataclass(frozen=True)
 class MonteCarloResult:
     """The nominal and the statistics over the samples, each ``(n_omega, outputs, inputs)``
@@ -152,9 +161,9 @@ class MonteCarloResult:
 
 def monte_carlo_coupling(study: NoiseStudy, samples: int, seed: int,
                          percentiles: Sequence[float] = (5.0, 50.0, 95.0),
-                         map: Callable[..., list[Any]] | None = None) -> MonteCarloResult:
+                         map: TaskMap | None = None) -> MonteCarloResult:
     """Run ``samples`` noisy couplings of ``study`` (module docstring) through ``map``
-    (``map(function, *argument_lists) -> list``, in process by default; the Dask study
+    (``map(function, items) -> results`` in order, in process by default; the Dask study
     backend's ``Session.map`` runs each sample as a task) and reduce them.
 
     Raises:
@@ -170,7 +179,7 @@ def monte_carlo_coupling(study: NoiseStudy, samples: int, seed: int,
         raise ValueError(f"percentiles must be in [0, 100], got {list(q)}")
     nominal = _coupled(study, [m.part(m.Y) for m in study.parts])
     run = map if map is not None else _in_process
-    draws = run(coupled_sample, [study] * samples, [seed] * samples, list(range(samples)))
+    draws = run(sample_task, [(study, seed, k) for k in range(samples)])
     stack = np.stack(draws)
     dev = stack - nominal  # about the nominal: exactly 0 without noise
     dmean = dev.mean(axis=0)
