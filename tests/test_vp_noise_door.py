@@ -98,3 +98,16 @@ def test_samples_as_dask_tasks_give_the_same_bits(tmp_path):
     for key in ("nominal", "mean", "std", "bands"):
         assert np.array_equal(getattr(runs["serial"], key), getattr(runs["dask"], key)), key
     assert runs["dask"].std.any()
+
+
+def test_the_run_prints_the_spread(tmp_path, capsys):
+    block = "      monte_carlo: {level: 1.0e-4, samples: 5, seed: 2}\n"
+    out = tmp_path / "out"
+    assert cli.main(["run", str(_case(tmp_path, block)), "--out", str(out),
+                     "--no-pictures"]) == 0
+    mc = load(out / "vpt_coupling.h5").monte_carlo
+    spread = mc.relative_spread()
+    line = [x for x in capsys.readouterr().out.splitlines() if "samples" in x]
+    assert line == [f"  noise 0.0001 on the measured receptances, 5 samples: relative spread "
+                    f"of the coupled result median {np.median(spread):.3g}, max "
+                    f"{spread.max():.3g}"]
