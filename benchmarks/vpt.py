@@ -7,7 +7,8 @@ rigid-adapter kinematics of a random symmetric complex receptance of the virtual
 pass-through channels (``R_u Y_q R_f^T``), so that the exact answer is known; ``--noise``
 multiplies every entry by ``1 + eps n`` (complex Gaussian ``n``).
 
-Measured, each the median of ``--repeat`` runs:
+Measured, each the median of ``--repeat`` runs, in CPU time of the process (one BLAS thread:
+run with ``OMP_NUM_THREADS=1``; CPU time does not count the waits of a shared machine):
 
 * substruct: ``virtual_point_transform`` (both parts), ``vp_part`` (the transformation of the
   receptances) and ``couple_virtual_points`` (LM-FBS at every virtual point);
@@ -115,7 +116,7 @@ def run_substruct(data: dict, Ys: list[np.ndarray], repeat: int) -> dict:
     omega = np.linspace(1.0, 1000.0, data["n_freq"])
     times: dict[str, list[float]] = {"transform": [], "couple": [], "checked": []}
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         parts = []
         for p, Y in zip(data["parts"], Ys):
             rows = [{"name": n, "node": "1", "x": x[0], "y": x[1], "z": x[2], "dx": d[0],
@@ -130,13 +131,13 @@ def run_substruct(data: dict, Ys: list[np.ndarray], repeat: int) -> dict:
             vpt = virtual_point_transform(table, vps, [s[0] for s in p["sensors"]],
                                           [h[0] for h in p["impacts"]])
             parts.append(vp_part(p["name"], omega, vpt, Y))
-        t1 = time.perf_counter()
+        t1 = time.process_time()
         pairs = [(f"A@{name}:{c}", f"B@{name}:{c}") for name, _ in data["parts"][0]["vps"]
                  for c in ("x", "y", "z", "rx", "ry", "rz")]
         couple_virtual_points(parts, pairs, check=False)
-        t2 = time.perf_counter()
+        t2 = time.process_time()
         res = couple_virtual_points(parts, pairs)
-        t3 = time.perf_counter()
+        t3 = time.process_time()
         times["transform"].append(t1 - t0)
         times["couple"].append(t2 - t1)
         times["checked"].append(t3 - t2)
@@ -172,14 +173,14 @@ def run_pyfbs(data: dict, Ys: list[np.ndarray], repeat: int) -> dict:
     freq = np.linspace(1.0, 1000.0, data["n_freq"]) / (2 * np.pi)
     times: dict[str, list[float]] = {"transform": [], "couple": []}
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        t0 = time.process_time()
         out = []
         for p, Y in zip(data["parts"], Ys):
             vpt = VPT(frame(p["sensors"], None, "chn"), frame(p["impacts"], None, "imp"),
                       vp_frame(p["vps"], "chn"), vp_frame(p["vps"], "imp"))
             vpt.apply_vpt(freq, Y)
             out.append(vpt.frf)
-        t1 = time.perf_counter()
+        t1 = time.process_time()
         n = [Yq.shape[1] for Yq in out]
         n_vp = 6 * len(data["parts"][0]["vps"])
         Y = np.zeros((len(freq), sum(n), sum(n)), dtype=complex)
@@ -189,7 +190,7 @@ def run_pyfbs(data: dict, Ys: list[np.ndarray], repeat: int) -> dict:
         B[:, :n_vp] = np.eye(n_vp)
         B[:, n[0]:n[0] + n_vp] = -np.eye(n_vp)
         Y - Y @ B.T @ np.linalg.inv(B @ Y @ B.T) @ B @ Y
-        t2 = time.perf_counter()
+        t2 = time.process_time()
         times["transform"].append(t1 - t0)
         times["couple"].append(t2 - t1)
     return {"times": {k: float(np.median(v)) for k, v in times.items()}, "Yq": out}

@@ -16,7 +16,8 @@ nbformat = pytest.importorskip("nbformat")
 pytest.importorskip("nbclient")
 
 EXAMPLES = Path(__file__).resolve().parent.parent / "examples"
-FAST = ["section5_frf.ipynb", "table1_both_ways.ipynb", "convergence.ipynb"]
+FAST = ["section5_frf.ipynb", "table1_both_ways.ipynb", "convergence.ipynb",
+        "testlab_vpt.ipynb"]
 SLOW = ["solid_absorbers.ipynb"]
 
 

@@ -17,6 +17,7 @@ r"""The ``virtual_points:`` block of a ``type: frf`` substructure: measured chan
             weights: {sensors: [...], impacts: [...]}                     # optional
         weaken: [rx, ry, rz]      # dropped from compatibility and equilibrium at this part's pairs
         regularization: {method: tikhonov, alpha: 1.0e-2, length: 0.025}   # or tsvd, rtol | rank
+        monte_carlo: {level: 1.0e-2, samples: 200, seed: 0}   # optional (one part of the case)
 
 The part's coordinates are then ``vp:<point>:<ux|uy|uz|rx|ry|rz>`` (``vp:<point>:e<k>`` for
 extra modes) and ``ch:<channel>`` for the channels given to no virtual point (they pass
@@ -38,7 +39,7 @@ from substruct.case.errors import FieldError
 from substruct.case.fields import Name, StrictModel
 
 __all__ = ["VP_LABEL_COMPONENTS", "ChannelLists", "VirtualPointSpec", "VpRegularization",
-           "VirtualPointsSpec", "vp_label"]
+           "VpMonteCarlo", "VirtualPointsSpec", "vp_label"]
 
 #: The components of a virtual point in case-file labels (library order x, y, z, rx, ry, rz).
 VP_LABEL_COMPONENTS = ("ux", "uy", "uz", "rx", "ry", "rz")
@@ -126,6 +127,29 @@ class VpRegularization(StrictModel):
         return self
 
 
+class VpMonteCarlo(StrictModel):
+    """The coupled result's sensitivity to noise (:mod:`substruct.analysis.frf.vp_noise`):
+    relative complex Gaussian noise of ``level`` on every measured FRF of the case (every
+    ``type: frf`` part), ``samples`` couplings, sample ``k`` seeded by ``[seed, k]``."""
+
+    level: float = Field(ge=0.0, le=1.0)
+    samples: int = Field(ge=2, le=100_000)
+    seed: int = Field(default=0, ge=0)
+    #: the coupled receptances kept (points as in ``analysis.frf``; default: its outputs)
+    outputs: list[str] | None = Field(default=None, min_length=1)
+    #: default: the inputs of ``analysis.frf``
+    inputs: list[str] | None = Field(default=None, min_length=1)
+    #: percentile bands of the magnitude
+    percentiles: list[float] = Field(default_factory=lambda: [5.0, 50.0, 95.0], max_length=99)
+
+    @model_validator(mode="after")
+    def _bands(self) -> "VpMonteCarlo":
+        for i, q in enumerate(self.percentiles):
+            if not 0.0 <= q <= 100.0:
+                raise FieldError(("percentiles", i), "a percentile is in [0, 100]", q)
+        return self
+
+
 class VirtualPointsSpec(StrictModel):
     """The virtual points of a measured part (module docstring)."""
 
@@ -135,6 +159,7 @@ class VirtualPointsSpec(StrictModel):
     #: connections (``[rx, ry, rz]``: a ball joint)
     weaken: list[Literal["ux", "uy", "uz", "rx", "ry", "rz"]] = Field(default_factory=list)
     regularization: VpRegularization | None = None
+    monte_carlo: VpMonteCarlo | None = None
     _table: ChannelTable | None = PrivateAttr(default=None)
 
     @model_validator(mode="after")

@@ -38,7 +38,7 @@ from substruct.cli.summary import print_summary, summary_json
 if TYPE_CHECKING:
     from substruct.run.result import Result
 
-__all__ = ["run_command", "run_backend", "picture_paths", "write_pictures", "compute",
+__all__ = ["run_command", "run_backend", "monte_carlo_case", "picture_paths", "write_pictures", "compute",
            "stage_set"]
 
 
@@ -62,7 +62,8 @@ def compute(case: Any, quiet: bool, frf_sink: Any = None, backend: Any = None) -
     try:
         with Session(backend) as session:
             if not quiet:
-                events("amls", f"AMLS tasks on {backend.describe()}", 0)
+                what = "Monte Carlo samples" if monte_carlo_case(case) else "AMLS tasks"
+                events("amls", f"{what} on {backend.describe()}", 0)
             return runner.run_case(case, progress=bar, model=model, events=events,
                                    frf_sink=frf_sink, tasks=session.map)
     except BackendError as err:
@@ -71,8 +72,8 @@ def compute(case: Any, quiet: bool, frf_sink: Any = None, backend: Any = None) -
 
 def run_backend(args: argparse.Namespace, case: Any) -> Any:
     """The backend of ``--workers``/``--scheduler`` (``None`` without them), refused unless
-    the case computes its modes by AMLS (``analysis.modes.solver: amls``), the only analysis
-    of ``run`` whose tasks it runs."""
+    the case computes its modes by AMLS (``analysis.modes.solver: amls``) or has a Monte Carlo
+    study (``virtual_points.monte_carlo``), the analyses of ``run`` whose tasks it runs."""
     if getattr(args, "workers", None) is None and getattr(args, "scheduler", None) is None:
         if getattr(args, "connect_timeout", None) is not None:
             raise InputError(f"--connect-timeout: only with --scheduler, got "
@@ -82,12 +83,19 @@ def run_backend(args: argparse.Namespace, case: Any) -> Any:
 
     backend = backend_options(args)
     modes = case.analysis.modes
-    if modes is None or modes.solver != "amls":
+    if (modes is None or modes.solver != "amls") and not monte_carlo_case(case):
         flag = "--workers" if args.workers is not None else "--scheduler"
         raise InputError(f"{flag}: runs the blocks of an AMLS reduction as tasks; the case's "
                          f"analysis.modes.solver is not amls, got "
                          f"{modes.solver if modes is not None else 'no modes'}")
     return backend
+
+
+def monte_carlo_case(case: Any) -> bool:
+    """Whether a substructure of ``case`` asks for a Monte Carlo study of its virtual points
+    (its samples are tasks)."""
+    return any(getattr(getattr(s, "virtual_points", None), "monte_carlo", None) is not None
+               for s in case.substructures)
 
 
 def run_command(args: argparse.Namespace) -> int:

@@ -208,6 +208,12 @@ def print_summary(result: Result, out: TextIO, requested: int | None = None,
         print_frf(result.frf, out)
     for part, ind in result.virtual_points.items():
         out.write(f"  virtual points of {part}: " + vp_minima(ind) + "\n")
+    mc = result.monte_carlo
+    if mc is not None:
+        spread = mc.relative_spread()
+        out.write(f"  noise {mc.level:g} on the measured receptances, {mc.samples} samples: "
+                  f"relative spread of the coupled result median {np.median(spread):.3g}, "
+                  f"max {spread.max():.3g}\n")
     for line in testlab_lines(result):
         out.write(line + "\n")
     if result.transient is not None:

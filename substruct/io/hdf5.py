@@ -49,7 +49,7 @@ from substruct.io.paths import write_errors
 from substruct.io.recovery_hdf5 import write_recovery
 from substruct.io.spec_hdf5 import write_random, write_srs
 from substruct.io.tpa_hdf5 import write_semm, write_tpa
-from substruct.io.vp_hdf5 import write_virtual_points
+from substruct.io.vp_hdf5 import write_monte_carlo, write_virtual_points
 from substruct.io.transient_hdf5 import write_transient
 from substruct.io.result_reader import FORMAT, FORMAT_VERSION, RESERVED_ATTRS, load
 from substruct.run.result import ModelInfo, Result
@@ -138,8 +138,11 @@ class ResultFile:
         if result.srs is not None:
             write_srs(f.create_group("srs", track_order=True), result.srs)
         if result.virtual_points:
-            write_virtual_points(f.create_group("virtual_points", track_order=True),
-                                 result.virtual_points)
+            vg = f.create_group("virtual_points", track_order=True)
+            write_virtual_points(vg, result.virtual_points)
+            if result.monte_carlo is not None:
+                write_monte_carlo(vg.create_group("monte_carlo", track_order=True),
+                                  result.monte_carlo)
         if result.tpa is not None:
             write_tpa(f.create_group("tpa", track_order=True), result.tpa)
         if result.semm is not None:

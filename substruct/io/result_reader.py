@@ -33,7 +33,7 @@ from substruct.builder.drawing import Drawing
 from substruct.io.recovery_hdf5 import read_recovery
 from substruct.io.tpa_hdf5 import read_semm, read_tpa
 from substruct.io.transient_hdf5 import read_transient
-from substruct.io.vp_hdf5 import read_virtual_points
+from substruct.io.vp_hdf5 import read_monte_carlo, read_virtual_points
 from substruct.run.result import ModelInfo, Result
 
 __all__ = ["load", "FORMAT", "FORMAT_VERSION", "RESERVED_ATTRS", "MAX_RESULT_BYTES",
@@ -319,8 +319,13 @@ def _testlab(rd: _Reader, f: h5py.File, result: Result) -> None:
     k = len(result.frf.omega)
     try:
         if "virtual_points" in groups:
+            members = rd.members(f, "virtual_points")
             result.virtual_points = read_virtual_points(
-                rd, _numbered(rd.members(f, "virtual_points"), "/virtual_points"), k)
+                rd, _numbered([m for m in members if m[0] != "monte_carlo"],
+                              "/virtual_points"), k)
+            mc = [g for name, g in members if name == "monte_carlo"]
+            if mc:
+                result.monte_carlo = read_monte_carlo(rd, mc[0], result.frf.omega)
         if "tpa" in groups:
             result.tpa = read_tpa(rd, rd.node(f, "tpa", h5py.Group), k)
         if "semm" in groups:

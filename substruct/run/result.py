@@ -23,6 +23,7 @@ from substruct.run.spec_results import RandomResponse, ShockSpectra
 
 if TYPE_CHECKING:  # the test-lab analysis (and its case layer) only where it is used
     from substruct.analysis.frf.virtual_point import VptResult
+    from substruct.analysis.frf.vp_noise import MonteCarloResult
     from substruct.run.testlab_results import SemmOutcome, TpaResult
 
 __all__ = ["ModelInfo", "Result"]
@@ -70,6 +71,8 @@ class Result:
     srs: ShockSpectra | None = None
     #: consistency indicators of the parts transformed to virtual points, by part
     virtual_points: dict[str, VptResult] = field(default_factory=dict)
+    #: the coupled result's sensitivity to noise (``virtual_points.monte_carlo``)
+    monte_carlo: MonteCarloResult | None = None
     #: blocked forces, their validation and path contributions of analysis.tpa
     tpa: TpaResult | None = None
     #: the mixed model of analysis.semm

@@ -143,7 +143,8 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
             events("sweep", f"receptances: {n_omega} frequencies, {len(frf.outputs)} output(s) "
                    f"x {len(frf.inputs)} input(s), {asm.n_dof} coordinates", n_omega)
         if has_virtual_points(case):
-            result.frf, result.virtual_points = vp_frf_result(case, model, progress)
+            result.frf, result.virtual_points, result.monte_carlo = vp_frf_result(
+                case, model, progress, tasks)
         elif frf.loss_factor is not None:
             result.frf = loss_frf_result(case, model, progress)
         else:

@@ -18,6 +18,7 @@ indicators of every transformed part are returned with it.
 from __future__ import annotations
 
 import re
+from typing import Callable
 
 import numpy as np
 
@@ -26,10 +27,12 @@ from substruct.analysis.checks import require_agreement
 from substruct.analysis.errors import AnalysisInputError, CheckError
 from substruct.analysis.frf.coupling import common_grid
 from substruct.analysis.frf.quantity import as_quantity
-from substruct.analysis.frf.virtual_point import (VirtualPoint, VptResult, consistency,
-                                                  virtual_point_transform)
+from substruct.analysis.frf.virtual_point import (VirtualPoint, VptResult, check_measured,
+                                                  consistency, virtual_point_transform)
 from substruct.analysis.frf.vp_coupling import (Regularisation, VpPart,
                                                 couple_virtual_points)
+from substruct.analysis.frf.vp_noise import (MeasuredPart, MonteCarloResult, NoiseStudy,
+                                             TaskMap, monte_carlo_coupling)
 from substruct.analysis.results import Receptance
 from substruct.builder.frf_parts import MODEL_PART, FrfPart, split_frf_case
 from substruct.builder.model import Model
@@ -41,7 +44,7 @@ from substruct.run.analyses import frf_result
 from substruct.run.frf_route import ANALYSIS_GRID
 from substruct.vocabulary import GENERALIZED_INVERSE
 
-__all__ = ["has_virtual_points", "vp_frf_result", "transformed_part"]
+__all__ = ["has_virtual_points", "vp_frf_result", "transformed_part", "measured_part"]
 
 _LIBRARY = dict(zip(("x", "y", "z", "rx", "ry", "rz"), VP_LABEL_COMPONENTS))
 
@@ -64,6 +67,19 @@ def transformed_part(case: Case, k: int, vps: VirtualPointsSpec, part: FrfPart
                      ) -> tuple[VpPart, VptResult]:
     """The measured part ``part`` (substructure ``k``, on the analysis grid) transformed to its
     virtual points, and its consistency indicators.
+
+    Raises:
+        CaseError: as :func:`measured_part`.
+    """
+    m = measured_part(case, k, vps, part)
+    vp = m.part(m.Y)
+    assert m.vpt is not None
+    return vp, consistency(m.vpt, m.Y)
+
+
+def measured_part(case: Case, k: int, vps: VirtualPointsSpec, part: FrfPart) -> MeasuredPart:
+    """The measured part ``part`` (substructure ``k``, on the analysis grid): its receptances
+    at the sensors x impacts and its virtual point transformation, labelled as in the case.
 
     Raises:
         CaseError: a virtual point whose motions are unobservable or that has fewer channels
@@ -95,13 +111,13 @@ def transformed_part(case: Case, k: int, vps: VirtualPointsSpec, part: FrfPart
                              getattr(vps.points[i], f"{m.group(2)}s")) from None
         raise case.error(loc, str(err)) from None
     try:
-        Yqm = vpt.apply(Y)
+        check_measured(Y, sensors, impacts)
     except ValueError as err:
         raise case.error(("substructures", k, "file"), str(err)) from None
     names_set = {p.name for p in vps.points}
-    out = VpPart(part.name, part.omega, [_relabel(x, names_set) for x in vpt.out_labels],
-                 [_relabel(x, names_set) for x in vpt.in_labels], Yqm)
-    return out, consistency(vpt, Y)
+    return MeasuredPart(part.name, part.omega, Y, vpt,
+                        tuple(_relabel(x, names_set) for x in vpt.out_labels),
+                        tuple(_relabel(x, names_set) for x in vpt.in_labels))
 
 
 def _regularisation(case: Case) -> tuple[Regularisation, float]:
@@ -124,10 +140,13 @@ def _regularisation(case: Case) -> tuple[Regularisation, float]:
     return chosen if chosen is not None else (Regularisation(), 1.0)
 
 
-def vp_frf_result(case: Case, model: Model, progress: Progress | None = None
-                  ) -> tuple[Receptance, dict[str, VptResult]]:
+def vp_frf_result(case: Case, model: Model, progress: Progress | None = None,
+                  tasks: TaskMap | None = None
+                  ) -> tuple[Receptance, dict[str, VptResult], MonteCarloResult | None]:
     """The receptances ``case.analysis.frf`` asks for, of the parts coupled at their virtual
-    points (module docstring), and the consistency indicators per transformed part.
+    points (module docstring), the consistency indicators per transformed part, and the
+    Monte Carlo study of a ``monte_carlo:`` block (``None`` without one; its samples run
+    through ``tasks``, in process by default).
 
     Raises:
         CaseError: as :func:`transformed_part`; an output that is not measured as an output
@@ -153,6 +172,10 @@ def vp_frf_result(case: Case, model: Model, progress: Progress | None = None
     if split.model_case is not None:
         parts.append(VpPart(MODEL_PART, w, first.labels, first.labels, same[0].Y))
     indicators: dict[str, VptResult] = {}
+    measured: list[MeasuredPart] = []
+    if split.model_case is not None:
+        measured.append(MeasuredPart(MODEL_PART, w, same[0].Y, None, tuple(first.labels),
+                                     tuple(first.labels), noisy=False))
     weaken: dict[str, list[str]] = {}
     for part in same[1:]:
         k = index[part.name]
@@ -160,9 +183,14 @@ def vp_frf_result(case: Case, model: Model, progress: Progress | None = None
         assert isinstance(s, FrfSpec)
         if s.virtual_points is None:
             parts.append(VpPart(part.name, w, part.labels, part.labels, part.Y))
+            measured.append(MeasuredPart(part.name, w, part.Y, None, tuple(part.labels),
+                                         tuple(part.labels)))
             continue
-        vp, indicators[part.name] = transformed_part(case, k, s.virtual_points, part)
-        parts.append(vp)
+        m = measured_part(case, k, s.virtual_points, part)
+        assert m.vpt is not None
+        measured.append(m)
+        parts.append(m.part(m.Y))
+        indicators[part.name] = consistency(m.vpt, m.Y)
         weaken[part.name] = list(s.virtual_points.weaken)
     frf_names = {p.name for p in split.parts}
 
@@ -216,4 +244,42 @@ def vp_frf_result(case: Case, model: Model, progress: Progress | None = None
     coupled = Receptance(method=how, omega=w, H=H, inputs=list(spec.inputs),
                          outputs=list(spec.outputs), agreement=checks,
                          constraint_residual=residual, tolerance=spec.tolerance)
-    return as_quantity(coupled, spec.quantity), indicators
+    mc = _monte_carlo(case, measured, pairs, drop, reg, length, stacked, tasks)
+    return as_quantity(coupled, spec.quantity), indicators, mc
+
+
+def _monte_carlo(case: Case, measured: list[MeasuredPart], pairs: list[tuple[str, str]],
+                 drop: list[str], reg: Regularisation, length: float,
+                 stacked: Callable[[str], str], tasks: TaskMap | None
+                 ) -> MonteCarloResult | None:
+    """The study of the one ``monte_carlo:`` block of the case (refused in a second part)."""
+    found = [(k, s) for k, s in enumerate(case.substructures) if isinstance(s, FrfSpec)
+             and s.virtual_points is not None and s.virtual_points.monte_carlo is not None]
+    if not found:
+        return None
+    if len(found) > 1:
+        k = found[1][0]
+        raise case.error(("substructures", k, "virtual_points", "monte_carlo"),
+                         f"one Monte Carlo study per case (it perturbs every measured part); "
+                         f"{found[0][1].name} gives one already", found[1][1].name)
+    k, s = found[0]
+    assert s.virtual_points is not None and s.virtual_points.monte_carlo is not None
+    mc = s.virtual_points.monte_carlo
+    spec = case.analysis.frf
+    assert spec is not None
+    loc = ("substructures", k, "virtual_points", "monte_carlo")
+    nominal = couple_virtual_points([m.part(m.Y) for m in measured], pairs, reg, drop, drop,
+                                    "coupled", length, check=False).part
+    picked = []
+    for key, given, labels in (("outputs", mc.outputs or spec.outputs, nominal.out_labels),
+                               ("inputs", mc.inputs or spec.inputs, nominal.in_labels)):
+        for i, p in enumerate(given):
+            if stacked(p) not in labels:
+                raise case.error((*loc, key, i), f"not one of the coupled {key}", p)
+        picked.append(list(given))
+    study = NoiseStudy(tuple(measured), tuple(pairs), tuple(stacked(p) for p in picked[0]),
+                       tuple(stacked(p) for p in picked[1]), mc.level, reg, tuple(drop),
+                       tuple(drop), length)
+    res = monte_carlo_coupling(study, mc.samples, mc.seed, mc.percentiles, map=tasks)
+    return MonteCarloResult(res.omega, picked[0], picked[1], res.level, res.samples, res.seed,
+                            res.nominal, res.mean, res.std, res.percentiles, res.bands)
