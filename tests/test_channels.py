@@ -6,7 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from substruct.case.channels import read_channels, write_channels
+from substruct.case.channel_files import read_channels
+from substruct.case.channels import write_channels
 from substruct.case.errors import CaseError
 
 GOOD = """name,node,x,y,z,dx,dy,dz,kind

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from substruct.case.channels import read_channels
+from substruct.case.channel_files import read_channels
 from substruct.case.errors import CaseError
 from uff_plain import ascii58
 

@@ -15,7 +15,8 @@ import scipy.sparse as sp
 from substruct import cli
 from substruct.analysis.frf.virtual_point import VirtualPoint, virtual_point_transform
 from substruct.analysis.frf.vp_coupling import Regularisation, couple_virtual_points, vp_part
-from substruct.case.channels import parse_channels, read_channels
+from substruct.case.channel_files import read_channels
+from substruct.case.channels import parse_channels
 from substruct.io.result_reader import load
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))

@@ -44,7 +44,7 @@ from substruct.case.fields import MAX_NAME_LENGTH, NAME_PATTERN
 from substruct.case.yaml_io import load_yaml
 
 __all__ = ["Channel", "ChannelTable", "COLUMNS", "CHANNEL_KINDS", "MAX_CHANNELS", "MAX_CHANNEL_FILE",
-           "parse_channels", "read_channels", "write_channels"]
+           "parse_channels", "read_channel_table", "check_channel_file", "write_channels"]
 
 #: The columns of a channel table, in the order written.
 COLUMNS = ("name", "node", "x", "y", "z", "dx", "dy", "dz", "kind")
@@ -203,7 +203,7 @@ def _check_copies(channels: list[Channel], paths: list[str], source: str) -> Non
                             list(c.position))
 
 
-def _check_file(path: Path) -> None:
+def check_channel_file(path: Path) -> None:
     try:
         info = os.stat(path)
     except OSError as err:
@@ -215,28 +215,16 @@ def _check_file(path: Path) -> None:
         raise CaseError(path.name, "", f"more than {MAX_CHANNEL_FILE} bytes", info.st_size)
 
 
-def read_channels(path: str | os.PathLike) -> ChannelTable:
-    """A channel table from a ``.csv`` or a ``.yaml``/``.yml`` file (module docstring), or
-    from the nodes, coordinate systems and 58 functions of a Universal File (``.uff``,
-    ``.unv``: :mod:`substruct.case.uff_geometry`).
+def read_channel_table(path: str | os.PathLike) -> ChannelTable:
+    """A channel table from a ``.csv`` or a ``.yaml``/``.yml`` file (module docstring); a
+    Universal File is read by :func:`substruct.case.channel_files.read_channels`.
 
     Raises:
         CaseError: an unreadable file, an unknown suffix, or a problem with a row.
     """
     p = Path(path)
-    _check_file(p)
+    check_channel_file(p)
     source = p.name
-    if p.suffix.lower() in (".uff", ".unv"):
-        from substruct.case.uff_geometry import channels_from_uff  # it builds on this module
-
-        try:
-            return channels_from_uff(p)
-        except CaseError:
-            raise
-        except ValueError as err:
-            text = str(err)
-            raise CaseError(source, "", text[len(source) + 2:] if text.startswith(
-                f"{source}: ") else text) from None
     try:
         text = p.read_text(encoding="utf-8")
     except UnicodeDecodeError:

@@ -28,7 +28,7 @@ model) with the measured one (:mod:`substruct.analysis.frf.semm`).
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING, Literal, Sequence
+from typing import Literal, Protocol, Sequence
 
 import numpy as np
 from pydantic import Field, PrivateAttr, ValidationInfo, model_validator
@@ -39,8 +39,18 @@ from substruct.case.frf_files import GRID_DIGITS_RTOL, MAX_FRF_FILE
 from substruct.case.npz_files import npz_members, read_npz
 from substruct.case.virtual_points import VpRegularization
 
-if TYPE_CHECKING:
-    from substruct.case.analysis import FrfAnalysis
+
+
+class ComputedReceptances(Protocol):
+    """What a test-lab analysis reads of ``analysis.frf`` (its
+    :class:`~substruct.case.analysis.FrfAnalysis`): the computed points and the grid."""
+
+    inputs: list[str]
+    outputs: list[str]
+
+    def omegas(self) -> np.ndarray:
+        """The frequencies of the receptances (rad/s)."""
+        ...
 
 __all__ = ["TpaAnalysis", "SemmBoundary", "SemmAnalysis", "check_against_frf"]
 
@@ -234,7 +244,7 @@ def _grid(key: tuple[str, str], w: np.ndarray, grid: np.ndarray, file: str) -> N
 
 
 def check_against_frf(tpa: TpaAnalysis | None, semm: SemmAnalysis | None,
-                      frf: FrfAnalysis | None) -> None:
+                      frf: ComputedReceptances | None) -> None:
     """Refuse (:class:`FieldError` relative to ``analysis``) a test-lab analysis whose
     coordinates are not computed by ``frf`` or whose grid is not ``frf``'s."""
     if tpa is None and semm is None:

@@ -34,7 +34,8 @@ from typing import Literal
 import numpy as np
 from pydantic import Field, PrivateAttr, ValidationInfo, model_validator
 
-from substruct.case.channels import ChannelTable, read_channels
+from substruct.case.channel_files import read_channels
+from substruct.case.channels import ChannelTable
 from substruct.case.errors import FieldError
 from substruct.case.fields import Name, StrictModel
 
