@@ -114,8 +114,9 @@ def test_workers_without_amls_is_refused(tmp_path):
     done = _cli(tmp_path, "sparse", ["--workers", "2"], solver="sparse")
     assert done.returncode == 2
     assert done.stderr.strip() == ("substruct: error: --workers: runs the blocks of an AMLS "
-                                   "reduction as tasks; the case's analysis.modes.solver is "
-                                   "not amls, got sparse")
+                                   "reduction or the samples of a virtual-point Monte Carlo "
+                                   "study as tasks; the case has no virtual_points.monte_carlo"
+                                   " and its analysis.modes.solver is not amls, got sparse")
     assert not (tmp_path / "sparse").exists()
 
 

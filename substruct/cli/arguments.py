@@ -53,7 +53,8 @@ def build_parser() -> argparse.ArgumentParser:
     run.add_argument("--json", action="store_true",
                      help="print a machine-readable summary instead of the table")
     add_backend_options(run, "the blocks of each level of an AMLS reduction (analysis.modes."
-                        "solver: amls) as tasks")
+                        "solver: amls) and the samples of a virtual-point Monte Carlo study "
+                        "(virtual_points.monte_carlo) as tasks")
 
     conv = sub.add_parser("converge", help="convergence study of a rod case",
                           description="Refine the case's rod by assumed modes, an enriched Ritz "

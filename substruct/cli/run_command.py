@@ -85,9 +85,10 @@ def run_backend(args: argparse.Namespace, case: Any) -> Any:
     modes = case.analysis.modes
     if (modes is None or modes.solver != "amls") and not monte_carlo_case(case):
         flag = "--workers" if args.workers is not None else "--scheduler"
-        raise InputError(f"{flag}: runs the blocks of an AMLS reduction as tasks; the case's "
-                         f"analysis.modes.solver is not amls, got "
-                         f"{modes.solver if modes is not None else 'no modes'}")
+        raise InputError(f"{flag}: runs the blocks of an AMLS reduction or the samples of a "
+                         f"virtual-point Monte Carlo study as tasks; the case has no "
+                         f"virtual_points.monte_carlo and its analysis.modes.solver is not "
+                         f"amls, got {modes.solver if modes is not None else 'no modes'}")
     return backend
 
 
