@@ -243,6 +243,8 @@ def couple_virtual_points(parts: Sequence[VpPart], pairs: Sequence[tuple[str, st
         raise ValueError(f"length must be finite and positive, got {length!r}")
     Bu, su = _rows(labels, pairs, weaken_compatibility, both, "output and input", length)
     Bf, sf = _rows(labels, pairs, weaken_equilibrium, both, "output and input", length)
+    if not pairs:
+        raise ValueError("no connection between the virtual points: nothing couples the parts")
     if not len(Bu) or not len(Bf):
         raise ValueError("every interface row is dropped by the weakening")
     Yc = interface_fbs(Y, Bu, Bf, reg, su, sf)
