@@ -145,8 +145,21 @@ def in_subprocess(tmp_path, case, overrides, share, **backend):
 
 
 def test_shared_parts_on_a_two_worker_local_cluster_give_the_same_table(tmp_path):
+    """The parts built once and shared to two worker processes give the serial study's
+    figures to round-off: the same arithmetic in other processes, whose arrays may sit at
+    other alignments (SIMD reductions then round differently: measured 3e-14 on a damping
+    ratio of 0.08, 3e-14 relative on the frequencies); 1e-10 of each figure's largest value
+    bounds that, orders below the study's check tolerance (1e-6)."""
     serial = in_subprocess(tmp_path, BOX, BOX_STUDY, False)
     dask = in_subprocess(tmp_path, BOX, BOX_STUDY, True, workers=2)
     assert dask.backend == "LocalCluster (2 workers)" and dask.shared == ["left", "right"]
     assert serial.shared == []
-    assert_same(serial, dask)
+    assert np.array_equal(serial.table, dask.table)  # the samples' parameters
+    assert serial.errors == dask.errors == [""] * len(serial.errors)
+    assert sorted(serial.values) == sorted(dask.values)
+    for name in serial.values:
+        a, b = np.asarray(serial.values[name]), np.asarray(dask.values[name])
+        assert np.abs(a - b).max() <= 1e-10 * np.abs(a).max(), name
+    for name in serial.reference:
+        a, b = np.asarray(serial.reference[name]), np.asarray(dask.reference[name])
+        assert np.abs(a - b).max() <= 1e-10 * np.abs(a).max(), name

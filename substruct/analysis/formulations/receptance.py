@@ -16,7 +16,8 @@ They take the constraints as :func:`substruct.analysis.formulations.coupling.rec
 rows equilibrated (:func:`substruct.linalg.scaling.equilibrate`, ``D A q = D R F``), ``R``
 consistent.  Each returns ``out[k] = O q(omega_k)`` for the force patterns ``E``, complex
 ``(n_omega, n_outputs, n_inputs)``.  Sparse matrices are factorized by the registry
-(:func:`substruct.linalg.factorize.factorizer`, ``"complex-lu"``).
+(:func:`substruct.linalg.factorize.factorizer`, ``"complex-lu"``; the Lagrange-multiplier
+saddle points by SuperLU with partial pivoting).
 """
 
 from __future__ import annotations
@@ -167,7 +168,10 @@ def kkt_sweep(K: sp.csr_array, M: sp.csr_array, C: sp.csr_array, A: sp.csr_array
         big = sp.block_array([[Z, beta * Ak.T], [beta * Ak, None]], format="csc")
         rhs = np.vstack([E, beta * RE]).astype(complex)
         try:
-            x = factorizer("complex-lu")(big.astype(complex))(rhs)[:n]
+            # SuperLU (partial pivoting), as for the real saddle points: PARDISO perturbs
+            # pivots of the zero block at some frequencies, and a perturbed factorization is
+            # refused (substruct.linalg.pardiso), so it would fall back there anyway
+            x = factorizer("superlu")(big.astype(complex))(rhs)[:n]
         except RuntimeError as exc:
             raise AnalysisInputError(f"KKT system singular at omega = {w} (a constrained resonance "
                              "of an undamped system)") from exc
