@@ -12,6 +12,12 @@ One numbered group per matrix, ``/recovery/<i>/``, attributes ``part``, ``name``
 ``peak_max_t``,     (with ``/transient``)
 ``peak_min``,
 ``peak_min_t``
+``frf``             ``n_omega x n_rows x n_inputs``, complex: the recovered quantities per
+                    unit force at each input (with ``/frf``), at ``omega`` (rad/s), for the
+``omega``,          ``inputs`` (names); ``frf_peak``, ``frf_peak_omega``: per row the largest
+``inputs``,         magnitude and its first frequency
+``frf_peak``,
+``frf_peak_omega``
 ==================  =====================================================================
 
 :func:`read_recovery` reads it back through the result reader's checks.
@@ -48,6 +54,14 @@ def write_recovery(g: h5py.Group, recovered: list[Recovered]) -> None:
             for name, values in (("peak_max", p.max), ("peak_max_t", p.t_max),
                                  ("peak_min", p.min), ("peak_min_t", p.t_min)):
                 sub.create_dataset(name, data=np.asarray(values, dtype=float))
+        if rec.omega.size:
+            sub.create_dataset("frf", data=np.asarray(rec.frf, dtype=complex))
+            sub.create_dataset("omega", data=np.asarray(rec.omega, dtype=float))
+            sub.create_dataset("inputs", data=np.array(rec.inputs, dtype=h5py.string_dtype()),
+                               shape=(len(rec.inputs),))
+            fp = rec.frf_peaks()
+            sub.create_dataset("frf_peak", data=np.asarray(fp.abs, dtype=float))
+            sub.create_dataset("frf_peak_omega", data=np.asarray(fp.omega, dtype=float))
 
 
 def _text(value: object) -> str:
@@ -85,7 +99,12 @@ def read_recovery(rd: ArrayReader, groups: list[h5py.Group], k: int | None,
                 raise ValueError(f"{g.name}/history without /transient")
             rec.history = rd.array(g, "history", "f", 2, (len(t), len(labels)))
             rec.t = np.asarray(t)
-        for name in ("modes", "history"):
+        if "frf" in g:
+            rec.omega = rd.array(g, "omega", "f", 1)
+            rec.inputs = rd.strings(g, "inputs")
+            rec.frf = rd.array(g, "frf", "c", 3, (len(rec.omega), len(labels),
+                                                  len(rec.inputs)))
+        for name in ("modes", "history", "frf", "omega"):
             if not np.all(np.isfinite(getattr(rec, name))):
                 raise ValueError(f"{g.name}/{name} holds values that are not finite")
         out.append(rec)

@@ -51,7 +51,8 @@ from substruct.case.fields import gigabytes
 from substruct.case.loader import Case, FiniteElements
 from substruct.run.result import ModelInfo
 
-__all__ = ["Progress", "modes_result", "frf_result", "in_place_quantity", "model_info",
+__all__ = ["Progress", "modes_result", "frf_result", "rows_receptance", "in_place_quantity",
+           "model_info",
            "check_dense_sizes",
            "check_dense_modes", "min_size", "DENSE_MODES_LIMIT", "DENSE_FRF_LIMIT"]
 
@@ -199,13 +200,9 @@ def frf_result(case: Case, model: Model, progress: Progress | None,
     inputs = sp.csc_array(asm.rows([model.points[p] for p in spec.inputs]).T)
     outputs = asm.rows([model.points[p] for p in spec.outputs])
     try:
-        block = spec.modal.amls
-        modal = ModalOptions(spec.modal.count, spec.modal.cutoff, spec.modal.residual,
-                             spec.modal.check_frequencies, spec.modal.solver,
-                             AmlsOptions(**block.model_dump()) if block is not None else None)
         options = SweepOptions(method=spec.method, checks=spec.check, tolerance=spec.tolerance,
                                input_names=spec.inputs, output_names=spec.outputs,
-                               progress=progress, modal=modal)
+                               progress=progress, modal=_modal_options(case))
         w = spec.omegas()
         if sink is None:
             return in_place_quantity(receptance_sweep(asm.system, w, inputs, outputs,
@@ -220,6 +217,42 @@ def frf_result(case: Case, model: Model, progress: Progress | None,
         raise case.error(("analysis", "frf"), " ".join(str(err).split())) from None
     except CheckError as err:
         raise CheckError(f"{err}; to accept it, raise analysis.frf.tolerance") from None
+
+
+def _modal_options(case: Case) -> ModalOptions:
+    spec = case.analysis.frf
+    assert spec is not None
+    block = spec.modal.amls
+    return ModalOptions(spec.modal.count, spec.modal.cutoff, spec.modal.residual,
+                        spec.modal.check_frequencies, spec.modal.solver,
+                        AmlsOptions(**block.model_dump()) if block is not None else None)
+
+
+def rows_receptance(case: Case, model: Model, rows: sp.csr_array,
+                    omegas: np.ndarray) -> np.ndarray:
+    r"""The receptances of the output rows ``rows`` (``m x n``, on the coupled coordinates)
+    to the inputs of ``case.analysis.frf`` at ``omegas``, by its method and without checks:
+
+    .. math::  H_R[k, i, j] = \text{rows}_i \, \hat H(\omega_k)\, e_j
+
+    (a second sweep at the frequencies of the first; ``n_omega x m x n_inputs``, complex).
+
+    Raises:
+        CaseError: at ``analysis.frf``, for input the solver cannot take.
+    """
+    spec = case.analysis.frf
+    if spec is None:
+        raise TypeError(f"case {case.name!r} asks for no receptances")
+    asm = model.assembly
+    inputs = sp.csc_array(asm.rows([model.points[p] for p in spec.inputs]).T)
+    try:
+        options = SweepOptions(method=spec.method, input_names=spec.inputs,
+                               what="frf (recovery)", modal=_modal_options(case))
+        res = receptance_sweep(asm.system, np.asarray(omegas, dtype=float), inputs,
+                               sp.csr_array(rows), options=options)
+    except INPUT_ERRORS as err:
+        raise case.error(("analysis", "frf"), " ".join(str(err).split())) from None
+    return np.asarray(res.H)
 
 
 def in_place_quantity(frf: Receptance, quantity: str) -> Receptance:

@@ -7,6 +7,9 @@ recovery matrix :math:`R = [R_{s_1} \dots]` acting on the histories :math:`s_i`,
 * in a mode with root :math:`\lambda` and shape :math:`\phi`, :math:`x(t) = \phi e^{\lambda t}`
   gives :math:`y = \sum_i R_{s_i} \lambda^{p_i} \phi` (:math:`p` = 0, 1, 2 for displacement,
   velocity, acceleration): the recovered mode shape, per unit modal amplitude;
+* in a receptance sweep, per unit force at input :math:`j` at the frequency :math:`\omega`,
+  :math:`H_y[\omega, :, j] = \sum_i (i\omega)^{p_i} R_{s_i} H_x(\omega) e_j`, and its peaks:
+  the largest :math:`|H_y|` of each row over the frequencies and inputs, where it is reached;
 * in a transient response, :math:`y(t) = \sum_i R_{s_i} x_{s_i}(t)` at each recorded instant,
   and its peaks: the largest and smallest value of each row and their instants.
 """
@@ -17,7 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["Recovered", "Peaks", "peaks_of"]
+__all__ = ["Recovered", "Peaks", "FrfPeaks", "peaks_of", "frf_peaks_of"]
 
 
 @dataclass
@@ -47,6 +50,28 @@ def peaks_of(history: np.ndarray, t: np.ndarray) -> Peaks:
 
 
 @dataclass
+class FrfPeaks:
+    """Per row: the largest magnitude ``abs`` of its receptances, at the frequency ``omega``
+    (rad/s) and the input ``input`` (index; the first such pair, frequencies first)."""
+
+    abs: np.ndarray
+    omega: np.ndarray
+    input: np.ndarray
+
+
+def frf_peaks_of(frf: np.ndarray, omega: np.ndarray) -> FrfPeaks:
+    """The :class:`FrfPeaks` of ``frf`` (``n_omega x n_rows x n_inputs``) at ``omega``."""
+    h = np.abs(np.asarray(frf))
+    nw, rows, ni = h.shape
+    if nw == 0 or ni == 0:
+        z = np.zeros(rows)
+        return FrfPeaks(z, z.copy(), np.zeros(rows, dtype=int))
+    flat = h.transpose(1, 0, 2).reshape(rows, nw * ni)
+    k = np.argmax(flat, axis=1)
+    return FrfPeaks(flat[np.arange(rows), k], np.asarray(omega, dtype=float)[k // ni], k % ni)
+
+
+@dataclass
 class Recovered:
     """One recovery matrix of one superelement and what it recovered.
 
@@ -58,6 +83,9 @@ class Recovered:
         history: ``n_samples x n_rows`` at the transient's instants ``t`` (empty without a
             transient response).
         t: the instants of ``history``.
+        frf: ``n_omega x n_rows x n_inputs``, complex: the recovered quantities per unit
+            force at each input (empty without receptances).
+        omega: the frequencies of ``frf`` (rad/s); ``inputs``: the names of its inputs.
     """
 
     part: str
@@ -67,6 +95,9 @@ class Recovered:
     modes: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     history: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     t: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    frf: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 0), dtype=complex))
+    omega: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    inputs: list[str] = field(default_factory=list)
 
     @property
     def title(self) -> str:
@@ -76,3 +107,7 @@ class Recovered:
     def peaks(self) -> Peaks:
         """The peaks of the transient history (:func:`peaks_of`)."""
         return peaks_of(self.history, self.t)
+
+    def frf_peaks(self) -> FrfPeaks:
+        """The peaks of the receptances (:func:`frf_peaks_of`)."""
+        return frf_peaks_of(self.frf, self.omega)

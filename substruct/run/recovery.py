@@ -6,6 +6,9 @@ its rows), so a recovery row is an output row of the coupled model,
 (:func:`recovery_rows`), and :func:`split_recovered` takes them back out, sums the blocks of
 each matrix over its histories and leaves the transient result as the case asked for it.
 Recovered mode shapes are :math:`\sum_i R_{s_i} \lambda^{p_i} S \phi` (:func:`recover_modes`).
+Recovered receptances are :math:`\sum_i (i\omega)^{p_i} R_{s_i} S H(\omega)` (:func:`recover_frf`,
+from the receptances of the same rows, computed by a second sweep at the frequencies of the
+case's one: the case's sweep streams its outputs to the results file as it goes).
 """
 
 from __future__ import annotations
@@ -24,7 +27,7 @@ from substruct.run.recovered import Recovered
 from substruct.vocabulary import DERIVATIVE_ORDER
 
 __all__ = ["RecoveryPlan", "recovery_plan", "recover_modes", "recovery_rows",
-           "split_recovered"]
+           "split_recovered", "recover_frf"]
 
 
 
@@ -101,3 +104,23 @@ def split_recovered(plan: RecoveryPlan, tr: Transient, n_outputs: int,
         tr, outputs=list(tr.outputs[:n_outputs]), displacement=tr.displacement[:, keep],
         velocity=tr.velocity[:, keep], acceleration=tr.acceleration[:, keep],
         base_influence=infl)
+
+
+def recover_frf(plan: RecoveryPlan, H: np.ndarray, omega: np.ndarray, inputs: list[str],
+                out: list[Recovered]) -> None:
+    r"""Fill ``out[i].frf`` from ``H``, the receptances of :func:`recovery_rows`
+    (``n_omega x rows x n_inputs``, plan order):
+
+    .. math::  H_y(\omega) = \sum_i (i\omega)^{p_i} \, (R_{s_i} S) H_x(\omega)
+
+    (:math:`p` = 0, 1, 2 for displacement, velocity, acceleration:
+    :data:`substruct.vocabulary.DERIVATIVE_ORDER`)."""
+    w = np.asarray(omega, dtype=float)
+    row = 0
+    for rec, (_, _, spec) in zip(out, plan.entries):
+        rows = spec.matrix_read().shape[0]
+        y = np.zeros((len(w), rows, H.shape[2]), dtype=complex)
+        for s in spec.histories():
+            y += (1j * w)[:, None, None] ** DERIVATIVE_ORDER[s] * H[:, row:row + rows]
+            row += rows
+        rec.frf, rec.omega, rec.inputs = y, w.copy(), list(inputs)

@@ -31,9 +31,11 @@ from substruct.run.analyses import (
     min_size,
     model_info,
     modes_result,
+    rows_receptance,
 )
 from substruct.run.frf_route import coupled_frf_result
 from substruct.run.recovery import (
+    recover_frf,
     recover_modes,
     recovery_plan,
     recovery_rows,
@@ -160,6 +162,16 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
     result.recovery = plan.empty()
     if plan and result.modes is not None:
         recover_modes(plan, result.modes, result.recovery)
+    if plan and frf is not None and not (has_virtual_points(case) or has_frf_parts(case)
+                                         or frf.loss_factor is not None):
+        # a second sweep of the recovery rows at the same frequencies (the first streams)
+        omegas = np.asarray(frf.omegas(), dtype=float)
+        if events is not None:
+            events("sweep", f"recovered receptances: {len(omegas)} frequencies, "
+                   f"{recovery_rows(plan, asm.n_dof).shape[0]} row(s)", len(omegas))
+        with np.errstate(over="ignore", invalid="ignore"):
+            H = rows_receptance(case, model, recovery_rows(plan, asm.n_dof), omegas)
+        recover_frf(plan, H, omegas, list(frf.inputs), result.recovery)
     if case.analysis.transient is not None:
         if events is not None:
             events("sweep", f"transient: {case.analysis.transient.steps} steps, "
@@ -201,4 +213,5 @@ def _require_finite_result(result: Result) -> None:
                        acceleration=tr.acceleration, constraint_forces=tr.constraint_forces,
                        energy=tr.energy)
     for rec in result.recovery:
-        require_finite(f"recovery {rec.title}", modes=rec.modes, history=rec.history)
+        require_finite(f"recovery {rec.title}", modes=rec.modes, history=rec.history,
+                       frf=rec.frf)
