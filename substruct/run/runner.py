@@ -166,11 +166,12 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
                                          or frf.loss_factor is not None):
         # a second sweep of the recovery rows at the same frequencies (the first streams)
         omegas = np.asarray(frf.omegas(), dtype=float)
+        rec_rows = recovery_rows(plan, asm.n_dof)
         if events is not None:
             events("sweep", f"recovered receptances: {len(omegas)} frequencies, "
-                   f"{recovery_rows(plan, asm.n_dof).shape[0]} row(s)", len(omegas))
+                   f"{rec_rows.shape[0]} row(s)", len(omegas))
         with np.errstate(over="ignore", invalid="ignore"):
-            H = rows_receptance(case, model, recovery_rows(plan, asm.n_dof), omegas)
+            H = rows_receptance(case, model, rec_rows, omegas)
         recover_frf(plan, H, omegas, list(frf.inputs), result.recovery)
     if case.analysis.transient is not None:
         if events is not None:
