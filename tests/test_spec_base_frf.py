@@ -13,6 +13,7 @@ import yaml
 
 from cli_helpers import assert_one_line_error, run
 from substruct.case.loader import load_case
+from substruct.io.result_reader import load
 from substruct.run.runner import build_model
 
 K1, M1 = 1.0e5, 1.0
@@ -140,6 +141,10 @@ def test_two_tables_against_dense_kkt(capsys, tmp_path):
     T = direct(load_case(path), f)
     assert np.abs(data["transmissibility"] - T).max() <= 1e-9 * np.abs(T).max()
     assert "left" in out and "right" in out and "peak |T|" in out
+    back = load(h5path).base_frf  # read back as written
+    assert back is not None and back.inputs == ["left", "right"]
+    np.testing.assert_array_equal(back.T, data["transmissibility"])
+    assert back.agreement == agreement and back.quantity == "acceleration"
 
 
 def test_random_psd_is_T_squared_times_input(capsys, tmp_path):
