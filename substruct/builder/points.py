@@ -70,6 +70,16 @@ def point_uses(case: Case) -> list[PointUse]:
                  for i, p in enumerate(rnd.base.at if rnd.base is not None else [])]
         uses += [PointUse(p, ("analysis", "random", "outputs", i))
                  for i, p in enumerate(rnd.outputs)]
+        uses += [PointUse(p, ("analysis", "random", "bases", k, "at", i))
+                 for k, b in enumerate(rnd.bases) for i, p in enumerate(b.at)]
+    bfr = case.analysis.base_frf
+    if bfr is not None:  # analysis.base_frf: base supports, outputs
+        uses += [PointUse(p, ("analysis", "base_frf", "base", "at", i))
+                 for i, p in enumerate(bfr.base.at if bfr.base is not None else [])]
+        uses += [PointUse(p, ("analysis", "base_frf", "bases", k, "at", i))
+                 for k, b in enumerate(bfr.bases) for i, p in enumerate(b.at)]
+        uses += [PointUse(p, ("analysis", "base_frf", "outputs", i))
+                 for i, p in enumerate(bfr.outputs)]
     uses += [PointUse(text, loc, shown) for text, loc, shown in link_point_texts(case)]
     return uses
 

@@ -28,6 +28,7 @@ from substruct.case.fields import (
 from substruct.case.numbers import MAX_MAGNITUDE, RANGE
 from substruct.case.frequency_grid import Omega
 from substruct.case.spec_analysis import (
+    BaseFrfAnalysis,
     BasePsd,
     LossFactorSpec,
     ForcePsd,
@@ -52,7 +53,7 @@ from substruct.vocabulary import (
 __all__ = ["ConstraintSpec", "Variant", "ModesBand", "AmlsSpec", "ModesAnalysis", "Omega",
            "ModalFrf", "FrfAnalysis", "Analysis", "Output", "LossFactorSpec", "PsdTable",
            "ForcePsd", "BasePsd", "NamedBasePsd", "RandomAnalysis", "SrsFrequencies",
-           "SrsAnalysis"]
+           "SrsAnalysis", "BaseFrfAnalysis"]
 
 
 
@@ -217,6 +218,8 @@ class Analysis(StrictModel):
     transient: TransientAnalysis | None = None
     #: response PSDs and RMS under force or base acceleration PSDs
     random: "RandomAnalysis | None" = None
+    #: transmissibilities per base acceleration (substruct.case.spec_analysis)
+    base_frf: "BaseFrfAnalysis | None" = None
     #: shock response spectra of the transient's output accelerations
     srs: "SrsAnalysis | None" = None
     #: transfer path analysis and model mixing on the receptances of frf
@@ -227,7 +230,7 @@ class Analysis(StrictModel):
     @model_validator(mode="after")
     def _something(self) -> "Analysis":
         if self.modes is None and self.frf is None and self.transient is None \
-                and self.random is None:
+                and self.random is None and self.base_frf is None:
             raise ValueError("nothing to compute: give modes and/or frf")
         if self.srs is not None:
             if self.transient is None:

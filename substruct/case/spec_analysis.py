@@ -26,8 +26,9 @@ from substruct.case.frequency_grid import Omega
 from substruct.case.random_cross import CrossPsd, check_cross
 from substruct.vocabulary import DEFAULT_TOLERANCE, GENERALIZED_INVERSE, FormulationName
 
-__all__ = ["LossFactorSpec", "PsdTable", "ForcePsd", "BasePsd", "NamedBasePsd", "RandomAnalysis",
-           "SrsFrequencies", "SrsAnalysis"]
+__all__ = ["LossFactorSpec", "PsdTable", "ForcePsd", "BaseSupports", "NamedBaseSupports",
+           "BasePsd", "NamedBasePsd", "RandomAnalysis", "BaseFrfAnalysis", "SrsFrequencies",
+           "SrsAnalysis"]
 
 
 #: One loss factor on all of K, or one per substructure (by name); a mapping is validated as
@@ -76,11 +77,24 @@ class ForcePsd(StrictModel):
     psd: PsdTable
 
 
-class BasePsd(StrictModel):
+class BaseSupports(StrictModel):
+    """A base input moving the grounded supports ``at`` together (each held by a constraint
+    on it alone, as a transient's base)."""
+
+    at: Annotated[list[Point], Field(min_length=1)]
+
+
+class NamedBaseSupports(BaseSupports):
+    """One of several base inputs (``bases`` of ``analysis.base_frf``): a name and its
+    grounded supports ``at`` (moved together, by no other input)."""
+
+    name: Name
+
+
+class BasePsd(BaseSupports):
     """A base acceleration PSD ((length/s^2)^2/Hz in the case's units) moving the grounded
     supports ``at`` together (each held by a constraint on it alone, as a transient's base)."""
 
-    at: Annotated[list[Point], Field(min_length=1)]
     psd: PsdTable
 
 
@@ -147,6 +161,58 @@ class RandomAnalysis(StrictModel):
 
     def base_inputs(self) -> list[BasePsd]:
         """The base acceleration inputs (``[base]``, ``bases``, or none for forces)."""
+        return [self.base] if self.base is not None else list(self.bases)
+
+
+class BaseFrfAnalysis(StrictModel):
+    """Transmissibilities ``T[k, i, j]``: output ``i``'s displacement, velocity or
+    acceleration (absolute) per unit acceleration of base input ``j`` at ``omega`` (> 0), one
+    base ``base`` or several named ones ``bases`` (the supports of ``analysis.random``)."""
+
+    omega: Omega
+    #: the unit of the omega grid's values (rad/s or Hz)
+    units: Literal["rad/s", "Hz"] = "rad/s"
+    base: BaseSupports | None = None
+    bases: list[NamedBaseSupports] = Field(default_factory=list)
+    outputs: Annotated[list[Point], Field(min_length=1)]
+    #: what the outputs' motion is (per base acceleration): acceleration is the
+    #: transmissibility proper
+    quantity: Literal["displacement", "velocity", "acceleration"] = "acceleration"
+    method: FormulationName = GENERALIZED_INVERSE
+    check: list[FormulationName] = Field(default_factory=list)
+    tolerance: Positive = DEFAULT_TOLERANCE
+    #: structural damping: one loss factor on all of K, or {substructure: eta}
+    loss_factor: LossFactorSpec | None = None
+
+    @model_validator(mode="after")
+    def _inputs(self) -> "BaseFrfAnalysis":
+        if (self.base is None) == (not self.bases):
+            raise FieldError("bases" if self.bases else "base", "give one base input (base) "
+                             "or several (bases), one of the two")
+        for k, b in enumerate(self.bases):
+            if b.name in [c.name for c in self.bases[:k]]:
+                raise FieldError(("bases", k, "name"), "a base input named twice", b.name)
+        w = self.omega.grid()
+        if np.any(w <= 0):
+            raise FieldError("omega", "must be > 0 (the response per unit base acceleration "
+                             "is unbounded at omega = 0)", float(w[w <= 0][0]))
+        need = 16.0 * len(w) * len(self.outputs) * max(len(self.bases), 1)
+        if need > memory_limit():
+            raise FieldError((), f"the transmissibilities would need about {gigabytes(need)} "
+                             f"of memory, more than this machine has available", len(w))
+        return self
+
+    def omegas(self) -> np.ndarray:
+        """The circular frequencies of the grid (rad/s), converted from Hz if ``units: Hz``."""
+        w = self.omega.grid()
+        return 2 * np.pi * w if self.units == "Hz" else w
+
+    def input_names(self) -> list[str]:
+        """``base``, or the names of ``bases``."""
+        return ["base"] if self.base is not None else [b.name for b in self.bases]
+
+    def base_inputs(self) -> list[BaseSupports]:
+        """The base inputs (``[base]`` or ``bases``)."""
         return [self.base] if self.base is not None else list(self.bases)
 
 

@@ -8,9 +8,15 @@ from typing import Any, TextIO
 import numpy as np
 
 from substruct.analysis.frf.random import miles_check
-from substruct.run.spec_results import THREE_SIGMA_EXCEEDANCE, RandomResponse, ShockSpectra
+from substruct.run.spec_results import (
+    THREE_SIGMA_EXCEEDANCE,
+    BaseFrf,
+    RandomResponse,
+    ShockSpectra,
+)
 
-__all__ = ["print_random", "print_srs", "random_json", "srs_json"]
+__all__ = ["print_random", "print_base_frf", "print_srs", "random_json", "base_frf_json",
+           "srs_json"]
 
 
 def print_random(r: RandomResponse, out: TextIO) -> None:
@@ -38,6 +44,31 @@ def print_random(r: RandomResponse, out: TextIO) -> None:
                       f"{m.miles:11.4e}  {ratio:9.3f}\n")
 
 
+def _peaks(r: BaseFrf) -> list[tuple[str, str, float, float]]:
+    """``(output, input, max |T|, its frequency in Hz)`` of each output and base input."""
+    mag = np.abs(r.T)
+    rows = []
+    for i, name in enumerate(r.outputs):
+        for j, base in enumerate(r.inputs):
+            k = int(np.argmax(mag[:, i, j]))
+            rows.append((name, base, float(mag[k, i, j]), float(r.omega[k] / (2 * np.pi))))
+    return rows
+
+
+def print_base_frf(r: BaseFrf, out: TextIO) -> None:
+    """``output  input  peak |T|  at (Hz)`` for each output and base input."""
+    f = r.omega / (2 * np.pi)
+    out.write(f"base-driven frequency response ({r.quantity} per base acceleration, "
+              f"{len(f)} frequencies {f[0]:.4g}-{f[-1]:.4g} Hz; {r.method}")
+    checks = ", ".join(f"{k} {v:.2g}" for k, v in r.agreement.items())
+    out.write(f"; agreement: {checks})\n" if checks else ")\n")
+    width = max(len("output"), *(len(o) for o in r.outputs))
+    bw = max(len("input"), *(len(b) for b in r.inputs))
+    out.write(f"  {'output':<{width}}  {'input':<{bw}}  {'peak |T|':>11}  {'at (Hz)':>9}\n")
+    for name, base, peak, at in _peaks(r):
+        out.write(f"  {name:<{width}}  {base:<{bw}}  {peak:11.4e}  {at:9.4g}\n")
+
+
 def print_srs(s: ShockSpectra, out: TextIO) -> None:
     """For each output, the largest of its spectrum and where it is."""
     out.write(f"shock response spectra (Q = {1 / (2 * s.zeta):.4g}, {len(s.fn)} frequencies "
@@ -54,6 +85,12 @@ def print_srs(s: ShockSpectra, out: TextIO) -> None:
 def random_json(r: RandomResponse) -> dict[str, Any]:
     """The RMS table as JSON."""
     return {"quantity": r.quantity, "rms": dict(zip(r.outputs, map(float, r.rms)))}
+
+
+def base_frf_json(r: BaseFrf) -> dict[str, Any]:
+    """The peak of each transmissibility (``output/input``) and its frequency (Hz) as JSON."""
+    return {"quantity": r.quantity,
+            "peaks": {f"{o}/{b}": {"peak": peak, "f": at} for o, b, peak, at in _peaks(r)}}
 
 
 def srs_json(s: ShockSpectra) -> dict[str, Any]:

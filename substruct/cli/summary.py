@@ -10,7 +10,14 @@ from typing import TYPE_CHECKING, Any, Sequence, TextIO
 import numpy as np
 
 from substruct.cli.recovery_summary import print_recovery, recovery_json
-from substruct.cli.spec_summary import print_random, print_srs, random_json, srs_json
+from substruct.cli.spec_summary import (
+    base_frf_json,
+    print_base_frf,
+    print_random,
+    print_srs,
+    random_json,
+    srs_json,
+)
 from substruct.cli.testlab_summary import testlab_json, testlab_lines
 from substruct.cli.transient_summary import print_transient, transient_json
 from substruct.analysis.frf.stream import StreamedArray
@@ -97,6 +104,8 @@ def summary_json(result: Result, files: Sequence[Path] = ()) -> dict[str, Any]:
         out["transient"] = transient_json(result.transient)
     if result.random is not None:
         out["random"] = random_json(result.random)
+    if result.base_frf is not None:
+        out["base_frf"] = base_frf_json(result.base_frf)
     if result.srs is not None:
         out["srs"] = srs_json(result.srs)
     if result.recovery:
@@ -220,6 +229,8 @@ def print_summary(result: Result, out: TextIO, requested: int | None = None,
         print_transient(result.transient, out, str(result.attrs.get("units", "")))
     if result.random is not None:
         print_random(result.random, out)
+    if result.base_frf is not None:
+        print_base_frf(result.base_frf, out)
     if result.srs is not None:
         print_srs(result.srs, out)
     print_recovery(result.recovery, out)

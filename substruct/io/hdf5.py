@@ -47,7 +47,7 @@ from substruct.io.blocks import BLOCK_BYTES, CHUNK_BYTES, DatasetSink, write_blo
 from substruct.io.file_set import TEMP_PREFIX
 from substruct.io.paths import write_errors
 from substruct.io.recovery_hdf5 import write_recovery
-from substruct.io.spec_hdf5 import write_random, write_srs
+from substruct.io.spec_hdf5 import write_base_frf, write_random, write_srs
 from substruct.io.tpa_hdf5 import write_semm, write_tpa
 from substruct.io.vp_hdf5 import write_monte_carlo, write_virtual_points
 from substruct.io.transient_hdf5 import write_transient
@@ -135,6 +135,8 @@ class ResultFile:
             write_recovery(f.create_group("recovery", track_order=True), result.recovery)
         if result.random is not None:
             write_random(f.create_group("random", track_order=True), result.random)
+        if result.base_frf is not None:
+            write_base_frf(f.create_group("base_frf", track_order=True), result.base_frf)
         if result.srs is not None:
             write_srs(f.create_group("srs", track_order=True), result.srs)
         if result.virtual_points:

@@ -35,6 +35,7 @@ from substruct.io.tpa_hdf5 import read_semm, read_tpa
 from substruct.io.transient_hdf5 import read_transient
 from substruct.io.vp_hdf5 import read_monte_carlo, read_virtual_points
 from substruct.run.result import ModelInfo, Result
+from substruct.run.spec_results import BaseFrf
 
 __all__ = ["load", "FORMAT", "FORMAT_VERSION", "RESERVED_ATTRS", "MAX_RESULT_BYTES",
            "MAX_MEMBERS", "CELL_NODES"]
@@ -206,6 +207,24 @@ def _frf(rd: _Reader, g: h5py.Group) -> Receptance:
         quantity=_text(attrs.get("quantity", "receptance")))
 
 
+def _base_frf(rd: _Reader, g: h5py.Group) -> BaseFrf:
+    """``/base_frf`` (:func:`substruct.io.spec_hdf5.write_base_frf`)."""
+    attrs = _scalar_attrs(g)
+    omega = rd.array(g, "omega", "f", 1, finite=True)
+    inputs, outputs = rd.strings(g, "inputs"), rd.strings(g, "outputs")
+    agreement = {}
+    if g.get("agreement", getlink=True) is not None:
+        agreement = {k: _number(_scalar_attrs(a), k, a.name)
+                     for a in [rd.node(g, "agreement", h5py.Group)] for k in a.attrs}
+    return BaseFrf(
+        omega=omega, outputs=outputs, inputs=inputs,
+        quantity=_text(attrs.get("quantity", "acceleration")),
+        T=rd.array(g, "transmissibility", "fc", 3, (len(omega), len(outputs), len(inputs)),
+                   finite=True),
+        method=_text(attrs.get("method", "")), agreement=agreement,
+        tolerance=_number(attrs, "tolerance", g.name, DEFAULT_TOLERANCE))
+
+
 def _numbered(members: list[tuple[str, h5py.Group]], where: str) -> list[h5py.Group]:
     if any(not k.isdigit() for k, _ in members):
         raise _Bad(f"{where} holds a member that is not numbered")
@@ -303,6 +322,8 @@ def _read(f: h5py.File) -> Result:
     result = Result(case_name=_text(root["case_name"]), case_yaml=_text(root["case_yaml"]),
                     model=model, modes=modes, frf=frf, transient=transient, variants=variants,
                     recovery=recovery,
+                    base_frf=_base_frf(rd, rd.node(f, "base_frf", h5py.Group))
+                    if "base_frf" in f else None,
                     attrs={k: v for k, v in root.items() if k not in RESERVED_ATTRS})
     _testlab(rd, f, result)
     return result

@@ -4,6 +4,9 @@
                only with correlated inputs), psd (n_f x q x q, complex),
                rms (q); attrs quantity, method, tolerance, three_sigma_exceedance;
                agreement/ (attrs: check -> relative difference)
+    /base_frf  omega (rad/s), f (Hz), outputs, inputs, transmissibility (n_w x q x p,
+               complex: output motion per base acceleration); attrs quantity, per, method,
+               tolerance; agreement/ (attrs: check -> relative difference)
     /srs       fn (Hz), outputs, pos, neg, maxabs, pv (n_outputs x n_fn); attrs zeta, Q, dt
 """
 
@@ -12,9 +15,14 @@ from __future__ import annotations
 import h5py
 import numpy as np
 
-from substruct.run.spec_results import THREE_SIGMA_EXCEEDANCE, RandomResponse, ShockSpectra
+from substruct.run.spec_results import (
+    THREE_SIGMA_EXCEEDANCE,
+    BaseFrf,
+    RandomResponse,
+    ShockSpectra,
+)
 
-__all__ = ["write_random", "write_srs"]
+__all__ = ["write_random", "write_base_frf", "write_srs"]
 
 
 def _strings(group: h5py.Group, name: str, values: list[str]) -> None:
@@ -34,6 +42,21 @@ def write_random(g: h5py.Group, r: RandomResponse) -> None:
     g.create_dataset("rms", data=r.rms)
     g.attrs.update({"quantity": r.quantity, "method": r.method, "tolerance": r.tolerance,
                     "three_sigma_exceedance": THREE_SIGMA_EXCEEDANCE})
+    agreement = g.create_group("agreement")
+    for key, value in r.agreement.items():
+        agreement.attrs[key] = float(value)
+
+
+def write_base_frf(g: h5py.Group, r: BaseFrf) -> None:
+    """Write the transmissibilities of ``analysis.base_frf`` to the group ``g`` (module
+    docstring)."""
+    g.create_dataset("omega", data=r.omega).attrs["units"] = "rad/s"
+    g.create_dataset("f", data=r.omega / (2 * np.pi)).attrs["units"] = "Hz"
+    _strings(g, "outputs", r.outputs)
+    _strings(g, "inputs", r.inputs)
+    g.create_dataset("transmissibility", data=r.T)
+    g.attrs.update({"quantity": r.quantity, "per": "acceleration", "method": r.method,
+                    "tolerance": r.tolerance})
     agreement = g.create_group("agreement")
     for key, value in r.agreement.items():
         agreement.attrs[key] = float(value)

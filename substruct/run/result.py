@@ -19,7 +19,7 @@ from substruct.analysis.results import Modes, Receptance
 from substruct.analysis.transient.results import Transient
 from substruct.builder.drawing import Drawing
 from substruct.run.recovered import Recovered
-from substruct.run.spec_results import RandomResponse, ShockSpectra
+from substruct.run.spec_results import BaseFrf, RandomResponse, ShockSpectra
 
 if TYPE_CHECKING:  # the test-lab analysis (and its case layer) only where it is used
     from substruct.analysis.frf.virtual_point import VptResult
@@ -69,6 +69,8 @@ class Result:
     #: response PSDs and RMS of analysis.random; shock response spectra of analysis.srs
     random: RandomResponse | None = None
     srs: ShockSpectra | None = None
+    #: transmissibilities per base acceleration of analysis.base_frf
+    base_frf: BaseFrf | None = None
     #: consistency indicators of the parts transformed to virtual points, by part
     virtual_points: dict[str, VptResult] = field(default_factory=dict)
     #: the coupled result's sensitivity to noise (``virtual_points.monte_carlo``)

@@ -41,6 +41,7 @@ from substruct.run.recovery import (
     recovery_rows,
     split_recovered,
 )
+from substruct.run.base_frf_route import base_frf_result
 from substruct.run.spec_route import loss_frf_result, random_result, srs_result
 from substruct.run.transient_run import transient_result
 from substruct.run.vp_route import has_virtual_points, vp_frf_result
@@ -189,6 +190,9 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
     if case.analysis.random is not None:
         result.random = random_result(case, model)
         require_finite("random", psd=result.random.psd)
+    if case.analysis.base_frf is not None:
+        result.base_frf = base_frf_result(case, model)
+        require_finite("base_frf", transmissibility=result.base_frf.T)
     if case.analysis.srs is not None and result.transient is not None:
         result.srs = srs_result(case, result.transient)
     _require_finite_result(result)

@@ -9,7 +9,7 @@ import numpy as np
 
 from substruct.analysis.frf.random import THREE_SIGMA_EXCEEDANCE
 
-__all__ = ["RandomResponse", "ShockSpectra", "THREE_SIGMA_EXCEEDANCE"]
+__all__ = ["RandomResponse", "BaseFrf", "ShockSpectra", "THREE_SIGMA_EXCEEDANCE"]
 
 
 @dataclass
@@ -41,6 +41,32 @@ class RandomResponse:
     tolerance: float = 0.0
     input_csd: np.ndarray | None = None
     base: bool = False
+
+
+@dataclass
+class BaseFrf:
+    r"""Transmissibilities of ``analysis.base_frf``: :math:`T[k, i, j] = (i \omega_k)^p\,
+    \hat u_i / \hat a_j`, output ``i``'s absolute motion (``p = 0, 1, 2``: displacement,
+    velocity, acceleration) per unit acceleration :math:`\hat a_j` of base input ``j``.
+
+    Attributes:
+        omega: the circular frequencies (rad/s).
+        outputs, inputs: the output points and the base inputs' names (``base`` or those of
+            ``bases``).
+        quantity: ``displacement``, ``velocity`` or ``acceleration`` (the transmissibility).
+        T: ``n_w x q x p``, complex.
+        method, agreement, tolerance: of the sweep behind it (``agreement`` holds the
+            relative-coordinates check of every frequency).
+    """
+
+    omega: np.ndarray
+    outputs: list[str]
+    inputs: list[str]
+    quantity: str
+    T: np.ndarray
+    method: str = ""
+    agreement: dict[str, float] = field(default_factory=dict)
+    tolerance: float = 0.0
 
 
 @dataclass

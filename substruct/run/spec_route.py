@@ -51,8 +51,8 @@ from substruct.case.random_cross import cross_matrix
 from substruct.run.spec_results import RandomResponse, ShockSpectra
 from substruct.vocabulary import DERIVATIVE_ORDER
 
-__all__ = ["loss_parts", "loss_frf_result", "grounding_column", "random_result",
-           "srs_result"]
+__all__ = ["loss_parts", "loss_frf_result", "grounding_column", "base_columns", "sweep_kw",
+           "random_result", "srs_result"]
 
 
 
@@ -80,7 +80,9 @@ def loss_parts(case: Case, model: Model, spec: LossFactorSpec, loc: tuple) -> li
     return parts
 
 
-def _sweep_kw(spec, inputs: Sequence[str], outputs: Sequence[str]) -> dict:
+def sweep_kw(spec, inputs: Sequence[str], outputs: Sequence[str]) -> dict:
+    """The keywords of a receptance sweep: a spec's ``method``, ``check`` and ``tolerance``,
+    and the input and output names."""
     return dict(method=spec.method, checks=spec.check, tolerance=spec.tolerance,
                 input_names=list(inputs), output_names=list(outputs))
 
@@ -106,7 +108,7 @@ def loss_frf_result(case: Case, model: Model, progress: Progress | None = None) 
     outputs = asm.rows([model.points[p] for p in spec.outputs])
     try:
         H = hysteretic_sweep(asm.K, asm.M, asm.C, asm.A, spec.omegas(), inputs, outputs,
-                             parts, R=asm.R, **_sweep_kw(spec, spec.inputs, spec.outputs))
+                             parts, R=asm.R, **sweep_kw(spec, spec.inputs, spec.outputs))
     except INPUT_ERRORS as err:
         raise case.error(("analysis", "frf"), " ".join(str(err).split())) from None
     except CheckError as err:
@@ -137,6 +139,26 @@ def grounding_column(case: Case, model: Model, points: Sequence[str], loc: tuple
         if not found:
             raise case.error((*loc, i), "not a grounded support: no active constraint holds "
                              "this point alone (add one with terms: {point: 1})", p)
+    return E
+
+
+def base_columns(case: Case, model: Model, supports: Sequence[Sequence[str]], loc: tuple,
+                 single: bool) -> np.ndarray:
+    """``E`` (``m x p``) of ``A q = E g``: column ``j`` the :func:`grounding_column` of base
+    input ``j``'s supports (``loc`` + ``base`` if ``single``, else ``bases[j]``).
+
+    Raises:
+        CaseError: a point that no constraint row holds alone, or a support moved by two
+            inputs (each grounded row follows one input).
+    """
+    where = [(*loc, "base", "at")] if single else \
+        [(*loc, "bases", k, "at") for k in range(len(supports))]
+    E = np.hstack([grounding_column(case, model, at, w) for at, w in zip(supports, where)])
+    shared = np.flatnonzero(np.count_nonzero(E, axis=1) > 1)
+    if len(shared):
+        j = int(np.flatnonzero(E[shared[0]])[1])
+        raise case.error(where[j], "a support that another base input already moves "
+                         "(each grounded row follows one input)", list(supports[j]))
     return E
 
 
@@ -174,23 +196,15 @@ def random_result(case: Case, model: Model) -> RandomResponse:
                 [list(c.between) for c in spec.cross]) from None
     try:
         if bases:
-            where = [(*loc, "base", "at")] if spec.base is not None else \
-                [(*loc, "bases", k, "at") for k in range(len(bases))]
-            E = np.hstack([grounding_column(case, model, b.at, at)
-                           for b, at in zip(bases, where)])
-            shared = np.flatnonzero(np.count_nonzero(E, axis=1) > 1)
-            if len(shared):
-                j = int(np.flatnonzero(E[shared[0]])[1])
-                raise case.error(where[j], "a support that another base input already moves "
-                                 "(each grounded row follows one table)", bases[j].at)
+            E = base_columns(case, model, [b.at for b in bases], loc, spec.base is not None)
             rec = base_drive_sweep(asm.K, asm.M, asm.C, asm.A, w, E, outputs,
                                    per="acceleration", loss=parts,
-                                   options=SweepOptions(**_sweep_kw(spec, names, spec.outputs),
+                                   options=SweepOptions(**sweep_kw(spec, names, spec.outputs),
                                                         what="random"))
         else:
             inputs = sp.csc_array(asm.rows([model.points[p] for p in names]).T)
             rec = hysteretic_sweep(asm.K, asm.M, asm.C, asm.A, w, inputs, outputs, parts,
-                                   R=asm.R, **_sweep_kw(spec, names, spec.outputs))
+                                   R=asm.R, **sweep_kw(spec, names, spec.outputs))
     except INPUT_ERRORS as err:
         raise case.error(loc, " ".join(str(err).split())) from None
     except CheckError as err:
