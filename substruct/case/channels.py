@@ -204,6 +204,8 @@ def _check_copies(channels: list[Channel], paths: list[str], source: str) -> Non
 
 
 def check_channel_file(path: Path) -> None:
+    """Refuse a channel file that cannot be read, is not a regular file or is larger than
+    :data:`MAX_CHANNEL_FILE` bytes (:class:`CaseError`, before anything is read)."""
     try:
         info = os.stat(path)
     except OSError as err:

@@ -171,7 +171,9 @@ def kkt_sweep(K: sp.csr_array, M: sp.csr_array, C: sp.csr_array, A: sp.csr_array
             # SuperLU (partial pivoting), as for the real saddle points: PARDISO perturbs
             # pivots of the zero block at some frequencies, and a perturbed factorization is
             # refused (substruct.linalg.pardiso), so it would fall back there anyway
-            x = factorizer("superlu")(big.astype(complex))(rhs)[:n]
+            solve = factorizer("superlu")(big.astype(complex))
+            x = solve(rhs)
+            x = (x + solve(rhs - big @ x))[:n]  # one step of iterative refinement
         except RuntimeError as exc:
             raise AnalysisInputError(f"KKT system singular at omega = {w} (a constrained resonance "
                              "of an undamped system)") from exc
