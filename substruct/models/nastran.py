@@ -49,7 +49,6 @@ from substruct.case.bdf_fields import BdfError
 from substruct.models.beam import bending_matrices, release, rotation
 from substruct.models.frame import frame_component
 from substruct.models.nastran_shells import bush_matrices, plate_matrices
-from substruct.models.nastran_solids import solid_blocks
 from substruct.models.selection import node_tolerance
 from substruct.substructure import Geometry, PointError, Substructure, as_csr
 
@@ -193,7 +192,13 @@ def nastran_matrices(bulk: BulkData) -> NastranMatrices:
     for kind, nodes, Ke, Me in plate_matrices(bulk, index):
         add((6 * np.asarray(nodes)[:, None] + np.arange(6)).ravel(), Ke, Me)
         faces.setdefault(kind, []).append(nodes)
-    for kind, conn, Ks, Ms in solid_blocks(bulk, index):
+    if bulk.solids:  # scikit-fem and meshio loaded only for solid elements (start-up time)
+        from substruct.models.nastran_solids import solid_blocks
+
+        blocks = list(solid_blocks(bulk, index))
+    else:
+        blocks = []
+    for kind, conn, Ks, Ms in blocks:
         rows += [Ks.row, Ms.row]
         cols += [Ks.col, Ms.col]
         kv += [Ks.data, np.zeros_like(Ms.data)]
