@@ -25,7 +25,8 @@ so a rigid rotation is carried unchanged along the element.
 
 **Links.** A rigid or interpolation link of a case is drawn as a spider: straight lines from
 its independent (reference) node to each of its other nodes, which move with the nodes'
-translations.
+translations.  So is each RBE2 (``GN`` to its ``GMi``) and RBE3 (``REFGRID`` to its
+``Gi,j``) of a Nastran model's bulk data, at the grids' positions in basic coordinates.
 """
 
 from __future__ import annotations
@@ -36,13 +37,16 @@ import numpy as np
 import scipy.sparse as sp
 
 from substruct.assembly.faces import face_node_refs, face_nodes, region_of
+from substruct.assembly.links import NodeRef
 from substruct.assembly.stack import Assembly
 from substruct.builder.drawing import Drawing
 from substruct.builder.links import link_node
+from substruct.builder.nastran import rigid_element_grids
 from substruct.case.links import InterpolationLinkSpec, RigidLinkSpec
+from substruct.case.nastran import NastranSpec
 from substruct.substructure import Substructure
 
-__all__ = ["BEAM_SEGMENTS", "beam_curves", "spider_drawing", "link_spiders"]
+__all__ = ["BEAM_SEGMENTS", "beam_curves", "spider_drawing", "link_spiders", "bulk_spiders"]
 
 #: Straight pieces a beam element is drawn with.
 BEAM_SEGMENTS = 8
@@ -173,4 +177,25 @@ def link_spiders(case: Any, asm: Assembly) -> list[Drawing]:
                           asm.rows([ref.point(c) for c in range(3)])))
         else:
             out.append(spider_drawing(spec.name or f"link{k + 1}", nodes[0], nodes[1:]))
+    return out
+
+
+def bulk_spiders(case: Any, asm: Assembly) -> list[Drawing]:
+    """The spider of each RBE2 and RBE3 card of every ``type: nastran`` substructure of
+    ``case`` over the stacked coordinates of ``asm``, named ``"<model>: RBE2 <id>"``: the
+    card's ``GN`` (``REFGRID``) first, then its ``GMi`` (``Gi,j``), each at its grid's position
+    in basic coordinates and moving with the grid's rows ``u_x, u_y, u_z`` of the assembly."""
+    subs = {s.name: s for s in asm.substructures}
+    out = []
+    for spec in case.substructures:
+        sub = subs.get(spec.name)
+        if not isinstance(spec, NastranSpec) or sub is None or sub.position is None:
+            continue
+        for card, ident, centre, others in rigid_element_grids(spec.bulk):
+            nodes = []
+            for g in [centre, *others]:
+                ref = NodeRef(spec.name, {"node": g})
+                nodes.append((np.asarray(sub.position(ref.point(0).where), dtype=float),
+                              asm.rows([ref.point(c) for c in range(3)])))
+            out.append(spider_drawing(f"{spec.name}: {card} {ident}", nodes[0], nodes[1:]))
     return out

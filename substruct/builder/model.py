@@ -30,7 +30,7 @@ from substruct.builder.checks import (
 from substruct.builder.drawing import Drawing
 from substruct.builder.drawings import layout_drawings
 from substruct.builder.factory import make_substructures
-from substruct.builder.frame_drawing import link_spiders
+from substruct.builder.frame_drawing import bulk_spiders, link_spiders
 from substruct.builder.links import case_links
 from substruct.builder.points import PointUse, point_uses, resolve_point
 from substruct.builder.solids import tie_and_reduce
@@ -149,4 +149,5 @@ def assemble_case(case: Case, prebuilt: Mapping[str, Substructure] | None = None
                          dict(case.constraints[k].terms)) from None
     check_connections_consistent(case, asm, len(connections))
     warn_free_springs(case)
-    return Model(asm, active, layout_drawings(asm, chains) + link_spiders(case, asm), points)
+    spiders = link_spiders(case, asm) + bulk_spiders(case, asm)
+    return Model(asm, active, layout_drawings(asm, chains) + spiders, points)

@@ -18,7 +18,7 @@ from substruct.case.nastran import NastranSpec
 from substruct.models.nastran import nastran_matrices, nastran_substructure
 from substruct.substructure import Substructure
 
-__all__ = ["build_nastran", "bulk_links", "autospc"]
+__all__ = ["build_nastran", "bulk_links", "rigid_element_grids", "autospc"]
 
 
 def build_nastran(spec: NastranSpec) -> Substructure:
@@ -87,6 +87,17 @@ def bulk_links(name: str, bulk: BulkData, subs: Mapping[str, Substructure]
         except LinkError as err:
             raise fail(err, m.line, "MPC", m.sid) from None
         out.append((link, m.line, "MPC", m.sid))
+    return out
+
+
+def rigid_element_grids(bulk: BulkData) -> list[tuple[str, int, int, list[int]]]:
+    """The grids of each RBE2 and RBE3 card of ``bulk``, in card order: ``(card name, id,
+    centre, others)``, the centre the RBE2's GN or the RBE3's REFGRID, the others the RBE2's
+    GMi or the RBE3's Gi,j (group by group, as :func:`bulk_links` takes them)."""
+    out: list[tuple[str, int, int, list[int]]] = [("RBE2", r.id, r.gn, list(r.gm))
+                                                  for r in bulk.rbe2]
+    out += [("RBE3", r3.id, r3.ref, [g for _, _, gl in r3.groups for g in gl])
+            for r3 in bulk.rbe3]
     return out
 
 
