@@ -1,0 +1,133 @@
+"""Pseudo-forces and operational (transmissibility-based) TPA on the synthetic test lab
+(tests/testlab_models.py): a source inside the free frame A (forces at two of its nodes) runs
+on the clamped receptor B, and the frame is computed as one piece.
+
+Pseudo-forces at points of A away from the joint and from the source reproduce the responses
+at targets on B when their blocked forces span the joint's six loads (three forces along x at
+three points of A's plane x = -0.4 m not on one line, three in that plane), and the validation
+error says by how much they miss when they cannot (three forces at one point; six at two
+points, whose line they cannot turn about).  Operational TPA: responses under random operating
+forces at three places give the transmissibility H_ts H_is^-1 of the generating model.
+
+Tolerance: the finite-element receptances are accurate to about 3.5e-10 of their largest entry
+(tests/test_virtual_point.py); 1e-8 leaves a margin of about 30.  The transmissibility and the
+sum of the contributions are formed from one set of receptances, so only the round-off of the
+least squares remains: 1e-14 times the condition number of H_is (2.0e3) times 100.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from substruct.analysis.frf.tpa import on_board_validation
+from substruct.analysis.frf.tpa_operational import (
+    operational_contributions,
+    pseudo_forces,
+    transmissibility,
+)
+from substruct.analysis.frf.vp_coupling import Regularisation
+from testlab_models import OMEGA, assembly, node_dofs, part_a, receptance
+
+EXACT = 1e-8
+SOURCE = [("3:uz", 1.0), ("4:ux", 0.4 - 0.3j)]
+F = np.array([a for _, a in SOURCE])
+INDICATORS = [((x, y, z), c) for (x, y, z) in [(1 / 6, 0.0, 0.0), (0.5, 0.0, 0.0),
+                                                (0.5, 0.35, 0.0)] for c in ("ux", "uy", "uz")]
+TARGETS = [((0.5, 0.35 * 2 / 3, 0.0), "uz"), ((0.5, 0.0, -0.1), "uy"), ((1 / 3, 0.0, 0.0), "uz")]
+N2, P1, P3 = (-0.4, 0.0, 0.0), (-0.4, 0.1, 0.0), (-0.4, 0.3, 0.5 / 3)
+#: spans the joint's loads: x forces at three points not on one line, three in the plane
+SPANNING = [(N2, "ux"), (N2, "uy"), (N2, "uz"), (P1, "ux"), (P3, "ux"), (P3, "uy")]
+ONE_POINT = [(N2, "ux"), (N2, "uy"), (N2, "uz")]
+TWO_POINTS = [(p, c) for p in (N2, (-0.4, 0.3, 0.0)) for c in ("ux", "uy", "uz")]
+
+
+def _at(sub, points):
+    return sp.csr_array(sp.vstack([sub.locate({"at": list(p), "component": c})
+                                   for p, c in points]))
+
+
+@pytest.fixture(scope="module")
+def lab():
+    A, AB = part_a(), assembly()
+    J = node_dofs(A, 1)
+    src_a = sp.csr_array(sp.vstack([A.locate(d) for d, _ in SOURCE]))
+    Yjj = receptance(A, J, J)
+    truth = np.linalg.solve(Yjj, (receptance(A, J, src_a) @ F)[:, :, None])[:, :, 0]
+    out = sp.csr_array(sp.vstack([_at(AB, INDICATORS), _at(AB, TARGETS)]))
+    src = sp.csr_array(sp.vstack([AB.locate(d) for d, _ in SOURCE]))
+    u = receptance(AB, out, src) @ F  # operating responses (k, 9 + 3)
+    return dict(A=A, AB=AB, J=J, Yjj=Yjj, truth=truth, out=out, u=u)
+
+
+def _pseudo(lab, points, reg=Regularisation()):
+    Y = receptance(lab["AB"], lab["out"], _at(lab["AB"], points))
+    Fp = pseudo_forces(Y[:, :9], lab["u"][:, :9], reg)
+    return Fp, on_board_validation(Y[:, 9:], Fp, lab["u"][:, 9:])
+
+
+def test_pseudo_forces_span_the_interface(lab):
+    """Six spanning pseudo-forces predict the targets; their blocked forces
+    Y_A,JJ^-1 Y_A,Jp F_ps are the source's (the pseudo-forces stand for it on any receptor)."""
+    Fp, val = _pseudo(lab, SPANNING)
+    print("spanning: validation error max", val.error.max())
+    assert val.error.max() < EXACT
+    M = np.linalg.solve(lab["Yjj"], receptance(lab["A"], lab["J"], _at(lab["A"], SPANNING)))
+    f_bl = (M @ Fp[:, :, None])[:, :, 0]
+    err = np.abs(f_bl - lab["truth"]).max() / np.abs(lab["truth"]).max()
+    print("spanning: blocked forces", err)
+    assert err < EXACT
+
+
+def test_pseudo_forces_that_cannot_span_are_reported(lab):
+    """Three forces at one point, or six at two points, miss part of the joint's loads: the
+    on-board validation reports it, per frequency."""
+    for points, floor in ((ONE_POINT, 1e-2), (TWO_POINTS, 1e-4)):
+        _, val = _pseudo(lab, points)
+        print(len(points), "validation error median", np.median(val.error), "max",
+              val.error.max())
+        assert np.median(val.error) > floor
+
+
+def test_operational_tpa(lab):
+    """Random operating forces at three places of A, responses at three indicators of B and at
+    the three targets: T = U_t U_i^+ is H_ts H_is^-1, and the contributions add up to the
+    target responses of every condition."""
+    AB = lab["AB"]
+    Y = receptance(AB, lab["out"], _at(AB, SPANNING[3:]))
+    H_i, H_t = Y[:, [0, 4, 8]], Y[:, 9:]
+    exact = H_t @ np.linalg.inv(H_i)
+    rng = np.random.default_rng(1)
+    for n_o in (3, 8):
+        Fo = rng.normal(size=(len(OMEGA), 3, n_o)) + 1j * rng.normal(size=(len(OMEGA), 3, n_o))
+        U_i, U_t = H_i @ Fo, H_t @ Fo
+        T = transmissibility(U_i, U_t)
+        err = np.abs(T - exact).max() / np.abs(exact).max()
+        print(n_o, "conditions: transmissibility", err)
+        assert err < 100 * 1e-14 * np.linalg.cond(H_i).max()
+        for j in range(n_o):
+            c = operational_contributions(T, U_i[:, :, j])
+            assert c.shape == (len(OMEGA), 3, 3)
+            e = np.abs(c.sum(axis=2) - U_t[:, :, j]).max() / np.abs(U_t[:, :, j]).max()
+            assert e < 100 * 1e-14 * np.linalg.cond(H_i).max()
+    with pytest.raises(ValueError, match="at least as many operating conditions as "
+                       "indicators: 2 conditions < 3 indicators"):
+        transmissibility(U_i[:, :, :2], U_t[:, :, :2])
+    with pytest.raises(ValueError, match="do not match"):
+        transmissibility(U_i, U_t[:, :, :-1])
+    bad = U_t.copy()
+    bad[2, 1, 0] = np.inf
+    with pytest.raises(ValueError, match=r"target responses are not finite at index \[2, 1, 0\]"):
+        transmissibility(U_i, bad)
+
+
+def test_pseudo_forces_bad_input(lab):
+    Y = np.ones((4, 3, 6), dtype=complex)
+    with pytest.raises(ValueError, match="at least as many indicator responses as "
+                       "pseudo-forces: 3 < 6"):
+        pseudo_forces(Y, np.ones((4, 3)))
+    with pytest.raises(ValueError, match="do not match"):
+        pseudo_forces(Y, np.ones((3, 3)))
+    with pytest.raises(ValueError, match="scale must be 2 finite positive numbers"):
+        pseudo_forces(Y[:, :, :2], np.ones((4, 3)), scale=[1.0, -1.0])
