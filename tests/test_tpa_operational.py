@@ -40,7 +40,7 @@ N2, P1, P3 = (-0.4, 0.0, 0.0), (-0.4, 0.1, 0.0), (-0.4, 0.3, 0.5 / 3)
 #: spans the joint's loads: x forces at three points not on one line, three in the plane
 SPANNING = [(N2, "ux"), (N2, "uy"), (N2, "uz"), (P1, "ux"), (P3, "ux"), (P3, "uy")]
 ONE_POINT = [(N2, "ux"), (N2, "uy"), (N2, "uz")]
-TWO_POINTS = [(p, c) for p in (N2, (-0.4, 0.3, 0.0)) for c in ("ux", "uy", "uz")]
+TWO_POINTS = [(p, c) for p in (N2, P1) for c in ("ux", "uy", "uz")]
 
 
 def _at(sub, points):
@@ -131,3 +131,92 @@ def test_pseudo_forces_bad_input(lab):
         pseudo_forces(Y, np.ones((3, 3)))
     with pytest.raises(ValueError, match="scale must be 2 finite positive numbers"):
         pseudo_forces(Y[:, :, :2], np.ones((4, 3)), scale=[1.0, -1.0])
+
+
+
+#: the test frames as one case: A's members split at (-0.4, 0.1, 0) (node 21) and
+#: (-0.4, 0.3, 0.5/3) (node 41), the pseudo-force points of SPANNING
+FRAME = """name: frame_tpa
+units: "N, m, kg, s"
+substructures:
+  - name: AB
+    type: frame
+    nodes: {1: [0, 0, 0], 2: [-0.4, 0, 0], 21: [-0.4, 0.1, 0], 3: [-0.4, 0.3, 0],
+            41: [-0.4, 0.3, 0.16666666666666666], 4: [-0.4, 0.3, 0.25], 12: [0.5, 0, 0],
+            13: [0.5, 0, -0.3], 14: [0.5, 0.35, 0]}
+    materials: {steel: {E: 2.1e11, G: 8.1e10, rho: 7850}}
+    sections: {tube: {A: 4.44e-4, Iy: 1.02e-7, Iz: 1.02e-7, J: 1.6e-7}}
+    members:
+      - {nodes: [1, 2], section: tube, material: steel, orientation: [0, 0, 1], divisions: 3}
+      - {nodes: [2, 21], section: tube, material: steel, orientation: [0, 0, 1]}
+      - {nodes: [21, 3], section: tube, material: steel, orientation: [0, 0, 1], divisions: 2}
+      - {nodes: [3, 41], section: tube, material: steel, orientation: [1, 0, 0], divisions: 2}
+      - {nodes: [41, 4], section: tube, material: steel, orientation: [1, 0, 0]}
+      - {nodes: [1, 12], section: tube, material: steel, orientation: [0, 0, 1], divisions: 3}
+      - {nodes: [12, 13], section: tube, material: steel, orientation: [1, 0, 0], divisions: 3}
+      - {nodes: [12, 14], section: tube, material: steel, orientation: [0, 0, 1], divisions: 3}
+    supports: {13: "123456"}
+analysis:
+  frf:
+    omega: {start: 31.41592653589793, stop: 3769.9111843077517, num: 40}
+    loss_factor: 0.01
+    inputs: INPUTS
+    outputs: [AB@12:ux, AB@12:uy, AB@12:uz, AB@12:rx, AB@12:ry, AB@12:rz, AB@14:ux, AB@14:uy,
+              AB@14:uz, AB@14:rx, AB@14:ry, AB@14:rz]
+"""
+DOOR_SOURCE = ["AB@3:uz", "AB@4:ux"]
+DOOR_TPA = """  tpa:
+    responses: RESPONSES
+    method: pseudo_forces
+    interface: INPUTS
+    indicators: INDICATORS
+    targets: [AB@14:rx, AB@14:ry, AB@14:rz]
+"""
+DOOR_IND = ["AB@12:ux", "AB@12:uy", "AB@12:uz", "AB@12:rx", "AB@12:ry", "AB@12:rz",
+            "AB@14:ux", "AB@14:uy", "AB@14:uz"]
+
+
+def _run_case(tmp_path, name, text):
+    from substruct import cli
+    from substruct.io.result_reader import load
+    path = tmp_path / f"{name}.yaml"
+    path.write_text(text)
+    code = cli.main(["run", str(path), "--out", str(tmp_path / name), "--quiet",
+                     "--no-pictures"])
+    return code, (load(tmp_path / name / "frame_tpa.h5") if code == 0 else None)
+
+
+def test_pseudo_forces_from_a_case_file(tmp_path, capsys):
+    """``analysis.tpa.method: pseudo_forces`` on a frame case: the operating responses are the
+    case's own receptances from the source times its forces; six spanning pseudo-forces
+    predict the targets, three at one point do not and the validation error says so."""
+    code, res = _run_case(tmp_path, "source",
+                          FRAME.replace("INPUTS", "[" + ", ".join(DOOR_SOURCE) + "]"))
+    assert code == 0
+    u = res.frf.H @ F
+    responses = tmp_path / "operating.npz"
+    np.savez(responses, omega=res.frf.omega, labels=np.array(res.frf.outputs), u=u)
+    errs = {}
+    for name, pts in (("spanning", ["AB@2:ux", "AB@2:uy", "AB@2:uz", "AB@21:ux", "AB@41:ux",
+                                    "AB@41:uy"]),
+                      ("one", ["AB@2:ux", "AB@2:uy", "AB@2:uz"])):
+        names = "[" + ", ".join(pts) + "]"
+        text = (FRAME + DOOR_TPA).replace("INPUTS", names).replace(
+            "RESPONSES", str(responses)).replace("INDICATORS", "[" + ", ".join(DOOR_IND) + "]")
+        code, res = _run_case(tmp_path, name, text)
+        assert code == 0
+        assert res.tpa.method == "pseudo_forces" and res.tpa.interface == pts
+        errs[name] = res.tpa.error
+    with capsys.disabled():
+        print("door: spanning max", errs["spanning"].max(), "one point median",
+              np.median(errs["one"]))
+    assert errs["spanning"].max() < EXACT
+    assert np.median(errs["one"]) > 1e-2
+    capsys.readouterr()
+    text = (FRAME + DOOR_TPA).replace("INPUTS", "[" + ", ".join(DOOR_IND[:7]) + "]").replace(
+        "RESPONSES", str(responses)).replace("INDICATORS", "[" + ", ".join(DOOR_IND[7:]) + "]")
+    code, _ = _run_case(tmp_path, "few", text)
+    assert code == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and ": analysis.tpa.indicators: pseudo-forces need at " \
+        "least as many indicators as pseudo-force points (7)" in err, err
