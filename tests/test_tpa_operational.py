@@ -111,6 +111,13 @@ def test_operational_tpa(lab):
             assert c.shape == (len(OMEGA), 3, 3)
             e = np.abs(c.sum(axis=2) - U_t[:, :, j]).max() / np.abs(U_t[:, :, j]).max()
             assert e < 100 * 1e-14 * np.linalg.cond(H_i).max()
+    # the regularised option is used: a truncation that drops nothing gives the same T, one
+    # that keeps two of the three singular values of U_i does not
+    keep = transmissibility(U_i, U_t, Regularisation("tsvd", rtol=1e-14))
+    assert np.abs(keep - exact).max() < 100 * 1e-14 * np.linalg.cond(H_i).max() * \
+        np.abs(exact).max()
+    cut = transmissibility(U_i, U_t, Regularisation("tsvd", rank=2))
+    assert np.abs(cut - exact).max() > 1e-3 * np.abs(exact).max()
     with pytest.raises(ValueError, match="at least as many operating conditions as "
                        "indicators: 2 conditions < 3 indicators"):
         transmissibility(U_i[:, :, :2], U_t[:, :, :2])
