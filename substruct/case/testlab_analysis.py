@@ -11,9 +11,10 @@ and a measurement file on the same frequency grid.
         responses: operating.npz   # omega (rad/s) or freq_hz, labels (points), u (freq x labels)
         interface: [A@vp:J:ux, A@vp:J:uy, ...]   # the paths c: inputs of analysis.frf
         method: in_situ            # or matrix_inverse (the responses at the interface itself)
+                                   # or pseudo_forces (interface: points of the source off it)
         indicators: [B@ch:I1, ...] # in_situ: at least as many as interface coordinates
         targets: [B@ch:T1, ...]    # on-board validation and path contributions
-        regularization: {method: tsvd, rtol: 1.0e-2, length: 0.3}   # in_situ only
+        regularization: {method: tsvd, rtol: 1.0e-2, length: 0.3}   # not matrix_inverse
       semm:
         measured: measured.npz     # omega or freq_hz, outputs, inputs, H (freq x out x in)
         boundary: {outputs: [...], inputs: [...]}   # optional: default every measured one
@@ -21,8 +22,10 @@ and a measurement file on the same frequency grid.
 The responses of ``tpa`` are operating responses of the assembly in the quantity of
 ``analysis.frf`` (a receptance's displacements by default); in situ,
 :math:`f^{bl} = (Y_{bc})^{+} u_b`; by matrix inverse, :math:`f^{bl} = Y_{cc}^{-1} u_c`
-(:mod:`substruct.analysis.frf.tpa`).  SEMM mixes ``analysis.frf``'s receptance (the numerical
-model) with the measured one (:mod:`substruct.analysis.frf.semm`).
+(:mod:`substruct.analysis.frf.tpa`); with pseudo-forces at points ``p`` of the source
+(given as ``interface``), :math:`F_{ps} = (Y_{bp})^{+} u_b`
+(:mod:`substruct.analysis.frf.tpa_operational`).  SEMM mixes ``analysis.frf``'s receptance
+(the numerical model) with the measured one (:mod:`substruct.analysis.frf.semm`).
 """
 
 from __future__ import annotations
@@ -124,10 +127,10 @@ class TpaAnalysis(StrictModel):
 
     responses: str
     interface: list[Point] = Field(min_length=1)
-    method: Literal["in_situ", "matrix_inverse"] = "in_situ"
+    method: Literal["in_situ", "matrix_inverse", "pseudo_forces"] = "in_situ"
     indicators: list[Point] = Field(default_factory=list)
     targets: list[Point] = Field(min_length=1)
-    #: in situ only: the pseudo-inverse of Y_bc; ``length`` scales the moment unknowns
+    #: in situ, pseudo-forces: the pseudo-inverse of Y_bc; ``length`` scales the moments
     regularization: VpRegularization | None = None
     _omega: np.ndarray | None = PrivateAttr(default=None)
     _u: dict[str, np.ndarray] = PrivateAttr(default_factory=dict)
@@ -145,8 +148,10 @@ class TpaAnalysis(StrictModel):
                 raise FieldError("regularization", "matrix_inverse is a solve; "
                                  "regularization belongs to in_situ", self.regularization.method)
         elif len(self.indicators) < len(self.interface):
-            raise FieldError("indicators", f"in situ needs at least as many indicators as "
-                             f"interface coordinates ({len(self.interface)})",
+            what = "pseudo-forces need at least as many indicators as pseudo-force points" \
+                if self.method == "pseudo_forces" else \
+                "in situ needs at least as many indicators as interface coordinates"
+            raise FieldError("indicators", f"{what} ({len(self.interface)})",
                              list(self.indicators))
         for i, t in enumerate(self.targets):
             if t in self.indicators or t in self.interface:

@@ -6,6 +6,8 @@ outputs ``x`` inputs ``H``; :mod:`substruct.case.testlab_analysis`):
   regularization's ``length``) or by matrix inverse :math:`f^{bl} = H_{cc}^{-1} u_c`; the
   prediction :math:`\hat u_t = H_{tc} f^{bl}` against the measured responses at the targets,
   and the path contributions :math:`H_{tc_j} f^{bl}_j` (:mod:`substruct.analysis.frf.tpa`);
+  with ``method: pseudo_forces`` the ``interface`` points are pseudo-force points ``p`` of the
+  source, :math:`F_{ps} = (H_{bp})^{+} u_b` (:mod:`substruct.analysis.frf.tpa_operational`);
 * ``analysis.semm``: ``H`` mixed with the measured receptance at the boundary
   (:mod:`substruct.analysis.frf.semm`).
 """
@@ -17,6 +19,7 @@ import numpy as np
 from substruct.analysis.frf.semm import semm
 from substruct.analysis.frf.tpa import (blocked_forces_in_situ, blocked_forces_matrix_inverse,
                                         on_board_validation, path_contributions)
+from substruct.analysis.frf.tpa_operational import pseudo_forces
 from substruct.analysis.frf.vp_coupling import Regularisation
 from substruct.analysis.results import Receptance
 from substruct.case.loader import Case
@@ -58,7 +61,8 @@ def tpa_result(case: Case, H: Receptance) -> TpaResult:
                 scale = np.array([r.length if p.rsplit(":", 1)[-1] in _ROTATIONS else 1.0
                                   for p in c])
                 how += f" ({r.method})"
-            f = blocked_forces_in_situ(_block(H, b, c), u_b, reg, scale)
+            solve = pseudo_forces if spec.method == "pseudo_forces" else blocked_forces_in_situ
+            f = solve(_block(H, b, c), u_b, reg, scale)
         Y_tc = _block(H, t, c)
         val = on_board_validation(Y_tc, f, spec.responses_at(t))
         paths = path_contributions(Y_tc, f)
