@@ -16,7 +16,7 @@ class TpaResult:
     r"""Blocked forces and their validation (:mod:`substruct.analysis.frf.tpa`).
 
     Attributes:
-        method: ``in_situ`` or ``matrix_inverse`` (with `` (tsvd)``/`` (tikhonov)`` when
+        method: ``in_situ``, ``matrix_inverse`` or ``pseudo_forces`` (with `` (tsvd)``/`` (tikhonov)`` when
             regularised).
         interface: the paths ``c`` (inputs of the receptance).
         indicators: the points whose operating responses found the forces (the interface
