@@ -35,7 +35,8 @@ def test_the_pictures_are_written(run):
     names = sorted(p.name for p in out.iterdir())
     assert names == ["vpt_coupling_tpa.h5", "vpt_coupling_tpa_consistency.png",
                      "vpt_coupling_tpa_frf.png", "vpt_coupling_tpa_paths.png",
-                     "vpt_coupling_tpa_validation.png"]
+                     "vpt_coupling_tpa_validation.png",
+                     "vpt_coupling_tpa_vp_geometry.png"]
     for png in out.glob("*.png"):
         assert matplotlib.image.imread(png)[..., :3].std() > 0.01  # not blank
 
