@@ -212,6 +212,9 @@ def picture_paths(case: Any, out: Path) -> list[Path]:
         paths.append(out / f"{name}_consistency.png")
     if any(getattr(s, "virtual_points", None) is not None for s in case.substructures):
         paths.append(out / f"{name}_vp_geometry.png")
+    if any(getattr(getattr(s, "virtual_points", None), "monte_carlo", None) is not None
+           for s in case.substructures):
+        paths.append(out / f"{name}_monte_carlo.png")
     if case.analysis.tpa is not None:
         paths += [out / f"{name}_paths.png", out / f"{name}_validation.png"]
     if case.analysis.transient is not None:
@@ -250,10 +253,12 @@ def write_pictures(result: Result, out: Path, name: str) -> list[Path]:
                     result, out / f"{name}_modes_{variant}.png", variant=variant)))
     if result.frf is not None:
         files.append(Path(plotting.plot_frf(result, out / f"{name}_frf.png")))
-    if result.virtual_points or result.tpa is not None:
+    if result.virtual_points or result.tpa is not None or result.monte_carlo is not None:
         lab = optional_module("viz.testlab_picture")
         if result.virtual_points:
             files.append(Path(lab.plot_consistency(result, out / f"{name}_consistency.png")))
+        if result.monte_carlo is not None:
+            files.append(Path(lab.plot_monte_carlo(result, out / f"{name}_monte_carlo.png")))
         if result.tpa is not None:
             files.append(Path(lab.plot_paths(result, out / f"{name}_paths.png")))
             files.append(Path(lab.plot_validation(result, out / f"{name}_validation.png")))
