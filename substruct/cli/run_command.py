@@ -38,7 +38,8 @@ from substruct.cli.summary import print_summary, summary_json
 if TYPE_CHECKING:
     from substruct.run.result import Result
 
-__all__ = ["run_command", "run_backend", "monte_carlo_case", "picture_paths", "write_pictures", "compute",
+__all__ = ["run_command", "run_backend", "monte_carlo_case", "picture_paths", "write_pictures",
+           "write_case_pictures", "compute",
            "stage_set"]
 
 
@@ -167,6 +168,7 @@ def stage_set(case: Any, args: argparse.Namespace, staging: Path, out: Path,
         with write_errors(out):
             if pictures:
                 drawn = write_pictures(result, staging, case.name)
+                drawn += write_case_pictures(case, staging)
             result.attrs["pictures"] = "\n".join(p.name for p in drawn)
             h5.save(result)
     with write_errors(out):
@@ -208,6 +210,11 @@ def picture_paths(case: Any, out: Path) -> list[Path]:
     if case.analysis.frf is not None and any(
             getattr(s, "virtual_points", None) is not None for s in case.substructures):
         paths.append(out / f"{name}_consistency.png")
+    if any(getattr(s, "virtual_points", None) is not None for s in case.substructures):
+        paths.append(out / f"{name}_vp_geometry.png")
+    if any(getattr(getattr(s, "virtual_points", None), "monte_carlo", None) is not None
+           for s in case.substructures):
+        paths.append(out / f"{name}_monte_carlo.png")
     if case.analysis.tpa is not None:
         paths += [out / f"{name}_paths.png", out / f"{name}_validation.png"]
     if case.analysis.transient is not None:
@@ -219,6 +226,16 @@ def picture_paths(case: Any, out: Path) -> list[Path]:
     if case.analysis.srs is not None:
         paths.append(out / f"{name}_srs.png")
     return paths
+
+
+def write_case_pictures(case: Any, out: Path) -> list[Path]:
+    """The pictures drawn from the case itself: the virtual-point geometry (channels and
+    virtual points of every part with ``virtual_points:``, :mod:`substruct.viz.vp_geometry_picture`)."""
+    if not any(getattr(s, "virtual_points", None) is not None for s in case.substructures):
+        return []
+    geo = optional_module("viz.vp_geometry_picture")
+    return [Path(geo.plot_vp_geometry(geo.vp_geometry(case), out / f"{case.name}_vp_geometry.png",
+                                      f"{case.name}: virtual-point geometry"))]
 
 
 def write_pictures(result: Result, out: Path, name: str) -> list[Path]:
@@ -236,10 +253,12 @@ def write_pictures(result: Result, out: Path, name: str) -> list[Path]:
                     result, out / f"{name}_modes_{variant}.png", variant=variant)))
     if result.frf is not None:
         files.append(Path(plotting.plot_frf(result, out / f"{name}_frf.png")))
-    if result.virtual_points or result.tpa is not None:
+    if result.virtual_points or result.tpa is not None or result.monte_carlo is not None:
         lab = optional_module("viz.testlab_picture")
         if result.virtual_points:
             files.append(Path(lab.plot_consistency(result, out / f"{name}_consistency.png")))
+        if result.monte_carlo is not None:
+            files.append(Path(lab.plot_monte_carlo(result, out / f"{name}_monte_carlo.png")))
         if result.tpa is not None:
             files.append(Path(lab.plot_paths(result, out / f"{name}_paths.png")))
             files.append(Path(lab.plot_validation(result, out / f"{name}_validation.png")))

@@ -9,7 +9,11 @@ r"""The test-lab pictures (matplotlib), drawn from a result's ``virtual_points``
   cumulative sum), with the magnitude of the prediction :math:`|\hat u_t|` (black), which is
   below the stack's top where paths cancel;
 * :func:`draw_validation`: measured :math:`|u_t|` and predicted :math:`|\hat u_t|` at every
-  target, and the relative error per frequency.
+  target, and the relative error per frequency;
+* :func:`draw_monte_carlo`: per chosen output/input pair of ``virtual_points.monte_carlo``
+  (the first :data:`MAX_PAIRS`), the nominal coupled :math:`|H_{oi}(\omega)|` (black) and the
+  percentiles of :math:`|H_{oi}|` over the noisy samples (thin lines), the band between the
+  lowest and the highest percentile filled.
 
 ``plot_*`` write the figure as PNG (atomically) and return the path.
 """
@@ -29,10 +33,13 @@ if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
 __all__ = ["draw_consistency", "draw_paths", "draw_validation", "plot_consistency",
-           "plot_paths", "plot_validation", "MAX_TARGETS"]
+           "plot_paths", "plot_validation", "draw_monte_carlo", "plot_monte_carlo",
+           "MAX_TARGETS", "MAX_PAIRS"]
 
 #: Targets drawn in the path-contribution picture (the first ones).
 MAX_TARGETS = 6
+#: Output/input pairs drawn in the Monte Carlo picture (the first ones, outputs first).
+MAX_PAIRS = 6
 
 
 def _omega(result: Result) -> np.ndarray:
@@ -175,3 +182,51 @@ def draw_validation(result: Result) -> Figure:
 def plot_validation(result: Result, png_path: str | os.PathLike) -> Path:
     """:func:`draw_validation` written as PNG; return the path."""
     return _save(draw_validation(result), png_path)
+
+
+def draw_monte_carlo(result: Result, max_pairs: int = MAX_PAIRS) -> Figure:
+    """Per output/input pair of the Monte Carlo study (the first ``max_pairs``, output by
+    output), the nominal magnitude and the percentile band of the magnitude over the samples,
+    against omega (module docstring).  Lines are labelled ``nominal |H|`` and
+    ``<q>th percentile``.
+
+    Raises:
+        ValueError: the result holds no Monte Carlo study.
+    """
+    from matplotlib.figure import Figure
+
+    mc = result.monte_carlo
+    if mc is None:
+        raise ValueError(f"result {result.case_name!r} holds no Monte Carlo study")
+    w = np.asarray(mc.omega, dtype=float)
+    pairs = [(o, i) for o in range(len(mc.outputs)) for i in range(len(mc.inputs))]
+    n = min(len(pairs), max(1, int(max_pairs)))
+    fig = Figure(figsize=(10, 2.8 * n + 0.8), dpi=110, layout="constrained")
+    axes = fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
+    q = list(mc.percentiles)
+    for ax, (o, i) in zip(axes, pairs):
+        if q:
+            lo, hi = int(np.argmin(q)), int(np.argmax(q))
+            ax.fill_between(w, mc.bands[lo][:, o, i], mc.bands[hi][:, o, i], color="C0",
+                            alpha=0.3, lw=0, label=f"{q[lo]:g} to {q[hi]:g}th percentiles")
+            for k, p in enumerate(q):
+                ax.plot(w, mc.bands[k][:, o, i], color="C0", lw=0.7,
+                        ls="-" if k in (lo, hi) else "--", label=f"{p:g}th percentile")
+        ax.plot(w, _positive(np.abs(mc.nominal[:, o, i])), color="k", lw=1.4,
+                label="nominal |H|")
+        ax.set_yscale("log")
+        ax.set_title(f"{mc.outputs[o]} / {mc.inputs[i]}: noise {mc.level:g} (relative), "
+                     f"{mc.samples} samples, seed {mc.seed}")
+        ax.set_ylabel("|H|")
+        ax.grid(True, alpha=0.3, which="both")
+    axes[0].legend(fontsize="small", loc="upper right")
+    if len(pairs) > n:
+        axes[-1].text(0.01, 0.02, f"{len(pairs) - n} more pair(s) not drawn",
+                      transform=axes[-1].transAxes, fontsize="small")
+    axes[-1].set_xlabel("\u03c9 (rad/s)")
+    return fig
+
+
+def plot_monte_carlo(result: Result, png_path: str | os.PathLike) -> Path:
+    """:func:`draw_monte_carlo` written as PNG; return the path."""
+    return _save(draw_monte_carlo(result), png_path)
