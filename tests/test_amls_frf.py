@@ -36,6 +36,7 @@ from substruct.case.loader import parse_case
 from substruct.linalg.system import ConstrainedSystem
 from substruct.models.solid import BoxGrid, solid_box
 from substruct.run.runner import run_case
+from two_boxes import two_boxes_case
 
 E, NU, RHO = 2.1e11, 0.3, 7850.0
 ALPHA, BETA = 2.0, 2e-6
@@ -127,25 +128,7 @@ def test_rayleigh_roots_on_the_amls_basis_are_the_closed_form(tied):
         assert abs(B[0, 1]) < 1e-10 * np.abs(np.diag(B)).max()
 
 
-CASE = """\
-name: two_boxes
-substructures:
-  - name: left
-    type: solid
-    box: {lengths: [2.0, 0.5, 0.5], divisions: [8, 3, 3]}
-    E: 2.1e11
-    nu: 0.3
-    rho: 7850
-    fixed: [xmin]
-  - name: right
-    type: solid
-    box: {lengths: [2.0, 0.5, 0.5], divisions: [8, 3, 3], origin: [2, 0, 0]}
-    E: 2.1e11
-    nu: 0.3
-    rho: 7850
-interfaces:
-  - {name: a, between: [left, right], nodes: {box: [[2, 0, 0], [2, 0.5, 0.5]]}}
-analysis:
+CASE = two_boxes_case("two_boxes", """\
   frf:
     omega: {start: 100, stop: 3000, num: 30}
     inputs: ["right@4,0.5,0.5:z"]
@@ -153,8 +136,7 @@ analysis:
     method: modal
     tolerance: 1e-2
     modal: {solver: amls, cutoff: 3, amls: {cutoff: 5, leaf_size: 100}}
-output: {pictures: false}
-"""
+""")
 
 
 def test_modal_amls_from_a_case_file():

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from two_boxes import two_boxes_case
 
 ROOT = Path(__file__).resolve().parent.parent
 ENV = {**os.environ, "PYTHONPATH": str(ROOT), "OMP_NUM_THREADS": "1",
@@ -58,28 +59,9 @@ def test_dask_local_cluster_gives_the_same_bits(tmp_path):
     assert calls.size >= 4 and calls.max() >= 4
 
 
-CASE = """\
-name: tied
-substructures:
-  - name: left
-    type: solid
-    box: {lengths: [2.0, 0.5, 0.5], divisions: [8, 3, 3]}
-    E: 2.1e11
-    nu: 0.3
-    rho: 7850
-    fixed: [xmin]
-  - name: right
-    type: solid
-    box: {lengths: [2.0, 0.5, 0.5], divisions: [8, 3, 3], origin: [2, 0, 0]}
-    E: 2.1e11
-    nu: 0.3
-    rho: 7850
-interfaces:
-  - {name: a, between: [left, right], nodes: {box: [[2, 0, 0], [2, 0.5, 0.5]]}}
-analysis:
+CASE = two_boxes_case("tied", """\
   modes: {count: 8, solver: SOLVER, tolerance: 0.05, amls: AMLS}
-output: {pictures: false}
-"""
+""")
 
 
 def _cli(tmp_path: Path, name: str, extra: list[str], solver: str = "amls"):

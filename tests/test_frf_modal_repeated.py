@@ -30,6 +30,7 @@ from substruct.analysis.transient import (
 )
 from substruct.case.loader import parse_case
 from substruct.run.runner import run_case
+from two_boxes import two_boxes_case
 
 ROOT = Path(__file__).resolve().parent.parent
 W = np.linspace(0.5, 20.0, 300)  # 30 of 38 roots reach about 136 rad/s
@@ -101,27 +102,7 @@ def test_nearly_repeated_roots_are_continuous(damping):
     assert _error(split, direct) < 1e-6
 
 
-CASE = """\
-name: two_boxes_damped
-substructures:
-  - name: left
-    type: solid
-    box: {lengths: [2.0, 0.5, 0.5], divisions: [8, 3, 3]}
-    E: 2.1e11
-    nu: 0.3
-    rho: 7850
-    fixed: [xmin]
-    damping: {rayleigh: [2.0, 2.0e-6]}
-  - name: right
-    type: solid
-    box: {lengths: [2.0, 0.5, 0.5], divisions: [8, 3, 3], origin: [2, 0, 0]}
-    E: 2.1e11
-    nu: 0.3
-    rho: 7850
-    damping: {rayleigh: [2.0, 2.0e-6]}
-interfaces:
-  - {name: a, between: [left, right], nodes: {box: [[2, 0, 0], [2, 0.5, 0.5]]}}
-analysis:
+CASE = two_boxes_case("two_boxes_damped", """\
   frf:
     omega: {start: 100, stop: 3000, num: 30}
     inputs: ["right@4,0.5,0.5:z", "right@4,0.5,0.5:y"]
@@ -129,8 +110,7 @@ analysis:
     method: modal
     tolerance: 1e-5
     modal: {solver: sparse, cutoff: 3}
-output: {pictures: false}
-"""
+""", rayleigh="[2.0, 2.0e-6]")
 
 
 def test_modal_case_with_repeated_roots_passes_its_check():

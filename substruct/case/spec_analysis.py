@@ -4,7 +4,7 @@ correlated inputs) and shock response spectra of a transient's outputs (the ``ra
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, Sequence
 
 import numpy as np
 from pydantic import Discriminator, Field, Tag, model_validator
@@ -26,7 +26,7 @@ from substruct.case.frequency_grid import Omega
 from substruct.case.random_cross import CrossPsd, check_cross
 from substruct.vocabulary import DEFAULT_TOLERANCE, GENERALIZED_INVERSE, FormulationName
 
-__all__ = ["LossFactorSpec", "PsdTable", "ForcePsd", "BaseSupports", "NamedBaseSupports",
+__all__ = ["LossFactorSpec", "BaseDrivenResponse", "PsdTable", "ForcePsd", "BaseSupports", "NamedBaseSupports",
            "BasePsd", "NamedBasePsd", "RandomAnalysis", "BaseFrfAnalysis", "SrsFrequencies",
            "SrsAnalysis"]
 
@@ -105,7 +105,31 @@ class NamedBasePsd(BasePsd):
     name: Name
 
 
-class RandomAnalysis(StrictModel):
+class BaseDrivenResponse(StrictModel):
+    """What a random response and a base-driven receptance share: the outputs, the motion
+    they are given as (absolute displacement, velocity or acceleration), the formulation and
+    its checks, and the structural damping; and the rule that names several base inputs
+    once each."""
+
+    outputs: Annotated[list[Point], Field(min_length=1)]
+    #: what the outputs' response is of (absolute motion; per base acceleration, the
+    #: acceleration is the transmissibility proper)
+    quantity: Literal["displacement", "velocity", "acceleration"] = "acceleration"
+    method: FormulationName = GENERALIZED_INVERSE
+    check: list[FormulationName] = Field(default_factory=list)
+    tolerance: Positive = DEFAULT_TOLERANCE
+    #: structural damping: one loss factor on all of K, or {substructure: eta}
+    loss_factor: LossFactorSpec | None = None
+
+    @staticmethod
+    def check_named_once(bases: Sequence[NamedBaseSupports | NamedBasePsd]) -> None:
+        """Refuse a name given to two of ``bases``."""
+        for k, b in enumerate(bases):
+            if b.name in [c.name for c in bases[:k]]:
+                raise FieldError(("bases", k, "name"), "a base input named twice", b.name)
+
+
+class RandomAnalysis(BaseDrivenResponse):
     """Response PSDs ``S_y = H S_f H^H`` and RMS values at ``outputs`` over ``frequencies``
     (Hz) for force PSDs ``forces``, one base acceleration PSD ``base`` or several named ones
     ``bases`` (uncorrelated, or pairs correlated by ``cross``)."""
@@ -116,14 +140,6 @@ class RandomAnalysis(StrictModel):
     cross: list[CrossPsd] = Field(default_factory=list)
     base: BasePsd | None = None
     bases: list[NamedBasePsd] = Field(default_factory=list)
-    outputs: Annotated[list[Point], Field(min_length=1)]
-    #: what the outputs' PSDs are of (absolute motion)
-    quantity: Literal["displacement", "velocity", "acceleration"] = "acceleration"
-    method: FormulationName = GENERALIZED_INVERSE
-    check: list[FormulationName] = Field(default_factory=list)
-    tolerance: Positive = DEFAULT_TOLERANCE
-    #: structural damping: one loss factor on all of K, or {substructure: eta}
-    loss_factor: LossFactorSpec | None = None
 
     @model_validator(mode="after")
     def _inputs(self) -> "RandomAnalysis":
@@ -133,9 +149,7 @@ class RandomAnalysis(StrictModel):
             raise FieldError(given[1] if len(given) > 1 else "forces", "give force PSDs "
                              "(forces), a base acceleration PSD (base) or several (bases), one "
                              "of the three")
-        for k, b in enumerate(self.bases):
-            if b.name in [c.name for c in self.bases[:k]]:
-                raise FieldError(("bases", k, "name"), "a base input named twice", b.name)
+        self.check_named_once(self.bases)
         check_cross(self.input_names() if self.base is None else [], self.cross)
         f = self.frequencies.grid()
         if np.any(f <= 0):
@@ -164,7 +178,7 @@ class RandomAnalysis(StrictModel):
         return [self.base] if self.base is not None else list(self.bases)
 
 
-class BaseFrfAnalysis(StrictModel):
+class BaseFrfAnalysis(BaseDrivenResponse):
     """Transmissibilities ``T[k, i, j]``: output ``i``'s displacement, velocity or
     acceleration (absolute) per unit acceleration of base input ``j`` at ``omega`` (> 0), one
     base ``base`` or several named ones ``bases`` (the supports of ``analysis.random``)."""
@@ -174,24 +188,13 @@ class BaseFrfAnalysis(StrictModel):
     units: Literal["rad/s", "Hz"] = "rad/s"
     base: BaseSupports | None = None
     bases: list[NamedBaseSupports] = Field(default_factory=list)
-    outputs: Annotated[list[Point], Field(min_length=1)]
-    #: what the outputs' motion is (per base acceleration): acceleration is the
-    #: transmissibility proper
-    quantity: Literal["displacement", "velocity", "acceleration"] = "acceleration"
-    method: FormulationName = GENERALIZED_INVERSE
-    check: list[FormulationName] = Field(default_factory=list)
-    tolerance: Positive = DEFAULT_TOLERANCE
-    #: structural damping: one loss factor on all of K, or {substructure: eta}
-    loss_factor: LossFactorSpec | None = None
 
     @model_validator(mode="after")
     def _inputs(self) -> "BaseFrfAnalysis":
         if (self.base is None) == (not self.bases):
             raise FieldError("bases" if self.bases else "base", "give one base input (base) "
                              "or several (bases), one of the two")
-        for k, b in enumerate(self.bases):
-            if b.name in [c.name for c in self.bases[:k]]:
-                raise FieldError(("bases", k, "name"), "a base input named twice", b.name)
+        self.check_named_once(self.bases)
         w = self.omega.grid()
         if np.any(w <= 0):
             raise FieldError("omega", "must be > 0 (the response per unit base acceleration "
