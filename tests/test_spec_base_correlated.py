@@ -9,9 +9,9 @@ import h5py
 import numpy as np
 import yaml
 
+from base_drive_reference import dense_transmissibility
 from cli_helpers import run
 from substruct.case.loader import load_case
-from substruct.run.runner import build_model
 
 CASE = {
     "name": "two_tables",
@@ -36,27 +36,9 @@ CASE = {
 
 
 def direct(case, f):
-    """``T`` ``(n_f, outputs, bases)`` by a dense KKT solve per frequency."""
-    model = build_model(case)
-    asm = model.assembly
-    K, M = asm.K.toarray(), asm.M.toarray()
-    C = asm.C.toarray()
-    A = asm.A.toarray()
-    n, m = K.shape[0], A.shape[0]
-    spec = case.analysis.random
-    E = np.zeros((m, len(spec.bases)))
-    for j, b in enumerate(spec.bases):
-        col = int(np.flatnonzero(asm.row(model.points[b.at[0]]).toarray().ravel())[0])
-        for k in range(m):
-            if np.flatnonzero(A[k]).tolist() == [col]:
-                E[k, j] = A[k, col]
-    assert np.count_nonzero(E) == 2
-    O = asm.rows([model.points[p] for p in spec.outputs]).toarray()
-    T = np.empty((len(f), O.shape[0], E.shape[1]), dtype=complex)
-    for k, w in enumerate(2 * np.pi * f):
-        kkt = np.block([[K + 1j * w * C - w ** 2 * M, A.T], [A, np.zeros((m, m))]])
-        T[k] = O @ np.linalg.solve(kkt, np.vstack([np.zeros((n, E.shape[1])), E]))[:n]
-    return T
+    """``T`` ``(n_f, outputs, bases)`` of ``analysis.random`` by a dense KKT solve per
+    frequency (:func:`base_drive_reference.dense_transmissibility`)."""
+    return dense_transmissibility(case, case.analysis.random, f)
 
 
 def test_correlated_tables_against_the_direct_computation(capsys, tmp_path):

@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 import yaml
 
+from base_drive_reference import dense_transmissibility
 from cli_helpers import assert_one_line_error, run
 from substruct.case.loader import load_case
 from substruct.io.result_reader import load
-from substruct.run.runner import build_model
 
 K1, M1 = 1.0e5, 1.0
 C1 = 31.6227766
@@ -104,27 +104,9 @@ def test_sdof_transmissibility_closed_form(capsys, tmp_path, quantity, power):
 
 
 def direct(case, f):
-    """``T`` ``(n_f, outputs, bases)``, acceleration per base acceleration, by a dense KKT solve
-    per frequency: ``[Z A^T; A 0] [q; l] = [0; E]`` with each table's row moved by 1 (output
-    acceleration per table acceleration = output displacement per table displacement)."""
-    model = build_model(case)
-    asm = model.assembly
-    K, M, C, A = (x.toarray() for x in (asm.K, asm.M, asm.C, asm.A))
-    n, m = K.shape[0], A.shape[0]
-    spec = case.analysis.base_frf
-    E = np.zeros((m, len(spec.bases)))
-    for j, b in enumerate(spec.bases):
-        col = int(np.flatnonzero(asm.row(model.points[b.at[0]]).toarray().ravel())[0])
-        for k in range(m):
-            if np.flatnonzero(A[k]).tolist() == [col]:
-                E[k, j] = A[k, col]
-    assert np.count_nonzero(E) == 2
-    O = asm.rows([model.points[p] for p in spec.outputs]).toarray()
-    T = np.empty((len(f), O.shape[0], E.shape[1]), dtype=complex)
-    for k, w in enumerate(2 * np.pi * f):
-        kkt = np.block([[K + 1j * w * C - w ** 2 * M, A.T], [A, np.zeros((m, m))]])
-        T[k] = O @ np.linalg.solve(kkt, np.vstack([np.zeros((n, E.shape[1])), E]))[:n]
-    return T
+    """``T`` ``(n_f, outputs, bases)`` of ``analysis.base_frf`` by a dense KKT solve per
+    frequency (:func:`base_drive_reference.dense_transmissibility`)."""
+    return dense_transmissibility(case, case.analysis.base_frf, f)
 
 
 def test_two_tables_against_dense_kkt(capsys, tmp_path):
