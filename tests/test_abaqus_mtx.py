@@ -53,6 +53,19 @@ def write_coordinate(path: Path, A: np.ndarray) -> None:
                             for i, j in zip(*np.nonzero(np.tril(A)))))
 
 
+def write_coordinate_blank(path: Path, A: np.ndarray) -> None:
+    """The coordinate layout as Abaqus 2024 writes it (``FORMAT=COORDINATE``): ``row column
+    value`` separated by blanks, 1-based, by rows of the upper triangle, each off-diagonal term
+    followed by its mirror (``1 2  3.749985979900784e+08`` then ``2 1  3.7499...e+08``), the
+    value in ``% .15e``."""
+    lines = []
+    for i, j in zip(*np.nonzero(np.triu(A))):
+        lines.append(f"{i + 1} {j + 1} {A[i, j]: .15e}")
+        if i != j:
+            lines.append(f"{j + 1} {i + 1} {A[j, i]: .15e}")
+    path.write_text("\n".join(lines) + "\n")
+
+
 CLAMP = "\n".join(f"  - {{name: c{c}, terms: {{arm@1:{c}: 1}}}}" for c in FRAME_COMPONENTS)
 
 
@@ -124,14 +137,56 @@ def test_coordinate_layout_with_a_dof_map(tmp_path: Path) -> None:
     _check_modes(tmp_path, sub, run_case(case).modes.omega[:6] ** 2)
 
 
+WRITERS = {
+    "nodes lower": lambda p, A, d: write_nodes(p, A, d, "lower"),
+    "nodes upper": lambda p, A, d: write_nodes(p, A, d, "upper"),
+    "nodes square": lambda p, A, d: write_nodes(p, A, d, "square"),
+    "coordinate commas": lambda p, A, d: write_coordinate(p, A),
+    "coordinate blanks": lambda p, A, d: write_coordinate_blank(p, A),
+}
+
+
+def test_every_layout_reads_to_the_same_matrices(tmp_path: Path) -> None:
+    """The same stiffness and mass written in each layout and storage read back to the same
+    matrices, ``==``, on the same DOF map (the nodes layout sorts its map; the coordinate one
+    keeps the map given, here already sorted).  Values whose ``% .15e`` text differs from the
+    double are rounded first, so that every writer writes the same numbers."""
+    sub = _frame()
+    dofs = _node_dofs(sub)
+    order = sorted(range(len(dofs)), key=lambda k: dofs[k])
+    dofs = [dofs[k] for k in order]
+    mats = {n: np.array([[float(f"{v: .15e}") for v in row]
+                         for row in A.toarray()[np.ix_(order, order)]])
+            for n, A in (("K", sub.K), ("M", sub.M))}
+    (tmp_path / "arm.csv").write_text("".join(f"{g},{c}\n" for g, c in dofs))
+    seen = {}
+    for name, write in WRITERS.items():
+        d = tmp_path / name.replace(" ", "_")
+        d.mkdir()
+        for key, A in mats.items():
+            write(d / f"arm_{key}.mtx", A, dofs)
+        dofs_text = ", dofs: {file: ../arm.csv}" if name.startswith("coordinate") else ""
+        case = load_case(_case(d, f"M: arm_M.mtx, K: arm_K.mtx{dofs_text}"))
+        spec = case.substructures[0]
+        assert spec.dof_table() == dofs, name
+        seen[name] = {key: spec.matrix(key) for key in mats}
+        for key, A in mats.items():
+            assert np.array_equal(seen[name][key], A), (name, key)
+    assert len(seen) == len(WRITERS)
+
+
 GOOD = "1,1, 1,1, 2.0\n1,2, 1,1, 0.5\n1,2, 1,2, 3.0\n"
 
 
 @pytest.mark.parametrize("text,message", [
     (GOOD + "1,2, 1,1, 0.5\n", r"arm_STIF1\.mtx: line 4: term \(1:2, 1:1\) is given twice "
      r"\(also on line 2\)"),
-    (GOOD + "1,2, 1,1\n", r"arm_STIF1\.mtx: line 4: expected 'node, dof, node, dof, value' or "
-     r"'row, column, value' \(comma-separated numbers\), got '1,2, 1,1'"),
+    (GOOD + "1,2, 1,1\n", r"arm_STIF1\.mtx: line 4: expected 'node, dof, node, dof, value' "
+     r"\(comma-separated\) or 'row column value' \(blank- or comma-separated numbers\), got "
+     r"'1,2, 1,1'"),
+    (GOOD + "1 2 1 1 0.5\n", r"line 4: expected 'node, dof, node, dof, value' \(comma"),
+    (GOOD + "1,3, 1,3,  1.000000000000000e+36\n", r"line 4: 1e36 is the diagonal Abaqus writes "
+     r"for a degree of freedom held by a boundary condition; .*, got '1.000000000000000e\+36'"),
     (GOOD + "1,2, 1,1, 1.0x\n", r"line 4: expected"),
     (GOOD + "1,11, 1,1, 1.0\n", r"line 4: degree of freedom 11 is not a displacement or a "
      r"rotation \(1-6\)"),

@@ -3,24 +3,31 @@ r"""Abaqus matrix files: the text ``.mtx`` files written by ``*MATRIX GENERATE``
 ``<job>_DMPV<step>.mtx``, ...), in either of two layouts:
 
 * the *matrix input* layout (``FORMAT=MATRIX INPUT``, the default, and the data lines of
-  ``*MATRIX INPUT``): one term a line, ``row node, row dof, column node, column dof, value``.
-  The nodes and degrees of freedom are the DOF map: the union of the ``(node, dof)`` pairs of
-  the matrices read, in ascending order;
-* the *coordinate* layout (``FORMAT=COORDINATE``): ``row, column, value`` with 1-based
-  equation numbers, whose DOF map is given beside it (``dofs:`` of the superelement).
+  ``*MATRIX INPUT``): one term a line, comma-separated, ``row node, row dof, column node,
+  column dof, value`` (``101,2, 101,1,  3.571428571428572e+01``), one triangle of a symmetric
+  matrix.  The nodes and degrees of freedom are the DOF map: the union of the ``(node, dof)``
+  pairs of the matrices read, in ascending order;
+* the *coordinate* layout (``FORMAT=COORDINATE``): ``row column value`` with 1-based equation
+  numbers, separated by blanks as Abaqus writes it (``1 2  3.749985979900784e+08``, both
+  triangles, each off-diagonal term followed by its mirror) or by commas; its DOF map is given
+  beside it (``dofs:`` of the superelement), since the file does not name the equations.
+
+``FORMAT=LABELS`` files are not read: no description or sample of their lines was found to
+check a reader against, so they are refused as lines of neither layout.
 
 A symmetric matrix is given by one triangle (every off-diagonal term on one side of the
 diagonal), the other filled in, :math:`A = L + L^T - \operatorname{diag} L`; a matrix with terms
 on both sides is square: every off-diagonal term must come with its mirror term (the
 superelement then checks the symmetry to the precision of the data).
 
-Refused, in one line naming the file, the line and the problem: a line that is not three or
-five comma-separated numbers (or two layouts in one file), a degree of freedom outside 1-6
-(Abaqus's 7 warping, 8 pore pressure, 11 temperature...), a node that is not 1 to 999999999
-(Abaqus numbers its internal nodes, Lagrange multipliers and element variables, negatively), a
-value that is not a finite number, a term given twice, a keyword line, an equation number beyond
-the DOF map, a square matrix missing a mirror term.  ``**`` lines are comments.  Sizes are
-checked before anything is allocated: the file's bytes, the coordinates
+Refused, in one line naming the file, the line and the problem: a line of neither layout (or
+two layouts in one file), a degree of freedom outside 1-6 (Abaqus's 7 warping, 8 pore
+pressure, 11 temperature...), a node that is not 1 to 999999999 (Abaqus numbers its internal
+nodes, Lagrange multipliers and element variables, negatively), a value that is not a finite
+number, a value of 1e36 (the diagonal Abaqus writes for a degree of freedom held by a boundary
+condition), a term given twice, a keyword line, an equation number beyond the DOF map, a square
+matrix missing a mirror term.  ``**`` lines are comments.  Sizes are checked before anything
+is allocated: the file's bytes, the coordinates
 (:data:`~substruct.case.fields.MAX_MATRIX_SIZE`) and the dense matrices' memory
 (:data:`~substruct.case.fields.MEMORY_LIMIT`).
 """
@@ -38,10 +45,12 @@ import numpy as np
 from substruct.case.errors import CaseError
 from substruct.case.fields import MAX_MATRIX_SIZE, MEMORY_LIMIT, gigabytes
 
-__all__ = ["MtxTerms", "read_mtx", "abaqus_matrices", "MAX_MTX_FILE"]
+__all__ = ["MtxTerms", "read_mtx", "abaqus_matrices", "MAX_MTX_FILE", "HELD_MARK"]
 
 #: Largest matrix file read (bytes): about 25 million terms.
 MAX_MTX_FILE = 1_000_000_000
+#: Abaqus's diagonal for a degree of freedom held by a boundary condition (refused).
+HELD_MARK = 1.0e36
 _INT = re.compile(r"[+-]?\d{1,12}")
 _FLOAT = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eEdD][+-]?\d{1,4})?")
 
@@ -112,12 +121,16 @@ def read_mtx(path: Path, source: str) -> MtxTerms:
             if raw.startswith("*"):
                 raise _fail(source, k, "a keyword line; a matrix file holds data lines only",
                             raw[:40])
-            parts = [p.strip() for p in raw.rstrip(",").split(",")]
-            kind = {5: "nodes", 3: "coordinate"}.get(len(parts))
+            if "," in raw:
+                parts = [p.strip() for p in raw.rstrip(",").split(",")]
+                kind = {5: "nodes", 3: "coordinate"}.get(len(parts))
+            else:  # Abaqus writes the coordinate layout separated by blanks
+                parts = raw.split()
+                kind = "coordinate" if len(parts) == 3 else None
             if kind is None or not all(_INT.fullmatch(p) for p in parts[:-1]) or \
                     not _FLOAT.fullmatch(parts[-1]):
-                raise _fail(source, k, "expected 'node, dof, node, dof, value' or 'row, column, "
-                            "value' (comma-separated numbers)", raw[:60])
+                raise _fail(source, k, "expected 'node, dof, node, dof, value' (comma-separated) "
+                            "or 'row column value' (blank- or comma-separated numbers)", raw[:60])
             if layout and kind != layout:
                 raise _fail(source, k, f"a {kind} line in a file of {layout} lines", raw[:60])
             layout = kind
@@ -132,6 +145,11 @@ def read_mtx(path: Path, source: str) -> MtxTerms:
             value = float(re.sub("[dD]", "e", parts[-1]))
             if not np.isfinite(value):
                 raise _fail(source, k, "the value is not a finite number", parts[-1])
+            if abs(value) >= HELD_MARK:
+                raise _fail(source, k, "1e36 is the diagonal Abaqus writes for a degree of "
+                            "freedom held by a boundary condition; generate the matrices "
+                            "without *BOUNDARY on the part and hold it in the case instead",
+                            parts[-1])
             rows.append(r)
             cols.append(c)
             values.append(value)
