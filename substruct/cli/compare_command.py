@@ -1,5 +1,6 @@
 """``substruct compare A.h5 B.h5``: the modes of two results (or two variants) side by side,
-and the peaks of their recovered transient quantities (:mod:`substruct.cli.compare_recovery`).
+the peaks of their recovered transient quantities (:mod:`substruct.cli.compare_recovery`) and
+of their receptances, plain and recovered (:mod:`substruct.cli.compare_frf`).
 
 Prints a frequency table (each mode of the first paired with the mode of the second of largest
 MAC, :mod:`substruct.analysis.modes.mac`; by order when no coordinates are shared) and the MAC
@@ -80,28 +81,33 @@ def compare_modes(a: Any, ma: Any, b: Any, mb: Any) -> dict[str, Any]:
 
 
 def _peaks_only(args: argparse.Namespace) -> int | None:
-    """Two results without modes but with recovered transient peaks: their table alone
-    (:mod:`substruct.cli.compare_recovery`); ``None`` when the modes are to be compared."""
+    """Two results without modes but with recovered transient peaks or receptances: their
+    tables alone (:mod:`substruct.cli.compare_recovery`, :mod:`substruct.cli.compare_frf`);
+    ``None`` when the modes are to be compared."""
+    from substruct.cli.compare_frf import compare_frf_peaks, print_frf_comparison
     from substruct.cli.compare_recovery import compare_peaks, print_peak_comparison
 
     a, b = load_result(args.first), load_result(args.second)
     if a.modes is not None and b.modes is not None or args.variant_a or args.variant_b or \
             args.image is not None:
         return None
-    rows = compare_peaks(a, b)
-    if not rows:
+    rows, frf = compare_peaks(a, b), compare_frf_peaks(a, b)
+    if not rows and not frf:
         return None
     if args.json:
-        print(json.dumps({"a": args.first, "b": args.second, "peaks": rows}, indent=1))
+        print(json.dumps({"a": args.first, "b": args.second, "peaks": rows,
+                          "frf_peaks": frf}, indent=1))
         return 0
     print(f"A: {args.first}\nB: {args.second}")
     print_peak_comparison(rows, sys.stdout)
+    print_frf_comparison(frf, sys.stdout)
     return 0
 
 
 def compare_command(args: argparse.Namespace) -> int:
-    """Print the comparison of the modes of ``args.first`` and ``args.second`` and of their
-    recovered transient peaks; return 0."""
+    """Print the comparison of the modes of ``args.first`` and ``args.second``, of their
+    recovered transient peaks and of their receptance peaks; return 0."""
+    from substruct.cli.compare_frf import compare_frf_peaks, print_frf_comparison
     from substruct.cli.compare_recovery import compare_peaks, print_peak_comparison
 
     only = _peaks_only(args)
@@ -115,6 +121,9 @@ def compare_command(args: argparse.Namespace) -> int:
     peaks = compare_peaks(a, b)
     if peaks:
         data["peaks"] = peaks
+    frf = compare_frf_peaks(a, b)
+    if frf:
+        data["frf_peaks"] = frf
     name_a = args.first + (f" ({args.variant_a})" if args.variant_a else "")
     name_b = args.second + (f" ({args.variant_b})" if args.variant_b else "")
     if image is not None:
@@ -144,6 +153,7 @@ def compare_command(args: argparse.Namespace) -> int:
         for row in data["mac"]:
             print("  " + " ".join(f"{v:5.3f}" for v in row))
     print_peak_comparison(peaks, sys.stdout)
+    print_frf_comparison(frf, sys.stdout)
     if image is not None:
         print(f"written: {image[0] / image[1]}")
     return 0
