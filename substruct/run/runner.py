@@ -42,7 +42,12 @@ from substruct.run.recovery import (
     split_recovered,
 )
 from substruct.run.base_frf_route import base_frf_result
-from substruct.run.spec_route import loss_frf_result, random_result, srs_result
+from substruct.run.spec_route import (
+    loss_frf_result,
+    loss_rows_receptance,
+    random_result,
+    srs_result,
+)
 from substruct.run.transient_run import transient_result
 from substruct.run.vp_route import has_virtual_points, vp_frf_result
 from substruct.run.result import Result
@@ -163,16 +168,16 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
     result.recovery = plan.empty()
     if plan and result.modes is not None:
         recover_modes(plan, result.modes, result.recovery)
-    if plan and frf is not None and not (has_virtual_points(case) or has_frf_parts(case)
-                                         or frf.loss_factor is not None):
+    if plan and frf is not None and not (has_virtual_points(case) or has_frf_parts(case)):
         # a second sweep of the recovery rows at the same frequencies (the first streams)
         omegas = np.asarray(frf.omegas(), dtype=float)
         rec_rows = recovery_rows(plan, asm.n_dof)
         if events is not None:
             events("sweep", f"recovered receptances: {len(omegas)} frequencies, "
                    f"{rec_rows.shape[0]} row(s)", len(omegas))
+        rows_of = rows_receptance if frf.loss_factor is None else loss_rows_receptance
         with np.errstate(over="ignore", invalid="ignore"):
-            H = rows_receptance(case, model, rec_rows, omegas)
+            H = rows_of(case, model, rec_rows, omegas)
         recover_frf(plan, H, omegas, list(frf.inputs), result.recovery)
     if case.analysis.transient is not None:
         if events is not None:

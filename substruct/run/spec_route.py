@@ -51,7 +51,7 @@ from substruct.case.random_cross import cross_matrix
 from substruct.run.spec_results import RandomResponse, ShockSpectra
 from substruct.vocabulary import DERIVATIVE_ORDER
 
-__all__ = ["loss_parts", "loss_frf_result", "grounding_column", "base_columns", "sweep_kw",
+__all__ = ["loss_parts", "loss_frf_result", "loss_rows_receptance", "grounding_column", "base_columns", "sweep_kw",
            "random_result", "srs_result"]
 
 
@@ -114,6 +114,35 @@ def loss_frf_result(case: Case, model: Model, progress: Progress | None = None) 
     except CheckError as err:
         raise CheckError(f"{err}; to accept it, raise analysis.frf.tolerance") from None
     return as_quantity(H, spec.quantity)
+
+
+def loss_rows_receptance(case: Case, model: Model, rows: sp.csr_array,
+                         omegas: np.ndarray) -> np.ndarray:
+    r"""The receptances of the output rows ``rows`` (on the coupled coordinates) to the inputs
+    of ``analysis.frf`` at ``omegas`` with its ``loss_factor``, without checks (the recovery
+    rows of superelements, :func:`substruct.run.recovery.recover_frf`):
+
+    .. math::  H_R[k, :, j] = \text{rows}\,[\textstyle\sum_s K_s (1 + i \eta_s)
+               + i\omega_k C - \omega_k^2 M]^{-1}_{A q = R F} e_j
+
+    (``n_omega x m x n_inputs``, complex).
+
+    Raises:
+        CaseError: at ``analysis.frf``, for input the solver cannot take.
+    """
+    spec = case.analysis.frf
+    if spec is None or spec.loss_factor is None:
+        raise TypeError(f"case {case.name!r} asks for no receptances with a loss factor")
+    asm = model.assembly
+    parts = loss_parts(case, model, spec.loss_factor, ("analysis", "frf", "loss_factor"))
+    inputs = sp.csc_array(asm.rows([model.points[p] for p in spec.inputs]).T)
+    try:
+        H = hysteretic_sweep(asm.K, asm.M, asm.C, asm.A, np.asarray(omegas, dtype=float),
+                             inputs, sp.csr_array(rows), parts, R=asm.R, method=spec.method,
+                             input_names=list(spec.inputs), what="frf (recovery)")
+    except INPUT_ERRORS as err:
+        raise case.error(("analysis", "frf"), " ".join(str(err).split())) from None
+    return np.asarray(H.H)
 
 
 def grounding_column(case: Case, model: Model, points: Sequence[str], loc: tuple
