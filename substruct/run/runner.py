@@ -42,6 +42,7 @@ from substruct.run.recovery import (
     split_recovered,
 )
 from substruct.run.base_frf_route import base_frf_result
+from substruct.run.recovery_frf_parts import frf_parts_rows_receptance
 from substruct.run.spec_route import (
     loss_frf_result,
     loss_rows_receptance,
@@ -168,17 +169,22 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
     result.recovery = plan.empty()
     if plan and result.modes is not None:
         recover_modes(plan, result.modes, result.recovery)
-    if plan and frf is not None and not (has_virtual_points(case) or has_frf_parts(case)):
+    if plan and frf is not None and not has_virtual_points(case):
         # a second sweep of the recovery rows at the same frequencies (the first streams)
         omegas = np.asarray(frf.omegas(), dtype=float)
         rec_rows = recovery_rows(plan, asm.n_dof)
         if events is not None:
             events("sweep", f"recovered receptances: {len(omegas)} frequencies, "
                    f"{rec_rows.shape[0]} row(s)", len(omegas))
-        rows_of = rows_receptance if frf.loss_factor is None else loss_rows_receptance
-        with np.errstate(over="ignore", invalid="ignore"):
-            H = rows_of(case, model, rec_rows, omegas)
-        recover_frf(plan, H, omegas, list(frf.inputs), result.recovery)
+        got: tuple[np.ndarray, np.ndarray] | None
+        if has_frf_parts(case):  # coupled by LM-FBS, the rows as outputs of the FE part
+            got = frf_parts_rows_receptance(case, model, rec_rows)
+        else:
+            rows_of = rows_receptance if frf.loss_factor is None else loss_rows_receptance
+            with np.errstate(over="ignore", invalid="ignore"):
+                got = omegas, rows_of(case, model, rec_rows, omegas)
+        if got is not None:
+            recover_frf(plan, got[1], got[0], list(frf.inputs), result.recovery)
     if case.analysis.transient is not None:
         if events is not None:
             events("sweep", f"transient: {case.analysis.transient.steps} steps, "
