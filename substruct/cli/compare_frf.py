@@ -30,21 +30,37 @@ __all__ = ["compare_frf_peaks", "print_frf_comparison", "MAX_FRF_ROWS"]
 MAX_FRF_ROWS = 30
 
 
-def _peak(h: np.ndarray, omega: np.ndarray) -> tuple[float, float]:
-    """The largest ``|h|`` over the frequencies and its first frequency in Hz."""
-    mag = np.abs(h)
-    k = int(np.argmax(mag))
-    return float(mag[k]), float(omega[k]) / (2.0 * math.pi)
+def _peaks(H: np.ndarray, omega: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per output/input pair of ``H`` (``n_omega x outputs x inputs``): the largest ``|H|``
+    over the frequencies and its first frequency in Hz."""
+    mag = np.abs(np.asarray(H))
+    k = np.argmax(mag, axis=0)
+    peak = np.take_along_axis(mag, k[None], axis=0)[0]
+    return peak, np.asarray(omega, dtype=float)[k] / (2.0 * math.pi)
 
 
-def _row(kind: str, quantity: str, inp: str, ha: np.ndarray, wa: np.ndarray,
-         hb: np.ndarray, wb: np.ndarray) -> dict[str, Any]:
-    pa, fa = _peak(ha, wa)
-    pb, fb = _peak(hb, wb)
-    ratio = pb / pa if pa > 0.0 else None
-    db = 20.0 * math.log10(ratio) if ratio is not None and ratio > 0.0 else None
-    return {"kind": kind, "quantity": quantity, "input": inp, "peak_a": pa, "f_a_hz": fa,
-            "peak_b": pb, "f_b_hz": fb, "ratio": ratio, "db": db}
+def _rows(kind: str, names: list[str], inputs: list[str], A: tuple[np.ndarray, np.ndarray],
+          B: tuple[np.ndarray, np.ndarray]) -> list[dict[str, Any]]:
+    """The table rows of the matched pairs, ``A`` and ``B`` the receptances of the matched
+    outputs and inputs (in the same order) and their frequencies."""
+    (pa, fa), (pb, fb) = _peaks(*A), _peaks(*B)
+    rows = []
+    for i, name in enumerate(names):
+        for j, inp in enumerate(inputs):
+            a, b = float(pa[i, j]), float(pb[i, j])
+            ratio = b / a if a > 0.0 else None
+            db = 20.0 * math.log10(ratio) if ratio is not None and ratio > 0.0 else None
+            rows.append({"kind": kind, "quantity": name, "input": inp, "peak_a": a,
+                         "f_a_hz": float(fa[i, j]), "peak_b": b, "f_b_hz": float(fb[i, j]),
+                         "ratio": ratio, "db": db})
+    return rows
+
+
+def _match(a: list[str], b: list[str]) -> tuple[list[int], list[int]]:
+    """The positions in ``a`` and in ``b`` of the names both hold, in ``a``'s order."""
+    where = {lab: k for k, lab in enumerate(b)}
+    ia = [k for k, lab in enumerate(a) if lab in where]
+    return ia, [where[a[k]] for k in ia]
 
 
 def _plain(a: Any, b: Any) -> list[dict[str, Any]]:
@@ -54,20 +70,13 @@ def _plain(a: Any, b: Any) -> list[dict[str, Any]]:
     if fa.quantity != fb.quantity:
         raise InputError(f"/frf: A's is {fa.quantity} and B's {fb.quantity}: peaks of "
                          "different quantities are not compared")
-    out_b = {lab: k for k, lab in enumerate(fb.outputs)}
-    in_b = {lab: k for k, lab in enumerate(fb.inputs)}
-    rows = []
-    for i, out in enumerate(fa.outputs):
-        ib = out_b.get(out)
-        if ib is None:
-            continue
-        for j, inp in enumerate(fa.inputs):
-            jb = in_b.get(inp)
-            if jb is None:
-                continue
-            rows.append(_row("frf", out, inp, fa.H[:, i, j], fa.omega, fb.H[:, ib, jb],
-                             fb.omega))
-    return rows
+    oa, ob = _match(list(fa.outputs), list(fb.outputs))
+    ia, ib = _match(list(fa.inputs), list(fb.inputs))
+    if not oa or not ia:
+        return []
+    Ha, Hb = np.asarray(fa.H), np.asarray(fb.H)
+    return _rows("frf", [fa.outputs[k] for k in oa], [fa.inputs[k] for k in ia],
+                 (Ha[:, oa][:, :, ia], fa.omega), (Hb[:, ob][:, :, ib], fb.omega))
 
 
 def _recovered(a: Any, b: Any) -> list[dict[str, Any]]:
@@ -77,18 +86,13 @@ def _recovered(a: Any, b: Any) -> list[dict[str, Any]]:
         rb = by_b.get(ra.title)
         if rb is None or not ra.omega.size:
             continue
-        lab_b = {lab: k for k, lab in enumerate(rb.labels)}
-        in_b = {lab: k for k, lab in enumerate(rb.inputs)}
-        for i, lab in enumerate(ra.labels):
-            ib = lab_b.get(lab)
-            if ib is None:
-                continue
-            for j, inp in enumerate(ra.inputs):
-                jb = in_b.get(inp)
-                if jb is None:
-                    continue
-                rows.append(_row("recovery", f"{ra.title}@{lab}", inp, ra.frf[:, i, j],
-                                 ra.omega, rb.frf[:, ib, jb], rb.omega))
+        la, lb = _match(list(ra.labels), list(rb.labels))
+        ia, ib = _match(list(ra.inputs), list(rb.inputs))
+        if not la or not ia:
+            continue
+        rows += _rows("recovery", [f"{ra.title}@{ra.labels[k]}" for k in la],
+                      [ra.inputs[k] for k in ia], (ra.frf[:, la][:, :, ia], ra.omega),
+                      (rb.frf[:, lb][:, :, ib], rb.omega))
     return rows
 
 
