@@ -74,3 +74,19 @@ def test_recovered_receptances_beside_an_frf_part(tmp_path: Path) -> None:
     out2 = np.asarray(fbs.frf.H)[:, 0, :]
     np.testing.assert_allclose(got.frf[:, 1, :] * 2.0 - got.frf[:, 0, :], out2,
                                rtol=0, atol=1e-12 * scale)
+
+
+def test_recovery_beside_a_decoupled_part_is_refused(tmp_path: Path) -> None:
+    """The decoupling's generalized-inverse solve is not followed by the recovery rows: the
+    case is refused in one line before any sweep, not run with ``/recovery/<i>/frf`` left out."""
+    import pytest
+
+    from substruct.case.errors import CaseError
+
+    w = np.array(OMEGA)
+    yb = 1.0 / (K_B + 1j * w * C_B - w ** 2 * M_B)
+    np.savez(tmp_path / "b.npz", H=yb[:, None, None], labels=np.array(["1:x"]), omega=w)
+    case = load_case(_case(tmp_path, "{name: B, type: frf, file: b.npz, decouple: true}"))
+    with pytest.raises(CaseError, match=r"analysis\.frf: receptances are not recovered .* "
+                                        r"a decoupled part"):
+        run_case(case, model=build_model(case))

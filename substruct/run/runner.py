@@ -22,6 +22,7 @@ from substruct.linalg.amls_block import TaskMap
 from substruct.builder.frf_parts import assemble_frf_case, has_frf_parts
 from substruct.builder.model import Model, assemble_case
 from substruct.builder.superelements import rigid_body_attrs
+from substruct.case.errors import CaseError
 from substruct.case.loader import Case
 from substruct.run.analyses import (
     Progress,
@@ -132,6 +133,8 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
     if case.output.matrices:
         result.model.matrices = {"M": sp.csr_array(asm.M), "K": sp.csr_array(asm.K),
                                  "C": sp.csr_array(asm.C)}
+    plan = recovery_plan(case, asm)
+    _refuse_unrecovered_receptances(case, bool(plan))
     spec = case.analysis.modes
     if spec is not None:
         result.modes = modes_result(case, asm, asm.A, ("analysis", "modes"), events=events,
@@ -165,7 +168,6 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
                 result.tpa = tpa_result(case, result.frf)
             if case.analysis.semm is not None:
                 result.semm = semm_result(case, result.frf)
-    plan = recovery_plan(case, asm)
     result.recovery = plan.empty()
     if plan and result.modes is not None:
         recover_modes(plan, result.modes, result.recovery)
@@ -208,6 +210,21 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
         result.srs = srs_result(case, result.transient)
     _require_finite_result(result)
     return result
+
+
+def _refuse_unrecovered_receptances(case: Case, recovers: bool) -> None:
+    """Refuse, before anything runs, a case whose receptances the recovery cannot follow:
+    recovery rows with virtual points or with a part removed by decoupling."""
+    frf = case.analysis.frf
+    if not recovers or frf is None:
+        return
+    why = ("virtual points" if has_virtual_points(case) else
+           "a decoupled part" if any(getattr(s, "decouple", False)
+                                     for s in case.substructures) else None)
+    if why is not None:
+        raise CaseError(case.source, "analysis.frf",
+                        f"receptances are not recovered (recovery:) in a case with {why}; "
+                        "drop analysis.frf or the recovery block", why)
 
 
 def _require_finite_modes(what: str, modes: Modes) -> None:
