@@ -16,7 +16,7 @@ from typing import Any
 from substruct.case.bdf_fields import BdfError, BdfText, RawCard
 
 __all__ = ["PARAMS", "OUTPUT_PARAMS", "CASE_CONTROL", "Eigrl", "read_eigrl", "read_control",
-           "param", "select_sets", "read_uset"]
+           "param", "select_sets", "read_uset", "read_static_load"]
 
 #: PARAM names read (K6ROT only in a model without shells, where it has no effect).
 PARAMS = ("WTMASS", "COUPMASS", "AUTOSPC", "K6ROT")
@@ -81,7 +81,8 @@ def read_control(text: BdfText) -> dict[str, Any]:
     for line, t in text.case_control:
         if plots:  # the plot subpackage's requests: no effect on the modes
             continue
-        m = re.match(r"^([A-Z]+)\s*(\([^)]*\))?\s*(?:=\s*(.*))?$", t)
+        m = re.match(r"^([A-Z]+)\s*(\([^)]*\))?\s*(?:=\s*(.*))?$", t) or \
+            re.match(r"^(SUBCASE)\s+()(\d+)$", t)
         word = m.group(1) if m else t.split()[0]
         if not m or word not in CASE_CONTROL:
             raise BdfError(src, f"case control {word} is not supported (read: "
@@ -115,6 +116,25 @@ def read_uset(c: RawCard) -> tuple[str, list[tuple[int, str]]]:
     if not pairs:
         raise c.error("a set needs a grid", name="ID1")
     return name, pairs
+
+
+def read_static_load(c: RawCard) -> None:
+    """LOAD SID S S1 L1 S2 L2 ... and FORCE SID G CID F N1 N2 N3: static loads, which the case
+    control of a normal modes run cannot choose (``LOAD =`` is refused there): their fields
+    are checked and they have no effect."""
+    c.integer(0, "SID")
+    if c.name == "FORCE":
+        c.blank_after(7, "FORCE has one line")
+        c.integer(1, "G")
+        c.integer(2, "CID", 0)
+        for k, name in ((3, "F"), (4, "N1"), (5, "N2"), (6, "N3")):
+            c.real(k, name, 0.0)
+        return
+    c.real(1, "S")
+    for k in range(2, len(c.fields), 2):
+        n = k // 2
+        c.real(k, f"S{n}")
+        c.integer(k + 1, f"L{n}")
 
 
 def param(params: dict[str, tuple[RawCard, str]], key: str, kind: str, default: Any) -> Any:
