@@ -183,3 +183,23 @@ def test_mat1_with_e_g_and_nu_given_uses_e_nu_for_shells_and_g_for_torsion():
     rod = ["GRID,1,,0.,0.,0.", "GRID,2,,2.,0.,0.", "PROD,3,1,1.,.5", "CROD,1,3,1,2"]
     K, _ = matrices(["MAT1,1,2.9+7,1.1+7,.32,.283"] + rod)
     assert K[3, 3] == pytest.approx(1.1e7 * .5 / 2, rel=1e-15)
+
+
+@pytest.mark.parametrize("head, message", [
+    (["ASSIGN INPUTT4 = 'k.op4', UNIT = 11", "SOL 103", "CEND"], "ASSIGN of output files"),
+    (["SOL 103", "CEND", "SEALL = 5"], "SEALL = ALL is read"),
+    (["SOL 103", "CEND", "SUPER = 2"], "SUPER = ALL is read"),
+])
+def test_control_statements_other_than_outputs_and_one_residual_are_refused(head, message):
+    text = head + ["BEGIN BULK", "GRID,1,,0.,0.,0.", "ENDDATA"]
+    with pytest.raises(BdfError, match=re.escape(message)):
+        parse_bulk("\n".join(text), "c.bdf")
+
+
+def test_output_assign_seall_super_maxlines_are_read_without_effect():
+    base = ["SOL 103", "CEND", "BEGIN BULK"] + SPC_MODEL[4:] + ["ENDDATA"]
+    more = ["ASSIGN OUTPUT2 = 'm.op2', UNIT = 12", "SOL 103", "CEND", "SEALL = ALL",
+            "SUPER = ALL", "MAXLINES = 999999", "BEGIN BULK"] + SPC_MODEL[4:] + \
+        ["PARAM,NOCOMPS,-1", "ENDDATA"]
+    a, b = (nastran_matrices(parse_bulk("\n".join(t), "c.bdf")) for t in (base, more))
+    assert (a.K != b.K).nnz == 0 and (a.M != b.M).nnz == 0

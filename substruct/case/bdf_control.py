@@ -21,15 +21,17 @@ __all__ = ["PARAMS", "OUTPUT_PARAMS", "CASE_CONTROL", "Eigrl", "read_eigrl", "re
 #: PARAM names read (K6ROT only in a model without shells, where it has no effect).
 PARAMS = ("WTMASS", "COUPMASS", "AUTOSPC", "K6ROT")
 #: PARAM names of output requests: read, no effect on the modes.
-OUTPUT_PARAMS = ("POST", "POSTEXT", "OUGCORD", "GRDPNT", "PRTMAXIM")
+OUTPUT_PARAMS = ("POST", "POSTEXT", "OUGCORD", "GRDPNT", "PRTMAXIM", "NOCOMPS")
 #: Case control commands read (titles and output requests have no effect: the mode shapes are
-#: always written).  ``OUTPUT(...)`` starts a plot subpackage: its lines (XYPRINT, ...) up
+#: always written; ``SEALL = ALL`` and ``SUPER = ALL`` name the one residual structure).  ``OUTPUT(...)`` starts a plot subpackage: its lines (XYPRINT, ...) up
 #: to BEGIN BULK are output requests too.
 CASE_CONTROL = ("METHOD", "SPC", "MPC", "SUBCASE", "TITLE", "SUBTITLE", "LABEL", "ECHO",
                 "DISPLACEMENT", "DISP", "VECTOR", "ELFORCE", "ELFOR", "FORCE", "STRESS",
                 "STRAIN", "SPCFORCES", "MPCFORCES", "OLOAD", "GPFORCE", "ESE", "GPKE",
-                "OUTPUT")
-_EXECUTIVE = ("SOL", "ID", "TIME", "DIAG")
+                "OUTPUT", "SEALL", "SUPER", "MAXLINES")
+_EXECUTIVE = ("SOL", "ID", "TIME", "DIAG", "ASSIGN")
+#: ASSIGN statements of output files (read, no effect: the results go to the run's HDF5).
+_ASSIGN_OUTPUTS = ("OUTPUT2", "OUTPUT4", "PUNCH", "OP2")
 
 
 @dataclass(frozen=True)
@@ -75,6 +77,9 @@ def read_control(text: BdfText) -> dict[str, Any]:
                            f"{', '.join(_EXECUTIVE)}, CEND)", t, line=line)
         if word == "SOL" and t.split()[1:2] not in (["103"], ["SEMODES"]):
             raise BdfError(src, "only normal modes, SOL 103, are run", t, line=line)
+        if word == "ASSIGN" and (re.split(r"[\s=]+", t) + [""])[1] not in _ASSIGN_OUTPUTS:
+            raise BdfError(src, f"ASSIGN of output files ({', '.join(_ASSIGN_OUTPUTS)}) is "
+                           "read, no other", t, line=line)
     chosen: dict[str, Any] = {}
     subcases = 0
     plots = False
@@ -94,6 +99,9 @@ def read_control(text: BdfText) -> dict[str, Any]:
             subcases += 1
             if subcases > 1:
                 raise BdfError(src, "one subcase is run", t, line=line)
+        if word in ("SEALL", "SUPER") and (m.group(3) or "").strip() != "ALL":
+            raise BdfError(src, f"{word} = ALL is read (one residual structure, no "
+                           "superelements)", t, line=line, card=word)
         if word in ("METHOD", "SPC", "MPC"):
             value = (m.group(3) or "").strip()
             if not value.isdigit():
