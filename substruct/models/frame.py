@@ -152,7 +152,7 @@ def _node_mass(name: str, node: int, value: Any) -> np.ndarray:
     return (arr + arr.T) / 2
 
 
-def _batch_matrices(items: list[tuple[int, int, Beam, str]], points: list[np.ndarray],
+def _batch_matrices(items: list[tuple[int, int, Beam, str]], points: list[Any],
                     mass: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The coordinates ``(n, 12)`` and global ``K``, ``M`` ``(n, 12, 12)`` of the unreleased
     elements ``(i, j, member, label)``, all at once (:mod:`substruct.models.beam_batch`).
