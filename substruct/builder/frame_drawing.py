@@ -184,9 +184,10 @@ def link_spiders(case: Any, asm: Assembly) -> list[Drawing]:
 def bulk_spiders(case: Any, asm: Assembly) -> list[Drawing]:
     """The spider of each RBE2, RBE3 and MPC card of every ``type: nastran`` substructure of
     ``case`` over the stacked coordinates of ``asm``, named ``"<model>: RBE2 <id>"``
-    (``"<model>: MPC <sid> (line <n>)"``): the card's ``GN`` (``REFGRID``, the MPC's dependent grid) first,
-    then its ``GMi`` (``Gi,j``, the MPC's other grids), each at its grid's position in basic
-    coordinates and moving with the grid's rows ``u_x, u_y, u_z`` of the assembly."""
+    (``"<model>: MPC <sid> (line <n>)"``): the card's ``GN`` (``REFGRID``, the MPC's
+    dependent grid) first, then its ``GMi`` (``Gi,j``, the MPC's other grids), each at its
+    grid's position in basic coordinates and moving with the grid's rows ``u_x, u_y, u_z`` of
+    the assembly."""
     subs = {s.name: s for s in asm.substructures}
     out = []
     for spec in case.substructures:

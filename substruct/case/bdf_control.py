@@ -23,8 +23,9 @@ PARAMS = ("WTMASS", "COUPMASS", "AUTOSPC", "K6ROT")
 #: PARAM names of output requests: read, no effect on the modes.
 OUTPUT_PARAMS = ("POST", "POSTEXT", "OUGCORD", "GRDPNT", "PRTMAXIM", "NOCOMPS")
 #: Case control commands read (titles and output requests have no effect: the mode shapes are
-#: always written; ``SEALL = ALL`` and ``SUPER = ALL`` name the one residual structure).  ``OUTPUT(...)`` starts a plot subpackage: its lines (XYPRINT, ...) up
-#: to BEGIN BULK are output requests too.
+#: always written; ``SEALL = ALL`` and ``SUPER = ALL`` name the one residual structure).
+#: ``OUTPUT(...)`` starts a plot subpackage: its lines (XYPRINT, ...) up to BEGIN BULK are
+#: output requests too.
 CASE_CONTROL = ("METHOD", "SPC", "MPC", "SUBCASE", "TITLE", "SUBTITLE", "LABEL", "ECHO",
                 "DISPLACEMENT", "DISP", "VECTOR", "ELFORCE", "ELFOR", "FORCE", "STRESS",
                 "STRAIN", "SPCFORCES", "MPCFORCES", "OLOAD", "GPFORCE", "ESE", "GPKE",
