@@ -153,7 +153,7 @@ def test_cbush_grounded_in_a_coordinate_system_and_between_grids():
     ("CBUSH,3,5,1", "CBUSH 3: CID: the element axes need CID"),
     ("CBUSH,3,5,1,,,,,7\nPBUSH,5,B,1.", r"PBUSH 5: B1: B \(damping\) is not supported"),
     ("CQUAD4,3,9,1,2,1,2", "CQUAD4 3: G1: the corners are different grids"),
-    ("GRID,5,,0.,1.,0.\nCTRIA3,3,9,1,2,5", "CTRIA3 3: PID: no PSHELL of that id"),
+    ("GRID,5,,0.,1.,0.\nCTRIA3,3,9,1,2,5", "CTRIA3 3: PID: no PSHELL or PCOMP of that id"),
     ("GRID,5,,0.,1.,0.\nCTRIA3,3,9,1,2,5\nPSHELL,9,1,.01,1,,4", "PSHELL 9: MID3"),
     ("GRID,5,,0.,1.,0.\nCTRIA3,3,9,1,2,5,,.1\nPSHELL,9,1,.01,1", "CTRIA3 3: ZOFFS"),
 ])

@@ -25,8 +25,9 @@ so a rigid rotation is carried unchanged along the element.
 
 **Links.** A rigid or interpolation link of a case is drawn as a spider: straight lines from
 its independent (reference) node to each of its other nodes, which move with the nodes'
-translations.  So is each RBE2 (``GN`` to its ``GMi``) and RBE3 (``REFGRID`` to its
-``Gi,j``) of a Nastran model's bulk data, at the grids' positions in basic coordinates.
+translations.  So is each RBE2 (``GN`` to its ``GMi``), RBE3 (``REFGRID`` to its ``Gi,j``)
+and MPC (its first, dependent, grid to the grids of its other terms) of a Nastran model's
+bulk data, at the grids' positions in basic coordinates.
 """
 
 from __future__ import annotations
@@ -181,10 +182,12 @@ def link_spiders(case: Any, asm: Assembly) -> list[Drawing]:
 
 
 def bulk_spiders(case: Any, asm: Assembly) -> list[Drawing]:
-    """The spider of each RBE2 and RBE3 card of every ``type: nastran`` substructure of
-    ``case`` over the stacked coordinates of ``asm``, named ``"<model>: RBE2 <id>"``: the
-    card's ``GN`` (``REFGRID``) first, then its ``GMi`` (``Gi,j``), each at its grid's position
-    in basic coordinates and moving with the grid's rows ``u_x, u_y, u_z`` of the assembly."""
+    """The spider of each RBE2, RBE3 and MPC card of every ``type: nastran`` substructure of
+    ``case`` over the stacked coordinates of ``asm``, named ``"<model>: RBE2 <id>"``
+    (``"<model>: MPC <sid> (line <n>)"``): the card's ``GN`` (``REFGRID``, the MPC's
+    dependent grid) first, then its ``GMi`` (``Gi,j``, the MPC's other grids), each at its
+    grid's position in basic coordinates and moving with the grid's rows ``u_x, u_y, u_z`` of
+    the assembly."""
     subs = {s.name: s for s in asm.substructures}
     out = []
     for spec in case.substructures:

@@ -90,14 +90,22 @@ def bulk_links(name: str, bulk: BulkData, subs: Mapping[str, Substructure]
     return out
 
 
-def rigid_element_grids(bulk: BulkData) -> list[tuple[str, int, int, list[int]]]:
-    """The grids of each RBE2 and RBE3 card of ``bulk``, in card order: ``(card name, id,
-    centre, others)``, the centre the RBE2's GN or the RBE3's REFGRID, the others the RBE2's
-    GMi or the RBE3's Gi,j (group by group, as :func:`bulk_links` takes them)."""
-    out: list[tuple[str, int, int, list[int]]] = [("RBE2", r.id, r.gn, list(r.gm))
-                                                  for r in bulk.rbe2]
+def rigid_element_grids(bulk: BulkData) -> list[tuple[str, int | str, int, list[int]]]:
+    """The grids of each RBE2, RBE3 and MPC card of ``bulk``, in card order: ``(card name,
+    id, centre, others)``, the centre the RBE2's GN, the RBE3's REFGRID or the MPC's first
+    (dependent) grid, the others the RBE2's GMi, the RBE3's Gi,j (group by group, as
+    :func:`bulk_links` takes them) or the MPC's other grids, each once; an MPC's id is
+    ``"<SID> (line <n>)"`` (cards of one set share the SID).  An MPC whose terms are all on
+    one grid has nothing to draw and is left out."""
+    out: list[tuple[str, int | str, int, list[int]]] = [("RBE2", r.id, r.gn, list(r.gm))
+                                                        for r in bulk.rbe2]
     out += [("RBE3", r3.id, r3.ref, [g for _, _, gl in r3.groups for g in gl])
             for r3 in bulk.rbe3]
+    for m in bulk.mpcs:
+        first = m.terms[0][0]
+        others = list(dict.fromkeys(g for g, _, _ in m.terms[1:] if g != first))
+        if others:
+            out.append(("MPC", f"{m.sid} (line {m.line})", first, others))
     return out
 
 

@@ -33,15 +33,18 @@ from pathlib import Path
 from typing import Any, Callable
 
 from substruct.case.bdf_cards import (
-    read_bar, read_conm2, read_cord2r, read_grid, read_mat1, read_pbar, read_pbarl, read_pbeam,
-    read_prod, read_rod,
+    read_bar, read_conm2, read_cord2r, read_grid, read_mat1, read_pbar, read_pbarl, read_prod,
+    read_rod,
 )
-from substruct.case.bdf_constraints import read_mpc, read_rbe2, read_rbe3, read_spc, read_spc1
+from substruct.case.bdf_constraints import read_mpc, read_rbe2, read_rbe3, read_spc, \
+    read_spc1, read_spcadd
 from substruct.case.bdf_control import CASE_CONTROL, OUTPUT_PARAMS, PARAMS, read_control, \
-    read_eigrl, read_uset
+    read_eigrl, read_static_load, read_uset
 from substruct.case.bdf_fields import RawCard, split_bdf
 from substruct.case.bdf_include import bdf_lines
 from substruct.case.bdf_model import BulkData, BdfSection
+from substruct.case.bdf_pbeam import read_pbeam
+from substruct.case.bdf_pcomp import read_pcomp
 from substruct.case.bdf_shells import read_cquad4, read_ctria3, read_pshell
 from substruct.case.bdf_solids import read_psolid, read_solid
 from substruct.case.bdf_springs import read_cbush, read_celas, read_pbush, read_pelas
@@ -52,9 +55,9 @@ __all__ = ["BulkData", "BdfSection", "read_bulk", "parse_bulk", "CARDS", "PARAMS
 
 #: Bulk data cards read (docs/structures.md has what is read of each).
 CARDS = ("GRID", "CORD2R", "CROD", "PROD", "CBAR", "PBAR", "PBARL", "CBEAM", "PBEAM",
-         "PBEAML", "USET", "CQUAD4",
-         "CTRIA3", "PSHELL", "CHEXA", "CPENTA", "CTETRA", "PSOLID", "CONM2", "CELAS1", "CELAS2", "PELAS", "CBUSH", "PBUSH", "RBE2",
-         "RBE3", "MPC", "SPC", "SPC1", "MAT1", "EIGRL", "PARAM")
+         "PBEAML", "USET", "CQUAD4", "CTRIA3", "PSHELL", "PCOMP", "CHEXA", "CPENTA", "CTETRA",
+         "PSOLID", "CONM2", "CELAS1", "CELAS2", "PELAS", "CBUSH", "PBUSH", "RBE2", "RBE3",
+         "MPC", "SPC", "SPC1", "SPCADD", "MAT1", "EIGRL", "PARAM", "LOAD", "FORCE")
 
 
 class _Reader:
@@ -110,6 +113,16 @@ def parse_bulk(text: str | list[tuple[str, int, str]], source: str) -> BulkData:
             ps = read_pshell(card)
             rd.unique("property", ps.id, card)
             cards.pshell[ps.id] = (card, ps)
+        elif name == "PCOMP":
+            pc = read_pcomp(card)
+            rd.unique("property", pc.id, card)
+            cards.pcomp[pc.id] = (card, pc)
+        elif name == "SPCADD":
+            sid, members = read_spcadd(card)
+            rd.unique("SPCADD", sid, card)
+            cards.spcadd[sid] = (card, members)
+        elif name in ("LOAD", "FORCE"):  # static loads: checked, no effect on the modes
+            read_static_load(card)
         elif name == "PSOLID":
             pso = read_psolid(card)
             rd.unique("property", pso.id, card)

@@ -17,7 +17,7 @@ import numpy as np
 from substruct.case.bdf_fields import RawCard, nastran_int, nastran_real
 
 __all__ = ["components", "GridCard", "Coord", "Rod", "Bar", "Mat1", "Conm2", "read_grid",
-           "read_cord2r", "read_prod", "read_pbar", "read_pbeam", "read_pbarl", "read_mat1",
+           "read_cord2r", "read_prod", "read_pbar", "read_pbarl", "read_mat1",
            "read_rod", "read_bar", "read_conm2"]
 
 
@@ -85,13 +85,21 @@ class Bar:
 
 @dataclass(frozen=True)
 class Mat1:
-    """MAT1: ``E``, ``G`` (completed from ``NU`` as Nastran does) and ``rho``."""
+    """MAT1: ``E``, ``G`` (completed from ``NU`` as Nastran does), ``rho`` and ``NU`` when all
+    three of ``E, G, NU`` are given (``given_nu``).  As in Nastran, line elements use ``E``
+    and ``G``, shells and solids ``E`` and :attr:`nu`."""
 
     id: int
     E: float
     G: float
     rho: float
     line: int
+    given_nu: float | None = None
+
+    @property
+    def nu(self) -> float:
+        """Poisson's ratio: ``NU`` as given, or :math:`E / 2G - 1` when it was derived."""
+        return self.given_nu if self.given_nu is not None else self.E / (2 * self.G) - 1
 
 
 @dataclass(frozen=True)
@@ -156,17 +164,6 @@ def read_pbar(c: RawCard) -> tuple[int, int, float, float, float, float, float]:
             c.real(4, "I2", 0.0), c.real(5, "J", 0.0), c.real(6, "NSM", 0.0))
 
 
-def read_pbeam(c: RawCard) -> tuple[int, int, float, float, float, float, float]:
-    """PBEAM (basic: one constant section) PID MID A I1 I2 I12 J NSM / C1 .. F2:
-    ``(pid, mid, A, I1, I2, J, nsm)``; shear factors are Nastran's default ``K1 = K2 = 1``."""
-    c.blank_after(16, "basic PBEAM: one constant section and its stress points; tapered "
-                  "sections, K1 K2, NSI and warping lines are not supported")
-    if c.text(5) and c.real(5, "I12") != 0.0:
-        raise c.error("unsymmetric sections (I12) are not supported", c.text(5), "I12")
-    return (c.integer(0, "PID"), c.integer(1, "MID"), c.real(2, "A"), c.real(3, "I1", 0.0),
-            c.real(4, "I2", 0.0), c.real(6, "J", 0.0), c.real(7, "NSM", 0.0))
-
-
 def read_pbarl(c: RawCard) -> tuple[int, int, float, float, float, float, float]:
     r"""PBARL / PBEAML PID MID GROUP TYPE / DIM1 NSM of the ``ROD`` section only (a solid
     circle of radius ``r = DIM1``): ``(pid, mid, A, I1, I2, J, nsm)`` with
@@ -204,7 +201,8 @@ def read_mat1(c: RawCard) -> Mat1:
         if value is None or value < 0:
             raise c.error("must not be negative", value, name)
     assert E is not None and G is not None
-    return Mat1(c.integer(0, "MID"), E, G, rho, c.line)
+    given = nu if c.text(1) and c.text(2) and nu is not None else None
+    return Mat1(c.integer(0, "MID"), E, G, rho, c.line, given)
 
 
 def read_rod(c: RawCard) -> Rod:

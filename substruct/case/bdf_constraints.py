@@ -1,5 +1,5 @@
 """The constraint cards of a Nastran file: rigid elements (RBE2, RBE3), multi-point
-constraints (MPC) and single-point constraints (SPC, SPC1), read from the fields of a
+constraints (MPC) and single-point constraints (SPC, SPC1, SPCADD), read from the fields of a
 :class:`~substruct.case.bdf_fields.RawCard` with the field names of the Nastran Quick
 Reference Guide (field indices as in :mod:`substruct.case.bdf_cards`).  Every field is read or
 refused.
@@ -13,7 +13,7 @@ from substruct.case.bdf_cards import components
 from substruct.case.bdf_fields import RawCard, nastran_int
 
 __all__ = ["Rbe2", "Rbe3", "Mpc", "read_rbe2", "read_rbe3", "read_mpc", "read_spc",
-           "read_spc1", "int_list"]
+           "read_spc1", "read_spcadd", "int_list"]
 
 
 @dataclass(frozen=True)
@@ -148,3 +148,18 @@ def read_spc1(c: RawCard) -> tuple[int, str, list[int] | range]:
     grids, k = int_list(c, 2, "G1")
     c.blank_after(k, "SPC1 grids are integers")
     return sid, comp, grids
+
+
+def read_spcadd(c: RawCard) -> tuple[int, list[int]]:
+    """SPCADD SID S1 S2 ...: ``(sid, [S1, S2, ...])``, the union of the SPC/SPC1 sets ``Si``
+    (chosen by ``SPC = SID`` as one set)."""
+    sets, k = int_list(c, 1, "S1")
+    c.blank_after(k, "SPCADD set ids are integers")
+    if not sets:
+        raise c.error("needs at least one set", name="S1")
+    sid = c.integer(0, "SID")
+    for n, s in enumerate(sets):
+        if s <= 0 or s == sid:
+            raise c.error("set ids are positive and differ from the SPCADD's own", s,
+                          f"S{n + 1}")
+    return sid, sets

@@ -16,20 +16,23 @@ from typing import Any
 from substruct.case.bdf_fields import BdfError, BdfText, RawCard
 
 __all__ = ["PARAMS", "OUTPUT_PARAMS", "CASE_CONTROL", "Eigrl", "read_eigrl", "read_control",
-           "param", "select_sets", "read_uset"]
+           "param", "select_sets", "read_uset", "read_static_load"]
 
 #: PARAM names read (K6ROT only in a model without shells, where it has no effect).
 PARAMS = ("WTMASS", "COUPMASS", "AUTOSPC", "K6ROT")
 #: PARAM names of output requests: read, no effect on the modes.
-OUTPUT_PARAMS = ("POST", "POSTEXT", "OUGCORD", "GRDPNT", "PRTMAXIM")
+OUTPUT_PARAMS = ("POST", "POSTEXT", "OUGCORD", "GRDPNT", "PRTMAXIM", "NOCOMPS")
 #: Case control commands read (titles and output requests have no effect: the mode shapes are
-#: always written).  ``OUTPUT(...)`` starts a plot subpackage: its lines (XYPRINT, ...) up
-#: to BEGIN BULK are output requests too.
+#: always written; ``SEALL = ALL`` and ``SUPER = ALL`` name the one residual structure).
+#: ``OUTPUT(...)`` starts a plot subpackage: its lines (XYPRINT, ...) up to BEGIN BULK are
+#: output requests too.
 CASE_CONTROL = ("METHOD", "SPC", "MPC", "SUBCASE", "TITLE", "SUBTITLE", "LABEL", "ECHO",
                 "DISPLACEMENT", "DISP", "VECTOR", "ELFORCE", "ELFOR", "FORCE", "STRESS",
                 "STRAIN", "SPCFORCES", "MPCFORCES", "OLOAD", "GPFORCE", "ESE", "GPKE",
-                "OUTPUT")
-_EXECUTIVE = ("SOL", "ID", "TIME", "DIAG")
+                "OUTPUT", "SEALL", "SUPER", "MAXLINES")
+_EXECUTIVE = ("SOL", "ID", "TIME", "DIAG", "ASSIGN")
+#: ASSIGN statements of output files (read, no effect: the results go to the run's HDF5).
+_ASSIGN_OUTPUTS = ("OUTPUT2", "OUTPUT4", "PUNCH", "OP2")
 
 
 @dataclass(frozen=True)
@@ -75,13 +78,17 @@ def read_control(text: BdfText) -> dict[str, Any]:
                            f"{', '.join(_EXECUTIVE)}, CEND)", t, line=line)
         if word == "SOL" and t.split()[1:2] not in (["103"], ["SEMODES"]):
             raise BdfError(src, "only normal modes, SOL 103, are run", t, line=line)
+        if word == "ASSIGN" and (re.split(r"[\s=]+", t) + [""])[1] not in _ASSIGN_OUTPUTS:
+            raise BdfError(src, f"ASSIGN of output files ({', '.join(_ASSIGN_OUTPUTS)}) is "
+                           "read, no other", t, line=line)
     chosen: dict[str, Any] = {}
     subcases = 0
     plots = False
     for line, t in text.case_control:
         if plots:  # the plot subpackage's requests: no effect on the modes
             continue
-        m = re.match(r"^([A-Z]+)\s*(\([^)]*\))?\s*(?:=\s*(.*))?$", t)
+        m = re.match(r"^([A-Z]+)\s*(\([^)]*\))?\s*(?:=\s*(.*))?$", t) or \
+            re.match(r"^(SUBCASE)\s+()(\d+)$", t)
         word = m.group(1) if m else t.split()[0]
         if not m or word not in CASE_CONTROL:
             raise BdfError(src, f"case control {word} is not supported (read: "
@@ -93,6 +100,9 @@ def read_control(text: BdfText) -> dict[str, Any]:
             subcases += 1
             if subcases > 1:
                 raise BdfError(src, "one subcase is run", t, line=line)
+        if word in ("SEALL", "SUPER") and (m.group(3) or "").strip() != "ALL":
+            raise BdfError(src, f"{word} = ALL is read (one residual structure, no "
+                           "superelements)", t, line=line, card=word)
         if word in ("METHOD", "SPC", "MPC"):
             value = (m.group(3) or "").strip()
             if not value.isdigit():
@@ -115,6 +125,25 @@ def read_uset(c: RawCard) -> tuple[str, list[tuple[int, str]]]:
     if not pairs:
         raise c.error("a set needs a grid", name="ID1")
     return name, pairs
+
+
+def read_static_load(c: RawCard) -> None:
+    """LOAD SID S S1 L1 S2 L2 ... and FORCE SID G CID F N1 N2 N3: static loads, which the case
+    control of a normal modes run cannot choose (``LOAD =`` is refused there): their fields
+    are checked and they have no effect."""
+    c.integer(0, "SID")
+    if c.name == "FORCE":
+        c.blank_after(7, "FORCE has one line")
+        c.integer(1, "G")
+        c.integer(2, "CID", 0)
+        for k, name in ((3, "F"), (4, "N1"), (5, "N2"), (6, "N3")):
+            c.real(k, name, 0.0)
+        return
+    c.real(1, "S")
+    for k in range(2, len(c.fields), 2):
+        n = k // 2
+        c.real(k, f"S{n}")
+        c.integer(k + 1, f"L{n}")
 
 
 def param(params: dict[str, tuple[RawCard, str]], key: str, kind: str, default: Any) -> Any:

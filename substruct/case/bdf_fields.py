@@ -243,7 +243,7 @@ def split_bdf(text: str | list[tuple[str, int, str]], source: str) -> BdfText:
         if not raw.strip():
             continue
         src, n = text[k][0], text[k][1]
-        if raw.strip().upper() == "ENDDATA":
+        if raw.strip().upper().split()[0].split(",")[0] == "ENDDATA":  # text after it: ignored
             break
         if raw.upper().startswith("INCLUDE"):
             raise BdfError(src, "INCLUDE is read from a file (substruct run MODEL.bdf, or "

@@ -23,8 +23,9 @@ __all__ = ["BdfSection", "ShellSection", "BushSpring", "BulkData"]
 @dataclass(frozen=True)
 class BdfSection:
     """A line element's property with its material: ``A, I1, I2, J, nsm`` and ``E, G, rho``
-    (``I1``, ``I2`` zero for a rod); ``shear``: shear flexibility, with the factor ``kshear``
-    (``K1 = K2``): CBEAM's default 1, 0.9 for a PBARL/PBEAML ``ROD``; ``beam``: a CBEAM
+    (``I1``, ``I2`` zero for a rod); ``shear``: shear flexibility, with the factors ``kshear``
+    (``K1``, ``K2`` of planes 1 and 2; 0: none in that plane): PBEAM's, 1 when blank, 0.9 for
+    a PBARL/PBEAML ``ROD``; ``beam``: a CBEAM
     (whose lumped mass has the torsional inertia)."""
 
     A: float
@@ -34,7 +35,7 @@ class BdfSection:
     nsm: float
     mat: Mat1
     shear: bool
-    kshear: float = 1.0
+    kshear: tuple[float, float] = (1.0, 1.0)
     beam: bool = False
 
 

@@ -27,7 +27,8 @@ class Plate:
 class Pshell:
     """PSHELL: membrane material ``mid1`` and bending material ``mid2`` (``None`` when blank:
     no membrane, no bending), thickness ``t``, bending inertia ratio ``bend`` (``12 I / T^3``,
-    1.0 by default) and non-structural mass per area ``nsm``."""
+    1.0 by default), non-structural mass per area ``nsm`` and the transverse shear material
+    ``mid3`` (read, not modelled)."""
 
     id: int
     mid1: int | None
@@ -36,6 +37,7 @@ class Pshell:
     bend: float
     nsm: float
     line: int
+    mid3: int | None = None
 
 
 def _plate(c: RawCard, n: int, theta: int, zoffs: int, tflag: int) -> Plate:
@@ -75,16 +77,21 @@ def read_ctria3(c: RawCard) -> Plate:
 
 
 def read_pshell(c: RawCard) -> Pshell:
-    """PSHELL PID MID1 T MID2 12I/T**3 MID3 TS/T NSM / Z1 Z2 MID4.  ``MID3`` (transverse shear
-    flexibility) and ``MID4`` (membrane-bending coupling) are refused: the elements are
-    Kirchhoff plates, as Nastran's with ``MID3`` blank; ``TS/T`` (used only with ``MID3``) and
-    the fibre distances ``Z1``, ``Z2`` (stress recovery) are read and not used."""
+    """PSHELL PID MID1 T MID2 12I/T**3 MID3 TS/T NSM / Z1 Z2 MID4.  ``MID4`` (membrane-bending
+    coupling) is refused.  ``MID3`` and ``TS/T`` (transverse shear flexibility) are read (the
+    material must exist, ``TS/T`` be positive) and not modelled: the elements are Kirchhoff
+    plates, Nastran's element with ``MID3`` blank, stiffer than Nastran's with ``MID3`` by the
+    shear deformation of the thickness (measured on a public model in docs/structures.md).
+    The fibre distances ``Z1``, ``Z2`` (stress recovery) are read and not used."""
     c.blank_after(11, "PSHELL has two lines")
-    for k, name in ((5, "MID3"), (10, "MID4")):
-        if c.text(k):
-            raise c.error(f"{name} is not supported (the shells have no transverse shear "
-                          f"flexibility and no membrane-bending coupling)", c.text(k), name)
-    c.real(6, "TS/T", 0.0)
+    if c.text(10):
+        raise c.error("MID4 is not supported (the shells have no membrane-bending coupling)",
+                      c.text(10), "MID4")
+    mid3 = c.integer(5, "MID3") if c.text(5) else None
+    if mid3 is not None and mid3 <= 0:
+        raise c.error("material ids are positive", mid3, "MID3")
+    if not c.real(6, "TS/T", 5.0 / 6.0) > 0:
+        raise c.error("must be positive", c.text(6), "TS/T")
     c.real(8, "Z1", 0.0)
     c.real(9, "Z2", 0.0)
     mids = []
@@ -105,4 +112,4 @@ def read_pshell(c: RawCard) -> Pshell:
             raise c.error("must be positive", value, name)
     if nsm < 0:
         raise c.error("must not be negative", nsm, "NSM")
-    return Pshell(c.integer(0, "PID"), mids[0], t, mids[1], bend, nsm, c.line)
+    return Pshell(c.integer(0, "PID"), mids[0], t, mids[1], bend, nsm, c.line, mid3)

@@ -16,6 +16,7 @@ from substruct.case.bdf_cards import Conm2, GridCard, Mat1
 from substruct.case.bdf_control import param, select_sets
 from substruct.case.bdf_fields import BdfError, RawCard
 from substruct.case.bdf_model import BulkData, BushSpring, BdfSection, ShellSection
+from substruct.case.bdf_pcomp import COUPLING_TOLERANCE, Pcomp, laminate
 from substruct.case.bdf_shells import Pshell
 from substruct.case.bdf_solids import Psolid
 from substruct.case.fields import MAX_ELEMENTS, MAX_MATRIX_SIZE
@@ -42,6 +43,8 @@ class Cards:
     pshell: dict[int, tuple[RawCard, Pshell]] = field(default_factory=dict)
     pbush: dict[int, tuple[RawCard, tuple[float, ...]]] = field(default_factory=dict)
     psolid: dict[int, tuple[RawCard, Psolid]] = field(default_factory=dict)
+    pcomp: dict[int, tuple[RawCard, Pcomp]] = field(default_factory=dict)
+    spcadd: dict[int, tuple[RawCard, list[int]]] = field(default_factory=dict)
     mats: dict[int, Mat1] = field(default_factory=dict)
     pelas: dict[int, float] = field(default_factory=dict)
     params: dict[str, tuple[RawCard, str]] = field(default_factory=dict)
@@ -125,12 +128,14 @@ def cross_reference(cards: Cards) -> BulkData:
         if pcard.name == "PROD":
             return BdfSection(v[2], 0.0, 0.0, v[3], v[4], mats[v[1]], False)
         shear = pcard.name in ("PBEAM", "PBARL", "PBEAML")
-        kshear = 0.9 if pcard.name in ("PBARL", "PBEAML") else 1.0  # Nastran's for ROD
+        kshear = (0.9, 0.9) if pcard.name in ("PBARL", "PBEAML") else (1.0, 1.0)  # ROD's
+        if pcard.name == "PBEAM":
+            kshear = (v[7], v[8])
         sec = BdfSection(v[2], v[3], v[4], v[5], v[6], mats[v[1]], shear, kshear,
                          card.name == "CBEAM")
-        if sec.shear and sec.mat.G == 0 and sec.A > 0:
-            raise pcard.error(f"shear flexibility (K1 = K2 = {kshear}) needs G > 0 in the "
-                              "material", v[1], "MID")
+        if sec.shear and max(kshear) > 0 and sec.mat.G == 0 and sec.A > 0:
+            raise pcard.error(f"shear flexibility (K1, K2 = {kshear[0]}, {kshear[1]}) needs "
+                              "G > 0 in the material", v[1], "MID")
         return sec
 
     for card, rod in by.get("CROD", []):
@@ -213,8 +218,7 @@ def cross_reference(cards: Cards) -> BulkData:
             for k, (g, _, _) in enumerate(m.terms):
                 grid(card, g, f"G{k + 1}")
             out.mpcs.append(m)
-    sets = set(spc_sets) | {sid for _, sid, _, _ in spc1}
-    use = select_sets(source, control, "SPC", sets)
+    use = _spc_sets(cards)
     for sid in use:
         for card, gid, comp in spc_sets.get(sid, []):
             out.spc.setdefault(grid(card, gid, "G1"), set()).update(int(c) - 1 for c in comp)
@@ -247,17 +251,69 @@ def cross_reference(cards: Cards) -> BulkData:
     return out
 
 
+def _spc_sets(cards: Cards) -> set[int]:
+    """The SPC/SPC1 set ids in use: the case control's ``SPC`` choice (an SPCADD's sets when
+    it names one), or every set of a file of bulk data only."""
+    sets = set(cards.spc_sets) | {sid for _, sid, _, _ in cards.spc1}
+    for sid, (card, members) in cards.spcadd.items():
+        if sid in sets:
+            raise card.error("an SPCADD id must differ from the SPC and SPC1 set ids", sid,
+                             "SID")
+        for n, m in enumerate(members):
+            if m not in sets:
+                raise card.error("no SPC or SPC1 set of that id", m, f"S{n + 1}")
+    chosen = cards.control.get("SPC")
+    if chosen in cards.spcadd:
+        card, members = cards.spcadd[chosen]
+        rest = sorted((sets | set(cards.spcadd)) - set(members) - {chosen})
+        if rest:
+            raise BdfError(cards.source, f"SPC set {rest[0]} is not in the chosen SPCADD "
+                           f"{chosen} and would be unused", rest[0], card="SPC")
+        return set(members)
+    if cards.spcadd and not cards.control["case_control"]:  # bulk data only: every set
+        return sets
+    return select_sets(cards.source, cards.control, "SPC", sets | set(cards.spcadd))
+
+
+def _shell_material(pcard: RawCard, mid: int, name: str, cards: Cards) -> Mat1:
+    if mid not in cards.mats:
+        raise pcard.error("no MAT1 of that id", mid, name)
+    mat = cards.mats[mid]
+    if not (mat.E > 0 and mat.G > 0 and -1 < mat.nu < 0.5):
+        raise pcard.error("a shell's MAT1 needs E > 0, G > 0 and -1 < NU < 0.5", mid, name)
+    return mat
+
+
+def _pcomp_section(pid: int, cards: Cards) -> ShellSection:
+    """The equivalent PSHELL of a PCOMP (:mod:`substruct.case.bdf_pcomp`)."""
+    pcard, p = cards.pcomp[pid]
+    mats = [_shell_material(pcard, mid, f"MID{(i - 8) // 4 + 1}", cards)
+            for mid, _, i in p.plies]
+    T, (em, num), (eb, nub), rho, coupling = laminate(p, mats)
+    if coupling > COUPLING_TOLERANCE:
+        raise pcard.error(f"the laminate couples membrane and bending (|B| = {coupling:.3g} "
+                          "A11 T: an offset Z0 or an unsymmetric stack), which is not "
+                          "supported", pcard.text(1) or "blank", "Z0")
+    membrane = Mat1(pid, em, em / (2 * (1 + num)), rho, pcard.line)
+    bending = Mat1(pid, eb, eb / (2 * (1 + nub)), rho, pcard.line)
+    return ShellSection(T, membrane, bending, 1.0, p.nsm)
+
+
 def _shell_section(card: RawCard, pid: int, cards: Cards) -> ShellSection:
+    if pid in cards.pcomp:
+        return _pcomp_section(pid, cards)
     if pid not in cards.pshell:
-        raise card.error("no PSHELL of that id", pid, "PID")
+        raise card.error("no PSHELL or PCOMP of that id", pid, "PID")
     pcard, p = cards.pshell[pid]
+    if p.mid3 is not None and p.mid3 not in cards.mats:
+        raise pcard.error("no MAT1 of that id", p.mid3, "MID3")
     found = []
     for mid, name in ((p.mid1, "MID1"), (p.mid2, "MID2")):
         if mid is not None and mid not in cards.mats:
             raise pcard.error("no MAT1 of that id", mid, name)
         mat = cards.mats[mid] if mid is not None else None
         if mat is not None and not (mat.E > 0 and mat.G > 0 and
-                                    -1 < mat.E / (2 * mat.G) - 1 < 0.5):
+                                    -1 < mat.nu < 0.5):
             raise pcard.error("a shell's MAT1 needs E > 0, G > 0 and -1 < NU < 0.5", mid, name)
         found.append(mat)
     return ShellSection(p.t, found[0], found[1], p.bend, p.nsm)
@@ -272,6 +328,6 @@ def _solid_material(card: RawCard, pid: int, cards: Cards, systems: dict) -> Mat
     if p.mid not in cards.mats:
         raise pcard.error("no MAT1 of that id", p.mid, "MID")
     mat = cards.mats[p.mid]
-    if not (mat.E > 0 and mat.G > 0 and -1 < mat.E / (2 * mat.G) - 1 < 0.5):
+    if not (mat.E > 0 and mat.G > 0 and -1 < mat.nu < 0.5):
         raise pcard.error("a solid's MAT1 needs E > 0, G > 0 and -1 < NU < 0.5", p.mid, "MID")
     return mat

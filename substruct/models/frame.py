@@ -31,6 +31,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from substruct.models.beam import MASSES, THEORIES, Material, Section, beam_matrices
+from substruct.models.beam_batch import BeamBatch, beam_matrices_batch
 from substruct.models.selection import node_tolerance
 from substruct.models.shell_mesh import Shell, shell_mesh
 from substruct.substructure import Geometry, PointError, Substructure, as_csr
@@ -151,6 +152,42 @@ def _node_mass(name: str, node: int, value: Any) -> np.ndarray:
     return (arr + arr.T) / 2
 
 
+def _batch_matrices(items: list[tuple[int, int, Beam, str]], points: list[Any],
+                    mass: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The coordinates ``(n, 12)`` and global ``K``, ``M`` ``(n, 12, 12)`` of the unreleased
+    elements ``(i, j, member, label)``, all at once (:mod:`substruct.models.beam_batch`).
+
+    Raises:
+        ValueError: an element :func:`~substruct.models.beam.beam_matrices` refuses (the first
+            in order), with its message.
+    """
+    def prop(get: Any) -> np.ndarray:
+        return np.array([float(get(m)) for _, _, m, _ in items])
+
+    ia = np.array([i for i, _, _, _ in items], dtype=np.int64)
+    ib = np.array([j for _, j, _, _ in items], dtype=np.int64)
+    pts = np.asarray(points, dtype=float)
+    b = BeamBatch(pts[ia], pts[ib], np.array([m.orientation for _, _, m, _ in items], float),
+                  prop(lambda m: m.material.E), prop(lambda m: m.material.G),
+                  prop(lambda m: m.material.rho), prop(lambda m: m.section.A),
+                  prop(lambda m: m.section.Iy), prop(lambda m: m.section.Iz),
+                  prop(lambda m: m.section.J), prop(lambda m: m.section.polar),
+                  prop(lambda m: m.section.ky), prop(lambda m: m.section.kz),
+                  np.array([m.theory == "timoshenko" for _, _, m, _ in items]))
+    K, M, ok = beam_matrices_batch(b, mass)
+    if not ok.all():
+        i, j, m, label = items[int(np.flatnonzero(~ok)[0])]
+        try:
+            beam_matrices(points[i], points[j], m.orientation, m.section, m.material,
+                          m.theory, mass)
+        except ValueError as err:
+            raise ValueError(f"{label}: {err}") from None
+        raise AssertionError(f"{label}: the element is refused all at once, not alone")
+    dofs = np.concatenate([6 * ia[:, None] + np.arange(6), 6 * ib[:, None] + np.arange(6)],
+                          axis=1)
+    return dofs, K, M
+
+
 def frame(name: str, nodes: Mapping[int, Sequence[float]], beams: Sequence[Beam],
           supports: Mapping[int, Any] | None = None, mass: str = "consistent",
           node_masses: Mapping[int, Any] | None = None, shells: Sequence[Shell] = ()
@@ -188,6 +225,7 @@ def frame(name: str, nodes: Mapping[int, Sequence[float]], beams: Sequence[Beam]
     rows, cols, kv, mv = [], [], [], []
     pairs: list[tuple[int, int]] = []
     lengths = []
+    batch: list[tuple[int, int, Beam, str]] = []
     for beam in beams:
         label = f"{name}: member {beam.name or beam.nodes}"
         if beam.theory not in THEORIES:
@@ -213,6 +251,11 @@ def frame(name: str, nodes: Mapping[int, Sequence[float]], beams: Sequence[Beam]
             i, j = ends[k], ends[k + 1]
             released = (pin_a if k == 0 else []) + \
                 [6 + c for c in (pin_b if k == n_div - 1 else [])]
+            pairs.append((i, j))
+            lengths.append(float(np.linalg.norm(points[j] - points[i])))
+            if not released:  # computed with the others, all at once
+                batch.append((i, j, beam, label))
+                continue
             try:
                 Ke, Me = beam_matrices(points[i], points[j], beam.orientation, beam.section,
                                        beam.material, beam.theory, mass, released)
@@ -223,8 +266,12 @@ def frame(name: str, nodes: Mapping[int, Sequence[float]], beams: Sequence[Beam]
             cols.append(np.tile(dofs, 12))
             kv.append(Ke.ravel())
             mv.append(Me.ravel())
-            pairs.append((i, j))
-            lengths.append(float(np.linalg.norm(points[j] - points[i])))
+    if batch:
+        dofs, Kb, Mb = _batch_matrices(batch, points, mass)
+        rows.append(np.repeat(dofs, 12, axis=1).ravel())
+        cols.append(np.tile(dofs, (1, 12)).ravel())
+        kv.append(Kb.ravel())
+        mv.append(Mb.ravel())
     mesh = shell_mesh(list(shells), points, ids, index, node_tolerance(xyz), mass,
                       lambda k: f"{name}: shell {shells[k].name or k}")
     rows, cols, kv, mv = rows + mesh.rows, cols + mesh.cols, kv + mesh.kv, mv + mesh.mv

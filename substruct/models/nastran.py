@@ -13,8 +13,9 @@ offsets of its ends (:math:`u_{end} = u_{grid} + \theta \times w`).
   (``PARAM,COUPMASS,1``), :math:`\mu L/6\,[2, 1; 1, 2]` on each translation.
 * **CBAR / CBEAM**: the beam of :mod:`substruct.models.beam` with ``I1`` bending in the plane
   of the orientation vector (local ``x-y``) and ``I2`` in the other; CBAR is Euler-Bernoulli
-  (PBAR's ``K1``, ``K2`` blank), CBEAM has PBEAM's default shear factors ``K1 = K2 = 1``
-  (:math:`\phi = 12 E I / (K G A L^2)`, ``K = 1``); a PBARL/PBEAML ``ROD`` has Nastran's
+  (PBAR's ``K1``, ``K2`` blank), CBEAM has PBEAM's shear factors ``K1`` (plane 1, with
+  ``I1``) and ``K2`` (plane 2), 1 when blank (:math:`\phi_i = 12 E I_i / (K_i G A L^2)`; a
+  factor 0 leaves its plane without shear flexibility); a PBARL/PBEAML ``ROD`` has Nastran's
   ``K = 0.9`` on either.  Pin flags ``PA``, ``PB`` are condensed out
   (:func:`~substruct.models.beam.release`), offsets ``WA``, ``WB`` are rigid.  Lumped mass is
   :math:`\mu L/2` on the translations of each end, no rotary inertia, and for CBEAM the
@@ -91,8 +92,9 @@ def bar_matrices(xa: np.ndarray, xb: np.ndarray, v: np.ndarray, s: BdfSection, c
     if coupled:
         M[np.ix_([0, 6], [0, 6])] = mu * L * pair
         M[np.ix_([3, 9], [3, 9])] = s.mat.rho * (s.I1 + s.I2) * L * pair
-    for vv, t, I, sign in ((1, 5, s.I1, 1.0), (2, 4, s.I2, -1.0)):
-        kga = s.kshear * G * s.A if shear else None
+    for vv, t, I, sign, k in ((1, 5, s.I1, 1.0, s.kshear[0]),
+                              (2, 4, s.I2, -1.0, s.kshear[1])):
+        kga = k * G * s.A if shear and k > 0 else None
         Kb, Mb = bending_matrices(L, E * I, kga if kga else None, mu, 0.0)
         D = np.diag([1.0, sign, 1.0, sign])
         idx = np.ix_([vv, t, vv + 6, t + 6], [vv, t, vv + 6, t + 6])

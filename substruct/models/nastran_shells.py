@@ -47,9 +47,9 @@ def plate_matrices(bulk: BulkData, index: dict[int, int]
         m1, m2 = sec.membrane, sec.bending
         main = m1 if m1 is not None else m2
         assert main is not None
-        bend_mat = (m2.E, m2.E / (2 * m2.G) - 1) if m2 is not None else None
+        bend_mat = (m2.E, m2.nu) if m2 is not None else None
         try:
-            K, M = shell_matrices(X, main.E, main.E / (2 * main.G) - 1, sec.t, sec.rho,
+            K, M = shell_matrices(X, main.E, main.nu, sec.t, sec.rho,
                                   "consistent" if bulk.coupled else "lumped", sec.nsm,
                                   terms=ShellTerms(bending_material=bend_mat, bend=sec.bend,
                                                    membrane=m1 is not None,

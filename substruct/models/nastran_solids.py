@@ -72,12 +72,12 @@ def solid_blocks(bulk: BulkData, index: dict[int, int]
             from_meshio(meshio.Mesh(xyz, [(kind, local)]))
         basis = Basis(mesh, ElementVector(_ELEMENT[kind]()), intorder=2) if kind != "wedge" \
             else Basis(mesh, ElementVector(ElementWedge1()), quadrature=wedge_quadrature())
-        nu = mat.E / (2 * mat.G) - 1
+        nu = mat.nu
         lam = mat.E * nu / ((1 + nu) * (1 - 2 * nu))
         if bubble:  # the 8-grid CHEXA with bubble functions, IN blank or BUBBLE
             K = _bubble_stiffness(xyz[local], local, len(used), mat.E, nu)
         else:
-            K = asm(linear_elasticity(lam, mat.G), basis)
+            K = asm(linear_elasticity(lam, mat.E / (2 * (1 + nu))), basis)
         if bulk.coupled:
             M = asm(BilinearForm(lambda u, v, w: mat.rho * dot(u, v)), basis)
         else:
