@@ -18,6 +18,13 @@ working precision.  A first attempt is therefore limited to :data:`FIRST_ATTEMPT
 restarts; one that has not converged by then starts again with a basis
 :data:`BASIS_GROWTH` times larger (up to ``n``), which holds the whole cluster and converges
 in a few restarts.  A problem that converges within the limit is solved exactly as before.
+
+Rigid-body modes (a free model) are deflated (:func:`shift_invert_lanczos_deflated`): about a
+shift just below zero their eigenvalues of the operator, :math:`1/|\sigma|`, exceed the elastic
+ones by the ratio :math:`\omega_1^2 / |\sigma|` (7e8 for a free-free cylinder of 2,000
+coordinates), and the elastic vectors come out with relative residuals of 3e-5 instead of
+round-off; a second pass in the ``M``-orthogonal complement of the rigid-body vectors, with the
+same factorization, gives them to 1e-17.
 """
 
 from __future__ import annotations
@@ -29,7 +36,7 @@ import scipy.sparse.linalg as spla
 
 from substruct.linalg.factorize import Solve
 
-__all__ = ["shift_invert_lanczos", "rayleigh_ritz", "FIRST_ATTEMPT_RESTARTS", "BASIS_GROWTH"]
+__all__ = ["shift_invert_lanczos", "shift_invert_lanczos_deflated", "rayleigh_ritz", "FIRST_ATTEMPT_RESTARTS", "BASIS_GROWTH"]
 
 #: ARPACK restarts (``maxiter``) of an attempt before the basis is enlarged; the last attempt
 #: (a basis of ``n``) has ARPACK's own limit.  Measured: 10 coupled superelements with a cluster
@@ -76,6 +83,45 @@ def shift_invert_lanczos(K: sp.sparray, M: sp.sparray, k: int, sigma: float, sol
                 raise
         first = False
         size = min(n, BASIS_GROWTH * size)
+
+
+def shift_invert_lanczos_deflated(K: sp.sparray, M: sp.sparray, k: int, sigma: float,
+                                  solve: Solve, rigid_below: float,
+                                  v0: np.ndarray | None = None, ncv: int | None = None
+                                  ) -> tuple[np.ndarray, np.ndarray]:
+    r""":func:`shift_invert_lanczos`, with the rigid-body modes deflated (module docstring).
+
+    A first pass gives ``k`` pairs; those with :math:`|\lambda| \le` ``rigid_below`` are the
+    rigid-body modes :math:`R` (``r`` of them).  When :math:`0 < r < k` the other ``k - r`` are
+    computed again by Lanczos on the ``M``-orthogonal complement of :math:`R`,
+
+    .. math::  \operatorname{OP} = (I - R R^T M)\,(K - \sigma M)^{-1} M , \qquad R^T M R = I,
+
+    (self-adjoint in the ``M`` inner product: :math:`R` spans eigenvectors, so the projector
+    commutes with :math:`(K - \sigma M)^{-1} M`), where the rigid-body modes have the operator's
+    eigenvalue 0 instead of its largest, :math:`1/|\sigma|`.
+
+    Returns:
+        ``(lam, V)``: ``k`` eigenvalues (unordered) and their vectors, the rigid-body ones first
+        when the second pass ran.
+    """
+    lam, V = shift_invert_lanczos(K, M, k, sigma, solve, v0, ncv)
+    rigid = np.abs(lam) <= rigid_below
+    r = int(rigid.sum())
+    if r == 0 or r == k:
+        return lam, V
+    R = V[:, rigid]
+    R = R @ np.linalg.inv(np.linalg.cholesky(R.T @ (M @ R))).T  # M-orthonormal
+
+    def deflated(b: np.ndarray) -> np.ndarray:
+        y = np.asarray(solve(b))
+        return y - R @ (R.T @ (M @ y))
+
+    start = np.random.default_rng(0).standard_normal(K.shape[0]) if v0 is None else v0
+    start = start - R @ (R.T @ (M @ start))
+    size = None if ncv is None else max(ncv - r, min(K.shape[0] - r, 2 * (k - r) + 1))
+    lam2, V2 = shift_invert_lanczos(K, M, k - r, sigma, deflated, start, size)
+    return np.concatenate([lam[rigid], lam2]), np.hstack([R, V2])
 
 
 def rayleigh_ritz(K: sp.sparray, M: sp.sparray, V: np.ndarray

@@ -35,6 +35,7 @@ __all__ = [
     "eliminate",
     "free_coordinates",
     "krylov_size",
+    "rigid_eigenvalue",
     "stiffness_over_mass",
 ]
 
@@ -73,6 +74,14 @@ def check_inputs(M: sp.sparray | np.ndarray, K: sp.sparray | np.ndarray,
 def stiffness_over_mass(K: sp.sparray, M: sp.sparray) -> float:
     r""":math:`\operatorname{tr} K / \operatorname{tr} M`, the scale of the eigenvalues."""
     return max(abs(K.diagonal()).sum() / max(abs(M.diagonal()).sum(), 1e-300), 1e-300)
+
+
+def rigid_eigenvalue(K: sp.sparray, M: sp.sparray) -> float:
+    r"""The largest :math:`|\omega^2|` read as a rigid-body mode,
+    :math:`10^{-12} \operatorname{tr} K / \operatorname{tr} M`: round-off of the size
+    :math:`\epsilon |K| / |M|` (a free-free rod of 600 coordinates gave :math:`\omega` =
+    1e-5 rad/s)."""
+    return 1e-12 * stiffness_over_mass(K, M)
 
 
 def default_shift(K: sp.sparray, M: sp.sparray) -> float:

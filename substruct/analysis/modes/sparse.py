@@ -58,12 +58,12 @@ from substruct.analysis.modes.krylov import (
     eliminate,
     free_coordinates,
     krylov_size,
-    stiffness_over_mass,
+    rigid_eigenvalue,
 )
 from substruct.analysis.results import Modes
 from substruct.analysis.modes.damped import damped_sparse_modes
 from substruct.linalg.factorize import Factorize, Solve, factorizer
-from substruct.linalg.lanczos import shift_invert_lanczos
+from substruct.linalg.lanczos import shift_invert_lanczos_deflated
 from substruct.linalg.nullspace import Elimination
 from substruct.linalg.scaling import massless_coordinates
 from substruct.vocabulary import FORMULATIONS, GENERALIZED_INVERSE, KKT, NULL_SPACE
@@ -90,9 +90,8 @@ def _finish(lam: np.ndarray, U: np.ndarray, K: sp.csr_array, M: sp.csr_array,
     lam, U = lam[order], U[:, order]
     scale = max(abs(lam).max(initial=0.0), 1e-300)
     lam = np.where(lam < 0, np.where(lam > -1e-8 * scale, 0.0, lam), lam)
-    # a rigid-body mode's omega^2 is round-off of the size eps |K| / |M|: zero, as the dense
-    # path reports it (a free-free rod of 600 coordinates gave omega = 1e-5 rad/s otherwise)
-    lam = np.where(lam <= 1e-12 * stiffness_over_mass(K, M), 0.0, lam)
+    # a rigid-body mode's omega^2 is round-off: zero, as the dense path reports it
+    lam = np.where(lam <= rigid_eigenvalue(K, M), 0.0, lam)
     big = np.argmax(np.abs(U), axis=0)
     U = U * np.sign(U[big, np.arange(U.shape[1])])
     U = U / np.sqrt(np.einsum("ij,ij->j", U, M @ U))
@@ -142,7 +141,8 @@ def null_space_modes(M: sp.sparray, K: sp.sparray, A: sp.sparray | None, n_modes
     s = default_shift(Kt, Mt) if sigma is None else float(sigma)
     solve = factorizer(factorization, spd=True)(sp.csc_array(Kt - s * Mt))
     v0 = np.random.default_rng(0).standard_normal(Kt.shape[0])
-    lam, P = shift_invert_lanczos(Kt, Mt, k, s, solve, v0, size)
+    lam, P = shift_invert_lanczos_deflated(Kt, Mt, k, s, solve, rigid_eigenvalue(Kt, Mt), v0,
+                                           size)
     return _finish(lam, T @ P, K, M, A, "null-space/sparse")
 
 
@@ -210,7 +210,7 @@ def generalized_inverse_modes(M: sp.sparray, K: sp.sparray, A: sp.sparray | None
         solve = projected
     rng = np.random.default_rng(0)
     v0 = kkt(M @ rng.standard_normal(n))  # a start in null(A)
-    lam, U = shift_invert_lanczos(K, M, k, s, solve, v0, size)
+    lam, U = shift_invert_lanczos_deflated(K, M, k, s, solve, rigid_eigenvalue(K, M), v0, size)
     return _finish(lam, U, K, M, A, "generalized-inverse/sparse")
 
 
