@@ -15,7 +15,13 @@ def testlab_lines(result: Any) -> list[str]:
     (none for what it does not hold)."""
     out = []
     tpa = getattr(result, "tpa", None)
-    if tpa is not None:
+    if tpa is not None and getattr(tpa, "transmissibility", None) is not None:
+        out.append(f"  transfer paths (operational): transmissibility from "
+                   f"{len(tpa.indicators)} indicator(s) to {len(tpa.targets)} target(s); "
+                   f"operating condition {tpa.validation_condition} predicted, validation "
+                   f"error median {float(np.median(tpa.error)):.3g}, "
+                   f"max {float(np.max(tpa.error)):.3g}")
+    elif tpa is not None:
         out.append(f"  transfer paths ({tpa.method}): blocked forces at {len(tpa.interface)} "
                    f"interface coordinate(s) from {len(tpa.indicators)} response(s); "
                    f"validation error at {len(tpa.targets)} target(s): median "

@@ -11,6 +11,10 @@ r"""The ``/tpa`` and ``/semm`` groups of a results file, on the frequencies of `
 ``predicted``          ``n_omega x n_t`` complex, :math:`Y_{tc} f^{bl}`
 ``measured``           ``n_omega x n_t`` complex, the operating responses at the targets
 ``error``              ``n_omega``, relative validation error
+``transmissibility``   operational TPA only: ``n_omega x n_t x n_i`` complex, :math:`T`
+                       (attribute ``validation_condition``: the condition it predicts;
+                       ``interface`` are then the indicators, ``blocked_forces`` their
+                       responses under that condition)
 =====================  =================================================================
 
 ``/semm`` (:class:`~substruct.run.testlab_results.SemmOutcome`): ``outputs``, ``inputs``, ``Y``
@@ -45,6 +49,9 @@ def write_tpa(g: h5py.Group, r: TpaResult) -> None:
     for key, name in (("forces", "blocked_forces"), ("contributions", "contributions"),
                       ("predicted", "predicted"), ("measured", "measured"), ("error", "error")):
         g.create_dataset(name, data=getattr(r, key))
+    if r.transmissibility is not None:
+        g.create_dataset("transmissibility", data=r.transmissibility)
+        g.attrs["validation_condition"] = int(r.validation_condition or 0)
 
 
 def _finite(g: h5py.Group, name: str, a: np.ndarray) -> np.ndarray:
@@ -68,8 +75,16 @@ def read_tpa(rd: ArrayReader, g: h5py.Group, k: int) -> TpaResult:
     def arr(name: str, kinds: str, shape: tuple[int, ...]) -> np.ndarray:
         return _finite(g, name, rd.array(g, name, kinds, len(shape), shape))
 
+    T, held = None, None
+    if "transmissibility" in g:
+        T = arr("transmissibility", "fc", (k, len(t), len(b)))
+        held_attr = g.attrs.get("validation_condition")
+        if not isinstance(held_attr, (int, np.integer)) or int(held_attr) < 0:
+            raise ValueError(f"{g.name} has a transmissibility but no validation_condition")
+        held = int(held_attr)
     return TpaResult(
         method.decode() if isinstance(method, bytes) else method, c, b, t,
+        transmissibility=T, validation_condition=held,
         forces=arr("blocked_forces", "fc", (k, len(c))),
         contributions=arr("contributions", "fc", (k, len(t), len(c))),
         predicted=arr("predicted", "fc", (k, len(t))),

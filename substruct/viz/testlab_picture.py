@@ -167,8 +167,12 @@ def draw_validation(result: Result) -> Figure:
                 ls="--", label=f"{name} predicted")
     ax.set_yscale("log")
     ax.set_ylabel("|response|")
-    ax.set_title(f"on-board validation: blocked forces ({tpa.method}) at "
-                 f"{len(tpa.interface)} interface coordinate(s)")
+    if tpa.transmissibility is not None:
+        ax.set_title(f"operational TPA: condition {tpa.validation_condition} predicted by "
+                     f"the transmissibility from {len(tpa.indicators)} indicator(s)")
+    else:
+        ax.set_title(f"on-board validation: blocked forces ({tpa.method}) at "
+                     f"{len(tpa.interface)} interface coordinate(s)")
     ax.grid(True, alpha=0.3, which="both")
     ax.legend(fontsize="small", ncol=2)
     ax_err.plot(w, _positive(tpa.error), color="k", lw=1.2, label="relative error")
