@@ -21,6 +21,7 @@ and a measurement file on the same frequency grid.
       semm:
         measured: measured.npz     # omega or freq_hz, outputs, inputs, H (freq x out x in)
         boundary: {outputs: [...], inputs: [...]}   # optional: default every measured one
+        form: extended             # optional: standard (default) or extended
 
 The responses of ``tpa`` are operating responses of the assembly in the quantity of
 ``analysis.frf`` (a receptance's displacements by default); in situ,
@@ -261,6 +262,9 @@ class SemmAnalysis(StrictModel):
 
     measured: str
     boundary: SemmBoundary | None = None
+    #: ``extended``: the removed model is the whole numerical model (every measured channel
+    #: may be on the boundary), with the channel coherence criterion
+    form: Literal["standard", "extended"] = "standard"
     _omega: np.ndarray | None = PrivateAttr(default=None)
     _H: np.ndarray | None = PrivateAttr(default=None)
     _outputs: list[str] = PrivateAttr(default_factory=list)

@@ -21,7 +21,8 @@ r"""The ``/tpa`` and ``/semm`` groups of a results file, on the frequencies of `
 (``n_omega x n_o x n_i`` complex, the mixed receptance), ``measured_outputs``,
 ``measured_inputs``, ``boundary_outputs``, ``boundary_inputs``, ``coherence``
 (``n_omega x m_o x m_i``), ``validation`` (``m_o x m_i``, 0/1), ``indicator`` (``n_omega``,
-NaN where nothing validates).
+NaN where nothing validates); attribute ``form`` (``standard`` or ``extended``) and, with the
+extended form and two or more measured outputs, ``channel_coherence`` (``n_omega x m_o``).
 """
 
 from __future__ import annotations
@@ -101,6 +102,9 @@ def write_semm(g: h5py.Group, r: SemmOutcome) -> None:
     g.create_dataset("coherence", data=r.coherence)
     g.create_dataset("validation", data=r.validation.astype(np.uint8))
     g.create_dataset("indicator", data=r.indicator)
+    g.attrs["form"] = r.form
+    if r.channel_coherence is not None:
+        g.create_dataset("channel_coherence", data=r.channel_coherence)
 
 
 def read_semm(rd: ArrayReader, g: h5py.Group, k: int) -> SemmOutcome:
@@ -128,4 +132,12 @@ def read_semm(rd: ArrayReader, g: h5py.Group, k: int) -> SemmOutcome:
     ind = rd.array(g, "indicator", "f", 1, (k,))
     if np.any(np.isinf(ind)) or (valid.any() and np.any(np.isnan(ind))):
         raise ValueError(f"{g.name}/indicator holds values that are not finite")
-    return SemmOutcome(o, i, Y, mo, mi, bo, bi, coh, valid.astype(bool), ind)
+    form = g.attrs.get("form", "standard")
+    form = form.decode() if isinstance(form, bytes) else form
+    if form not in ("standard", "extended"):
+        raise ValueError(f"{g.name}: form is standard or extended, got {form!r}")
+    chan = None
+    if "channel_coherence" in g:
+        chan = _finite(g, "channel_coherence",
+                       rd.array(g, "channel_coherence", "f", 2, (k, len(mo))))
+    return SemmOutcome(o, i, Y, mo, mi, bo, bi, coh, valid.astype(bool), ind, str(form), chan)

@@ -69,3 +69,9 @@ class SemmOutcome:
     coherence: np.ndarray
     validation: np.ndarray
     indicator: np.ndarray
+    #: ``standard`` or ``extended`` (:func:`~substruct.analysis.frf.semm.semm`)
+    form: str = "standard"
+    #: extended form with two or more measured outputs: ``n_omega x m_o``, each measured
+    #: output's coherence left out of the boundary
+    #: (:func:`~substruct.analysis.frf.semm.channel_coherence`)
+    channel_coherence: np.ndarray | None = None

@@ -13,14 +13,15 @@ outputs ``x`` inputs ``H``; :mod:`substruct.case.testlab_analysis`):
   ``validation_condition``, its prediction :math:`\hat u_t = T u_i` of that condition and the
   contributions :math:`T_{:,k} u_{i,k}` of the indicator paths;
 * ``analysis.semm``: ``H`` mixed with the measured receptance at the boundary
-  (:mod:`substruct.analysis.frf.semm`).
+  (:mod:`substruct.analysis.frf.semm`), standard or extended form; with the extended form and
+  two or more measured outputs, the channel coherence criterion too.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from substruct.analysis.frf.semm import semm
+from substruct.analysis.frf.semm import channel_coherence, semm
 from substruct.analysis.frf.tpa import (blocked_forces_in_situ, blocked_forces_matrix_inverse,
                                         on_board_validation, path_contributions)
 from substruct.analysis.frf.tpa_operational import (operational_contributions, pseudo_forces,
@@ -110,8 +111,11 @@ def semm_result(case: Case, H: Receptance) -> SemmOutcome:
     bo = outs if spec.boundary is None else list(spec.boundary.outputs)
     bi = ins if spec.boundary is None else list(spec.boundary.inputs)
     try:
-        res = semm(H.H, H.outputs, H.inputs, E, outs, ins, bo, bi)
+        res = semm(H.H, H.outputs, H.inputs, E, outs, ins, bo, bi, form=spec.form)
+        chan = channel_coherence(H.H, H.outputs, H.inputs, E, outs, ins) \
+            if spec.form == "extended" and len(outs) > 1 else None
     except ValueError as err:
         raise case.error(("analysis", "semm"), str(err), spec.measured) from None
     return SemmOutcome(list(H.outputs), list(H.inputs), res.Y, list(outs), list(ins),
-                       list(bo), list(bi), res.coherence, res.validation, res.indicator)
+                       list(bo), list(bi), res.coherence, res.validation, res.indicator,
+                       spec.form, chan)
