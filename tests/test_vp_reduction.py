@@ -160,3 +160,25 @@ def test_bad_settings_are_refused(frames):
     with pytest.raises(ValueError, match="keeps 7 singular vectors of an interface of 6"):
         couple_virtual_points([pa, pb], [(f"A@{c}", f"B@{c}") for c in VP],
                               reduction=InterfaceReduction(keep=7))
+
+
+def test_the_monte_carlo_study_couples_with_the_reduction(frames):
+    """A noise study with the reduction: its nominal is the reduced coupling bit for bit, and
+    at 0.1% its median spread is below that of the plain study on the redundant channels
+    (measured 0.045 vs 0.16, 20 samples)."""
+    from substruct.analysis.frf.vp_noise import MeasuredPart, NoiseStudy, monte_carlo_coupling
+
+    pa, pb = frames["ch"]
+    parts = tuple(MeasuredPart(p.name, OMEGA, p.Y, None, tuple(p.out_labels),
+                               tuple(p.in_labels)) for p in (pa, pb))
+    keep = InterfaceReduction(keep=6)
+    picked = ((OUTS[-1],), (INS[-2],))      # A4x per A3z: on A, changed by the coupling
+    reduced = NoiseStudy(parts, tuple(PAIRS), picked[0], picked[1], 1e-3, length=0.025,
+                         reduction=keep)
+    plain = NoiseStudy(parts, tuple(PAIRS), picked[0], picked[1], 1e-3)
+    mc_r = monte_carlo_coupling(reduced, 20, 0)
+    mc_p = monte_carlo_coupling(plain, 20, 0)
+    ref = couple_virtual_points([pa, pb], PAIRS, check=False, length=0.025,
+                                reduction=keep).part.block(list(picked[0]), list(picked[1]))
+    assert np.array_equal(mc_r.nominal, ref)
+    assert np.median(mc_r.relative_spread()) < np.median(mc_p.relative_spread())
