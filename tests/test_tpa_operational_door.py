@@ -3,8 +3,8 @@ line against the library functions (bit for bit) and against the known answer
 ``T = H_ts H_is^-1`` of the generating receptances; the result read back, summarised and drawn;
 the refusals.
 
-The structure is eight masses joined by springs (a dense stiffness); operating forces act at three masses
-(``s``), the indicators are three others and the targets the last two.  Five operating
+The structure is eight masses joined by springs (a dense stiffness); operating forces act at
+three masses (``s``), the indicators are three others and the targets the last two.  Five operating
 conditions (random complex forces, seeded); condition 4 is left out of the transmissibility
 and predicted by it.  Tolerance of the known answer: the pseudo-inverse of ``U_i`` over the
 four training conditions loses ``eps cond(U_i)`` (measured cond up to ~1e3 here), so

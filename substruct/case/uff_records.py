@@ -18,14 +18,14 @@ skipped.
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import BinaryIO, Iterator
 
 import numpy as np
 
 from substruct.case.fields import MEMORY_LIMIT
-from substruct.case.uff_units import UffHeader, UffUnits, ordinate_factor, parse_151, parse_164
+from substruct.case.uff_units import UffHeader, UffUnits, parse_151, parse_164, to_si
 
 __all__ = ["Uff58", "UffNode", "UffSystem", "UffFile", "read_uff_records", "MAX_UFF_LINE", "MAX_POINTS"]
 
@@ -414,13 +414,6 @@ def read_uff_records(path: str | os.PathLike) -> UffFile:
                 units = u
             else:
                 _skip(lines, where)
-    if units is not None and not units.is_si:  # to SI (uff_units): lengths / L, y * F / L
-        L = units.length
-        functions = [replace(f, y=f.y * ordinate_factor(units, f.numerator, f.denominator,
-                                                          f.where)) for f in functions]
-        table = {k: replace(n, xyz=(n.xyz[0] / L, n.xyz[1] / L, n.xyz[2] / L))
-                 for k, n in table.items()}
-        systems = [replace(s, matrix=tuple(tuple(v / L for v in row) if s.dataset == 18 or r == 3
-                                           else row for r, row in enumerate(s.matrix)))
-                   for s in systems]
+    if units is not None:
+        functions, table, systems = to_si(units, functions, table, systems)
     return UffFile(functions, nodes, table, systems, header, units)

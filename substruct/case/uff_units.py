@@ -26,12 +26,16 @@ units are not known.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
+if TYPE_CHECKING:  # the records import this module: their types for the checker only
+    from substruct.case.uff_records import Uff58, UffNode, UffSystem
+
 __all__ = ["UffHeader", "UffUnits", "UNIT_SYSTEMS", "parse_151", "parse_164",
-           "ordinate_factor"]
+           "ordinate_factor", "to_si"]
 
 #: code -> (name, length factor, force factor) of the specification's unit systems.
 UNIT_SYSTEMS: dict[int, tuple[str, float, float]] = {
@@ -148,3 +152,25 @@ def ordinate_factor(units: UffUnits, numerator: int, denominator: int, where: st
                          f"{denominator} cannot be converted from units code {units.code} "
                          f"({units.where.split(': ', 1)[-1]}) to SI")
     return units.force / units.length
+
+
+def to_si(units: UffUnits, functions: list[Uff58], nodes: dict[int, UffNode],
+          systems: list[UffSystem]) -> tuple[list[Uff58], dict[int, UffNode], list[UffSystem]]:
+    """The records in SI (module docstring): ordinates times :func:`ordinate_factor`, node
+    coordinates, 2420 origins (record 8) and the three defining points of 18 divided by the
+    length factor; unchanged when the file is SI.
+
+    Raises:
+        ValueError: as :func:`ordinate_factor`.
+    """
+    if units.is_si:
+        return functions, nodes, systems
+    L = units.length
+    funcs = [replace(f, y=f.y * ordinate_factor(units, f.numerator, f.denominator, f.where))
+             for f in functions]
+    table = {k: replace(n, xyz=(n.xyz[0] / L, n.xyz[1] / L, n.xyz[2] / L))
+             for k, n in nodes.items()}
+    scaled = [replace(s, matrix=tuple(tuple(v / L for v in row) if s.dataset == 18 or r == 3
+                                      else row for r, row in enumerate(s.matrix)))
+              for s in systems]
+    return funcs, table, scaled
