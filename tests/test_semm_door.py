@@ -135,3 +135,57 @@ def test_refused_in_one_line(tmp_path, capsys, what, field, words):
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and f": {field}: " in err and words in err, err
     assert not (tmp_path / "out").exists() or not any((tmp_path / "out").iterdir())
+
+
+def test_the_extended_form_from_the_case(tmp_path, capsys):
+    """``form: extended`` with every measured channel on the boundary (3 sensors x 2 impacts,
+    no square block): the run's mix is the library's extended mix, holds the measurement at
+    every measured entry, and carries the channel coherence criterion (written, read back,
+    printed) equal to the library's."""
+    from substruct.analysis.frf.semm import channel_coherence
+    E = _sub(_Y(K1, M1, C1), OUTS, INS)
+    path = _write(tmp_path, E, boundary=False)
+    path.write_text(path.read_text().replace("measured: measured.npz",
+                                             "measured: measured.npz\n    form: extended"))
+    assert _run(path, tmp_path / "out") == 0
+    s = load(tmp_path / "out" / "chain_semm.h5").semm
+    Yn = _Y(K0, M0, C0)
+    lib = semm(Yn, LABELS, LABELS, E, OUTS, INS, form="extended")
+    assert s.form == "extended"
+    assert np.abs(s.Y - lib.Y).max() < 1e-8 * np.abs(lib.Y).max()
+    assert np.abs(_sub(s.Y, OUTS, INS) - E).max() < 1e-8 * np.abs(E).max()
+    assert s.channel_coherence is not None and s.channel_coherence.shape == (len(W), 3)
+    ref = channel_coherence(Yn, LABELS, LABELS, E, OUTS, INS)
+    np.testing.assert_allclose(s.channel_coherence, ref, atol=1e-8)
+    capsys.readouterr()
+    assert cli.main(["info", str(tmp_path / "out" / "chain_semm.h5")]) == 0
+    assert "model mixing (extended): 6 x 6 model, boundary 3 x 2 of 3 x 2 measured" \
+        in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("form", ["standard", "extended"])
+def test_the_coherence_picture(tmp_path, form):
+    """``substruct run`` draws ``<case>_semm.png``; the curves drawn are the stored
+    coherences: the validation entry P@q4 / each input and the indicator, and with the
+    extended form each measured output's channel coherence."""
+    from substruct.viz.testlab_picture import draw_semm
+    E = _sub(_Y(K1, M1, C1), OUTS, INS)
+    path = _write(tmp_path, E)
+    if form == "extended":
+        path.write_text(path.read_text().replace("measured: measured.npz",
+                                                 "measured: measured.npz\n    form: extended"))
+    out = tmp_path / "out"
+    assert cli.main(["run", str(path), "--out", str(out), "--quiet"]) == 0
+    assert (out / "chain_semm_semm.png").stat().st_size > 10_000
+    res = load(out / "chain_semm.h5")
+    fig = draw_semm(res)
+    lines = {ln.get_label(): ln.get_ydata() for ax in fig.axes for ln in ax.get_lines()}
+    s = res.semm
+    for i, name in enumerate(INS):
+        assert np.array_equal(lines[f"P@q4 / {name}"], s.coherence[:, 1, i])
+    assert np.array_equal(lines["validation indicator"], s.indicator)
+    if form == "extended":
+        for j, name in enumerate(OUTS):
+            assert np.array_equal(lines[name], s.channel_coherence[:, j])
+    else:
+        assert len(fig.axes) == 1

@@ -15,6 +15,7 @@ import scipy.sparse as sp
 from substruct import cli
 from substruct.analysis.frf.virtual_point import VirtualPoint, virtual_point_transform
 from substruct.analysis.frf.vp_coupling import Regularisation, couple_virtual_points, vp_part
+from substruct.analysis.frf.vp_reduction import InterfaceReduction
 from substruct.case.channel_files import read_channels
 from substruct.case.channels import parse_channels
 from substruct.io.result_reader import load
@@ -109,6 +110,29 @@ def test_weakening_and_regularization_reach_the_coupling(tmp_path, block, reg, w
     assert _rel(plain, ref) > 1e-6
 
 
+@pytest.mark.parametrize("setting, reduction", [
+    ("keep: 6", InterfaceReduction(keep=6)), ("keep: 4", InterfaceReduction(keep=4)),
+    ("tolerance: 0.2", InterfaceReduction(tolerance=0.2))])
+def test_interface_reduction_reaches_the_coupling(tmp_path, setting, reduction):
+    """``interface: {reduction: svd, ...}`` on both parts: the library's coupling with the
+    same reduction; six of six kept is the plain coupling to round-off (the interface
+    receptance's condition number is below 1e4 here), fewer differ from it."""
+    block = f"    virtual_points:\n      interface: {{reduction: svd, {setting}, length: 0.025}}\n"
+    path = _case(tmp_path, "    virtual_points:\n", block)
+    assert _run(path, tmp_path / "out") == 0
+    res = load(tmp_path / "out" / "vpt_coupling.h5")
+    assert "svd-reduced" in res.frf.method
+    H = res.frf.H[:, :6, :6]
+    parts = _library_parts()
+    lib = couple_virtual_points(parts, LIB_PAIRS, length=0.025, reduction=reduction)
+    assert np.array_equal(H, lib.part.block(LIB_J, LIB_J))
+    plain = couple_virtual_points(parts, LIB_PAIRS).part.block(LIB_J, LIB_J)
+    if reduction.keep == 6:
+        assert _rel(H, plain) < 1e-11
+    else:
+        assert _rel(H, plain) > 1e-3
+
+
 @pytest.mark.parametrize("old, new, field", [
     ("[A@vp:J:rz, B@vp:J:rz]", "[A@ch:A4x, B@vp:J:rz]", "connections[5][0]"),
     ("B@ch:B14x]", "A@ch:A4x]", "analysis.frf.inputs[6]"),     # a sensor as an input
@@ -116,7 +140,20 @@ def test_weakening_and_regularization_reach_the_coupling(tmp_path, block, reg, w
     ("          impacts: [H1, H2, H3, H4, H5, H6, H7, H8, H9]\n  - name: B",
      "          impacts: [H1, H2, H3, H4, H5, H6, H7, H8, H9]\n"
      "      regularization: {method: tsvd, alpha: 0.1, length: 0.025}\n  - name: B",
-     "substructures.A.virtual_points.regularization.alpha")])
+     "substructures.A.virtual_points.regularization.alpha"),
+    ("          impacts: [H1, H2, H3, H4, H5, H6, H7, H8, H9]\n  - name: B",
+     "          impacts: [H1, H2, H3, H4, H5, H6, H7, H8, H9]\n"
+     "      interface: {reduction: svd, keep: 7, length: 0.025}\n  - name: B",
+     "substructures.A.virtual_points.interface.keep"),
+    ("          impacts: [H1, H2, H3, H4, H5, H6, H7, H8, H9]\n  - name: B",
+     "          impacts: [H1, H2, H3, H4, H5, H6, H7, H8, H9]\n"
+     "      interface: {reduction: svd, keep: 4, tolerance: 0.1, length: 0.025}\n  - name: B",
+     "substructures.A.virtual_points.interface.reduction"),
+    ("          impacts: [H1, H2, H3, H4, H5, H6, H7, H8, H9]\n  - name: B",
+     "          impacts: [H1, H2, H3, H4, H5, H6, H7, H8, H9]\n"
+     "      interface: {reduction: svd, keep: 4, length: 0.05}\n"
+     "      regularization: {method: tsvd, rtol: 0.001, length: 0.025}\n  - name: B",
+     "substructures.A.virtual_points.interface.length")])
 def test_refused_in_one_line(tmp_path, capsys, old, new, field):
     path = _case(tmp_path, old, new)
     assert _run(path, tmp_path / "out") == 2

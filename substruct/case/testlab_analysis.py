@@ -15,16 +15,23 @@ and a measurement file on the same frequency grid.
         indicators: [B@ch:I1, ...] # in_situ: at least as many as interface coordinates
         targets: [B@ch:T1, ...]    # on-board validation and path contributions
         regularization: {method: tsvd, rtol: 1.0e-2, length: 0.3}   # not matrix_inverse
+      # or operational TPA, from responses under several operating conditions:
+      # tpa: {method: operational, responses: operating.npz (u: freq x labels x conditions),
+      #       indicators: [...], targets: [...], validation_condition: 0}
       semm:
         measured: measured.npz     # omega or freq_hz, outputs, inputs, H (freq x out x in)
         boundary: {outputs: [...], inputs: [...]}   # optional: default every measured one
+        form: extended             # optional: standard (default) or extended
 
 The responses of ``tpa`` are operating responses of the assembly in the quantity of
 ``analysis.frf`` (a receptance's displacements by default); in situ,
 :math:`f^{bl} = (Y_{bc})^{+} u_b`; by matrix inverse, :math:`f^{bl} = Y_{cc}^{-1} u_c`
 (:mod:`substruct.analysis.frf.tpa`); with pseudo-forces at points ``p`` of the source
 (given as ``interface``), :math:`F_{ps} = (Y_{bp})^{+} u_b`
-(:mod:`substruct.analysis.frf.tpa_operational`).  SEMM mixes ``analysis.frf``'s receptance
+(:mod:`substruct.analysis.frf.tpa_operational`); operationally, the transmissibility
+:math:`T = U_t U_i^{+}` from the indicators to the targets over every operating condition but
+the ``validation_condition``, which it predicts, :math:`\hat u_t = T u_i` (the receptances are
+not used; ``analysis.frf`` gives the grid).  SEMM mixes ``analysis.frf``'s receptance
 (the numerical model) with the measured one (:mod:`substruct.analysis.frf.semm`).
 """
 
@@ -122,16 +129,19 @@ def _distinct(key: str, names: Sequence[str]) -> None:
 
 
 class TpaAnalysis(StrictModel):
-    """Blocked forces at the interface, their on-board validation and path contributions
-    (module docstring)."""
+    """Blocked forces at the interface, their on-board validation and path contributions, or
+    operational TPA (module docstring)."""
 
     responses: str
-    interface: list[Point] = Field(min_length=1)
-    method: Literal["in_situ", "matrix_inverse", "pseudo_forces"] = "in_situ"
+    interface: list[Point] = Field(default_factory=list)
+    method: Literal["in_situ", "matrix_inverse", "pseudo_forces", "operational"] = "in_situ"
     indicators: list[Point] = Field(default_factory=list)
     targets: list[Point] = Field(min_length=1)
     #: in situ, pseudo-forces: the pseudo-inverse of Y_bc; ``length`` scales the moments
     regularization: VpRegularization | None = None
+    #: operational: the operating condition (index in the file) left out of the
+    #: transmissibility and predicted by it
+    validation_condition: int | None = Field(default=None, ge=0)
     _omega: np.ndarray | None = PrivateAttr(default=None)
     _u: dict[str, np.ndarray] = PrivateAttr(default_factory=dict)
 
@@ -139,6 +149,15 @@ class TpaAnalysis(StrictModel):
     def _load(self, info: ValidationInfo) -> "TpaAnalysis":
         for key in ("interface", "indicators", "targets"):
             _distinct(key, getattr(self, key))
+        operational = self.method == "operational"
+        if operational:
+            self._operational_keys()
+        elif self.validation_condition is not None:
+            raise FieldError("validation_condition", "belongs to method: operational",
+                             self.validation_condition)
+        elif not self.interface:
+            raise FieldError("interface", f"{self.method} needs the interface coordinates "
+                             "(at least one)", [])
         if self.method == "matrix_inverse":
             if self.indicators:
                 raise FieldError("indicators", "matrix_inverse uses the responses at the "
@@ -147,7 +166,7 @@ class TpaAnalysis(StrictModel):
             if self.regularization is not None:
                 raise FieldError("regularization", "matrix_inverse is a solve; "
                                  "regularization belongs to in_situ", self.regularization.method)
-        elif len(self.indicators) < len(self.interface):
+        elif not operational and len(self.indicators) < len(self.interface):
             what = "pseudo-forces need at least as many indicators as pseudo-force points" \
                 if self.method == "pseudo_forces" else \
                 "in situ needs at least as many indicators as interface coordinates"
@@ -162,12 +181,22 @@ class TpaAnalysis(StrictModel):
             w, z = _read(path, {"labels": "U", "u": "c"})
             labels = _labels(path, z, "labels")
             u = z["u"]
-            if u.shape != (len(w), len(labels)):
-                raise ValueError(f"{path.name}: u has shape {list(u.shape)}, expected "
-                                 f"[{len(w)}, {len(labels)}] (frequencies, labels)")
-            _finite(path, "the response", u, [labels])
+            if operational:
+                ok = u.ndim == 3 and u.shape[:2] == (len(w), len(labels)) and u.shape[2] > 0
+                expect = f"[{len(w)}, {len(labels)}, conditions] (frequencies, labels, " \
+                    "operating conditions)"
+            else:
+                ok = u.shape == (len(w), len(labels))
+                expect = f"[{len(w)}, {len(labels)}] (frequencies, labels)"
+            if not ok:
+                raise ValueError(f"{path.name}: u has shape {list(u.shape)}, expected {expect}")
+            axes = [labels] + ([[f"condition {k}" for k in range(u.shape[2])]]
+                               if operational else [])
+            _finite(path, "the response", u, axes)
         except ValueError as err:
             raise FieldError("responses", " ".join(str(err).split()), self.responses) from None
+        if operational:
+            self._conditions(path, u.shape[2])
         for key in ("interface" if self.method == "matrix_inverse" else "indicators",
                     "targets"):
             for i, p in enumerate(getattr(self, key)):
@@ -177,6 +206,33 @@ class TpaAnalysis(StrictModel):
         self._u = {lab: u[:, j] for j, lab in enumerate(labels)}
         return self
 
+    def _operational_keys(self) -> None:
+        """Refuse the keys operational TPA does not use and a missing validation condition."""
+        if self.interface:
+            raise FieldError("interface", "operational TPA has no interface: its paths are the "
+                             "indicators", list(self.interface))
+        if self.regularization is not None:
+            raise FieldError("regularization", "belongs to in_situ and pseudo_forces",
+                             self.regularization.method)
+        if self.validation_condition is None:
+            raise FieldError("validation_condition", "operational TPA predicts one operating "
+                             "condition left out of the transmissibility: give its index")
+        if not self.indicators:
+            raise FieldError("indicators", "operational TPA needs indicators (its paths)", [])
+
+    def _conditions(self, path: Path, n_o: int) -> None:
+        """Refuse a validation condition the file lacks or too few conditions left."""
+        k = self.validation_condition
+        assert k is not None
+        if k >= n_o:
+            raise FieldError("validation_condition", f"{path.name} has {n_o} operating "
+                             f"condition(s), indexed from 0", k)
+        if n_o - 1 < len(self.indicators):
+            raise FieldError("indicators", f"operational TPA needs at least as many operating "
+                             f"conditions (besides the validation condition) as indicators: "
+                             f"{n_o - 1} < {len(self.indicators)} in {path.name}",
+                             list(self.indicators))
+
     def omega(self) -> np.ndarray:
         """The responses' grid (rad/s)."""
         if self._omega is None:
@@ -184,7 +240,8 @@ class TpaAnalysis(StrictModel):
         return self._omega
 
     def responses_at(self, points: Sequence[str]) -> np.ndarray:
-        """``(n_omega, len(points))`` operating responses."""
+        """``(n_omega, len(points))`` operating responses (operational:
+        ``(n_omega, len(points), conditions)``)."""
         return np.stack([self._u[p] for p in points], axis=1)
 
     def measured_points(self) -> list[str]:
@@ -205,6 +262,9 @@ class SemmAnalysis(StrictModel):
 
     measured: str
     boundary: SemmBoundary | None = None
+    #: ``extended``: the removed model is the whole numerical model (every measured channel
+    #: may be on the boundary), with the channel coherence criterion
+    form: Literal["standard", "extended"] = "standard"
     _omega: np.ndarray | None = PrivateAttr(default=None)
     _H: np.ndarray | None = PrivateAttr(default=None)
     _outputs: list[str] = PrivateAttr(default_factory=list)
@@ -263,7 +323,7 @@ def check_against_frf(tpa: TpaAnalysis | None, semm: SemmAnalysis | None,
             if p not in frf.inputs:
                 raise FieldError(("tpa", "interface", i), "not an input of analysis.frf", p)
         for key in ("interface", "indicators", "targets") if tpa.method == "matrix_inverse" \
-                else ("indicators", "targets"):
+                else () if tpa.method == "operational" else ("indicators", "targets"):
             for i, p in enumerate(getattr(tpa, key)):
                 if p not in frf.outputs:
                     raise FieldError(("tpa", key, i), "not an output of analysis.frf", p)

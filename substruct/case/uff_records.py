@@ -10,7 +10,9 @@ before it, to fit in :data:`~substruct.case.fields.MEMORY_LIMIT`.  Record 12 mus
 exactly the values declared (``ASCII``: the columns of the spec's case 1-8 formats; ``58b``:
 the bytes of its values in the declared precision, as many as its id line declares, or the
 count ``pyuff`` writes there, one value a point: ``num_pts * 8`` for doubles).  What the codes mean is checked by the caller
-(:mod:`substruct.case.frf_files`).  Other datasets are skipped.
+(:mod:`substruct.case.frf_files`).  The header datasets 151 and 164 are read and honoured
+(:mod:`substruct.case.uff_units`: the file's numbers are converted to SI).  Other datasets are
+skipped.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ from typing import BinaryIO, Iterator
 import numpy as np
 
 from substruct.case.fields import MEMORY_LIMIT
+from substruct.case.uff_units import UffHeader, UffUnits, parse_151, parse_164, to_si
 
 __all__ = ["Uff58", "UffNode", "UffSystem", "UffFile", "read_uff_records", "MAX_UFF_LINE", "MAX_POINTS"]
 
@@ -102,12 +105,15 @@ class UffSystem:
 @dataclass(frozen=True)
 class UffFile:
     """The functions (58) of a file, the node numbers its datasets 15 and 2411 define
-    (``None`` if it has neither), those nodes and the coordinate systems of 18 and 2420."""
+    (``None`` if it has neither), those nodes and the coordinate systems of 18 and 2420 (in
+    SI), and its model header (151) and units (164) if it has them."""
 
     functions: list[Uff58]
     nodes: set[int] | None
     node_table: dict[int, UffNode] = field(default_factory=dict)
     systems: list[UffSystem] = field(default_factory=list)
+    header: UffHeader | None = None
+    units: UffUnits | None = None
 
 
 class _Lines:
@@ -361,6 +367,8 @@ def read_uff_records(path: str | os.PathLike) -> UffFile:
     nodes: set[int] | None = None
     table: dict[int, UffNode] = {}
     systems: list[UffSystem] = []
+    header: UffHeader | None = None
+    units: UffUnits | None = None
     budget = [0.0]
     with open(p, "rb") as fh:
         lines = _Lines(fh, p.name, size)
@@ -393,6 +401,19 @@ def read_uff_records(path: str | os.PathLike) -> UffFile:
                 _nodes(lines, number, nodes, table, where)
             elif number in (18, 2420):
                 _systems(lines, number, systems, where)
+            elif number in (151, 164):
+                rows = [r.decode("latin-1") for r in lines.until_delimiter(f"{where}:")]
+                if number == 151 and header is not None:
+                    raise ValueError(f"{where}: a second model header (151)")
+                header = parse_151(rows, where) if number == 151 else header
+                u = parse_164(rows, where) if number == 164 else units
+                if units is not None and u is not None and \
+                        (u.length, u.force) != (units.length, units.force):
+                    raise ValueError(f"{where}: units code {u.code} differ from those of "
+                                     f"{units.where.split(': ', 1)[-1]} (code {units.code})")
+                units = u
             else:
                 _skip(lines, where)
-    return UffFile(functions, nodes, table, systems)
+    if units is not None:
+        functions, table, systems = to_si(units, functions, table, systems)
+    return UffFile(functions, nodes, table, systems, header, units)

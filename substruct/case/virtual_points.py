@@ -17,6 +17,7 @@ r"""The ``virtual_points:`` block of a ``type: frf`` substructure: measured chan
             weights: {sensors: [...], impacts: [...]}                     # optional
         weaken: [rx, ry, rz]      # dropped from compatibility and equilibrium at this part's pairs
         regularization: {method: tikhonov, alpha: 1.0e-2, length: 0.025}   # or tsvd, rtol | rank
+        interface: {reduction: svd, keep: 6, length: 0.025}   # or tolerance: instead of keep
         monte_carlo: {level: 1.0e-2, samples: 200, seed: 0}   # optional (one part of the case)
 
 The part's coordinates are then ``vp:<point>:<ux|uy|uz|rx|ry|rz>`` (``vp:<point>:e<k>`` for
@@ -40,7 +41,7 @@ from substruct.case.errors import FieldError
 from substruct.case.fields import Name, StrictModel
 
 __all__ = ["VP_LABEL_COMPONENTS", "ChannelLists", "VirtualPointSpec", "VpRegularization",
-           "VpMonteCarlo", "VirtualPointsSpec", "vp_label"]
+           "VpInterface", "VpMonteCarlo", "VirtualPointsSpec", "vp_label"]
 
 #: The components of a virtual point in case-file labels (library order x, y, z, rx, ry, rz).
 VP_LABEL_COMPONENTS = ("ux", "uy", "uz", "rx", "ry", "rz")
@@ -128,6 +129,26 @@ class VpRegularization(StrictModel):
         return self
 
 
+class VpInterface(StrictModel):
+    """The interface reduced to the dominant singular vectors of its receptance over the band
+    (:mod:`substruct.analysis.frf.vp_reduction`)."""
+
+    reduction: Literal["svd"]
+    #: keep this many singular vectors
+    keep: int | None = Field(default=None, ge=1)
+    #: or those above ``tolerance`` times the largest singular value
+    tolerance: float | None = Field(default=None, ge=0.0, lt=1.0)
+    #: a length of the joint: the rotation rows are scaled by it before the SVD
+    length: float = Field(gt=0.0)
+
+    @model_validator(mode="after")
+    def _one(self) -> "VpInterface":
+        if (self.keep is None) == (self.tolerance is None):
+            raise FieldError(("reduction",), "svd needs exactly one of keep, tolerance",
+                             self.reduction)
+        return self
+
+
 class VpMonteCarlo(StrictModel):
     """The coupled result's sensitivity to noise (:mod:`substruct.analysis.frf.vp_noise`):
     relative complex Gaussian noise of ``level`` on every measured FRF of the case (every
@@ -160,6 +181,7 @@ class VirtualPointsSpec(StrictModel):
     #: connections (``[rx, ry, rz]``: a ball joint)
     weaken: list[Literal["ux", "uy", "uz", "rx", "ry", "rz"]] = Field(default_factory=list)
     regularization: VpRegularization | None = None
+    interface: VpInterface | None = None
     monte_carlo: VpMonteCarlo | None = None
     _table: ChannelTable | None = PrivateAttr(default=None)
 

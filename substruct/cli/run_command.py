@@ -253,7 +253,8 @@ def write_pictures(result: Result, out: Path, name: str) -> list[Path]:
                     result, out / f"{name}_modes_{variant}.png", variant=variant)))
     if result.frf is not None:
         files.append(Path(plotting.plot_frf(result, out / f"{name}_frf.png")))
-    if result.virtual_points or result.tpa is not None or result.monte_carlo is not None:
+    if result.virtual_points or result.tpa is not None or result.monte_carlo is not None \
+            or result.semm is not None:
         lab = optional_module("viz.testlab_picture")
         if result.virtual_points:
             files.append(Path(lab.plot_consistency(result, out / f"{name}_consistency.png")))
@@ -262,6 +263,8 @@ def write_pictures(result: Result, out: Path, name: str) -> list[Path]:
         if result.tpa is not None:
             files.append(Path(lab.plot_paths(result, out / f"{name}_paths.png")))
             files.append(Path(lab.plot_validation(result, out / f"{name}_validation.png")))
+        if result.semm is not None:
+            files.append(Path(lab.plot_semm(result, out / f"{name}_semm.png")))
     tr = result.transient
     if tr is not None and tr.t.size and (tr.outputs or tr.constraint_forces.size):
         picture = optional_module("viz.transient_picture")

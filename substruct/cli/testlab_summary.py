@@ -15,7 +15,13 @@ def testlab_lines(result: Any) -> list[str]:
     (none for what it does not hold)."""
     out = []
     tpa = getattr(result, "tpa", None)
-    if tpa is not None:
+    if tpa is not None and getattr(tpa, "transmissibility", None) is not None:
+        out.append(f"  transfer paths (operational): transmissibility from "
+                   f"{len(tpa.indicators)} indicator(s) to {len(tpa.targets)} target(s); "
+                   f"operating condition {tpa.validation_condition} predicted, validation "
+                   f"error median {float(np.median(tpa.error)):.3g}, "
+                   f"max {float(np.max(tpa.error)):.3g}")
+    elif tpa is not None:
         out.append(f"  transfer paths ({tpa.method}): blocked forces at {len(tpa.interface)} "
                    f"interface coordinate(s) from {len(tpa.indicators)} response(s); "
                    f"validation error at {len(tpa.targets)} target(s): median "
@@ -26,7 +32,13 @@ def testlab_lines(result: Any) -> list[str]:
         quality = (f"validation coherence min {float(ind.min()):.4f}, median "
                    f"{float(np.median(ind)):.4f}") if ind.size else \
             "no measured entry off the boundary to validate with"
-        out.append(f"  model mixing: {len(semm.outputs)} x {len(semm.inputs)} model, "
+        if getattr(semm, "channel_coherence", None) is not None:
+            med = np.median(semm.channel_coherence, axis=0)
+            quality += (f"; channel coherence (median) lowest {float(med.min()):.4f} at "
+                        f"{semm.measured_outputs[int(np.argmin(med))]}")
+        form = getattr(semm, "form", "standard")
+        out.append(f"  model mixing{' (extended)' if form == 'extended' else ''}: "
+                   f"{len(semm.outputs)} x {len(semm.inputs)} model, "
                    f"boundary {len(semm.boundary_outputs)} x {len(semm.boundary_inputs)} of "
                    f"{len(semm.measured_outputs)} x {len(semm.measured_inputs)} measured; "
                    + quality)

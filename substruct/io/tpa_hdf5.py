@@ -11,13 +11,18 @@ r"""The ``/tpa`` and ``/semm`` groups of a results file, on the frequencies of `
 ``predicted``          ``n_omega x n_t`` complex, :math:`Y_{tc} f^{bl}`
 ``measured``           ``n_omega x n_t`` complex, the operating responses at the targets
 ``error``              ``n_omega``, relative validation error
+``transmissibility``   operational TPA only: ``n_omega x n_t x n_i`` complex, :math:`T`
+                       (attribute ``validation_condition``: the condition it predicts;
+                       ``interface`` are then the indicators, ``blocked_forces`` their
+                       responses under that condition)
 =====================  =================================================================
 
 ``/semm`` (:class:`~substruct.run.testlab_results.SemmOutcome`): ``outputs``, ``inputs``, ``Y``
 (``n_omega x n_o x n_i`` complex, the mixed receptance), ``measured_outputs``,
 ``measured_inputs``, ``boundary_outputs``, ``boundary_inputs``, ``coherence``
 (``n_omega x m_o x m_i``), ``validation`` (``m_o x m_i``, 0/1), ``indicator`` (``n_omega``,
-NaN where nothing validates).
+NaN where nothing validates); attribute ``form`` (``standard`` or ``extended``) and, with the
+extended form and two or more measured outputs, ``channel_coherence`` (``n_omega x m_o``).
 """
 
 from __future__ import annotations
@@ -45,6 +50,9 @@ def write_tpa(g: h5py.Group, r: TpaResult) -> None:
     for key, name in (("forces", "blocked_forces"), ("contributions", "contributions"),
                       ("predicted", "predicted"), ("measured", "measured"), ("error", "error")):
         g.create_dataset(name, data=getattr(r, key))
+    if r.transmissibility is not None:
+        g.create_dataset("transmissibility", data=r.transmissibility)
+        g.attrs["validation_condition"] = int(r.validation_condition or 0)
 
 
 def _finite(g: h5py.Group, name: str, a: np.ndarray) -> np.ndarray:
@@ -68,8 +76,16 @@ def read_tpa(rd: ArrayReader, g: h5py.Group, k: int) -> TpaResult:
     def arr(name: str, kinds: str, shape: tuple[int, ...]) -> np.ndarray:
         return _finite(g, name, rd.array(g, name, kinds, len(shape), shape))
 
+    T, held = None, None
+    if "transmissibility" in g:
+        T = arr("transmissibility", "fc", (k, len(t), len(b)))
+        held_attr = g.attrs.get("validation_condition")
+        if not isinstance(held_attr, (int, np.integer)) or int(held_attr) < 0:
+            raise ValueError(f"{g.name} has a transmissibility but no validation_condition")
+        held = int(held_attr)
     return TpaResult(
         method.decode() if isinstance(method, bytes) else method, c, b, t,
+        transmissibility=T, validation_condition=held,
         forces=arr("blocked_forces", "fc", (k, len(c))),
         contributions=arr("contributions", "fc", (k, len(t), len(c))),
         predicted=arr("predicted", "fc", (k, len(t))),
@@ -86,6 +102,9 @@ def write_semm(g: h5py.Group, r: SemmOutcome) -> None:
     g.create_dataset("coherence", data=r.coherence)
     g.create_dataset("validation", data=r.validation.astype(np.uint8))
     g.create_dataset("indicator", data=r.indicator)
+    g.attrs["form"] = r.form
+    if r.channel_coherence is not None:
+        g.create_dataset("channel_coherence", data=r.channel_coherence)
 
 
 def read_semm(rd: ArrayReader, g: h5py.Group, k: int) -> SemmOutcome:
@@ -113,4 +132,12 @@ def read_semm(rd: ArrayReader, g: h5py.Group, k: int) -> SemmOutcome:
     ind = rd.array(g, "indicator", "f", 1, (k,))
     if np.any(np.isinf(ind)) or (valid.any() and np.any(np.isnan(ind))):
         raise ValueError(f"{g.name}/indicator holds values that are not finite")
-    return SemmOutcome(o, i, Y, mo, mi, bo, bi, coh, valid.astype(bool), ind)
+    form = g.attrs.get("form", "standard")
+    form = form.decode() if isinstance(form, bytes) else form
+    if form not in ("standard", "extended"):
+        raise ValueError(f"{g.name}: form is standard or extended, got {form!r}")
+    chan = None
+    if "channel_coherence" in g:
+        chan = _finite(g, "channel_coherence",
+                       rd.array(g, "channel_coherence", "f", 2, (k, len(mo))))
+    return SemmOutcome(o, i, Y, mo, mi, bo, bi, coh, valid.astype(bool), ind, str(form), chan)

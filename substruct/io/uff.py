@@ -310,12 +310,18 @@ def export_uff(result: Result, out: str | os.PathLike, force: bool = False) -> P
     """Write the result's receptances (58), modes (55, and 2414 in double precision) and the
     nodes of both (15, or 2411 above :data:`E13_EXACT_NODES`: the model's coordinates, then
     the other points of the receptances, :func:`frf_nodes`) to one UFF file
-    (:func:`uff_path`), atomically; return its path.
+    (:func:`uff_path`), atomically; return its path.  A result of virtual points whose parts
+    carry their channel geometry, without modes, is written with the test's geometry instead
+    (:func:`substruct.io.uff_channels.export_channels_uff`).
 
     Raises:
         FileExistsError: the file exists and ``force`` is not set.
         ValueError: a result with neither modes nor receptances.
     """
+    from substruct.io.uff_channels import export_channels_uff, has_channel_geometry
+
+    if result.modes is None and has_channel_geometry(result):
+        return export_channels_uff(result, out, force)
     path = uff_path(result, out)
     if path.exists() and not force:
         raise FileExistsError(f"{path} exists; use --force to overwrite it")

@@ -16,7 +16,7 @@ class TpaResult:
     r"""Blocked forces and their validation (:mod:`substruct.analysis.frf.tpa`).
 
     Attributes:
-        method: ``in_situ``, ``matrix_inverse`` or ``pseudo_forces`` (with `` (tsvd)``/`` (tikhonov)`` when
+        method: ``in_situ``, ``matrix_inverse``, ``pseudo_forces`` or ``operational`` (with `` (tsvd)``/`` (tikhonov)`` when
             regularised).
         interface: the paths ``c`` (inputs of the receptance).
         indicators: the points whose operating responses found the forces (the interface
@@ -26,6 +26,10 @@ class TpaResult:
         contributions: ``n_omega x n_t x n_c``, :math:`Y_{tc_j} f^{bl}_j`.
         predicted, measured: ``n_omega x n_t``, :math:`Y_{tc} f^{bl}` and :math:`u_t`.
         error: ``n_omega``, :math:`\lVert \hat u_t - u_t\rVert / \lVert u_t \rVert`.
+        transmissibility: operational TPA only: ``n_omega x n_t x n_i``, :math:`T`; the paths
+            (``interface``) are then the indicators and ``forces`` their responses under the
+            validation condition.
+        validation_condition: operational TPA only: the condition left out of ``T``.
     """
 
     method: str
@@ -37,6 +41,8 @@ class TpaResult:
     predicted: np.ndarray
     measured: np.ndarray
     error: np.ndarray
+    transmissibility: np.ndarray | None = None
+    validation_condition: int | None = None
 
 
 @dataclass
@@ -63,3 +69,9 @@ class SemmOutcome:
     coherence: np.ndarray
     validation: np.ndarray
     indicator: np.ndarray
+    #: ``standard`` or ``extended`` (:func:`~substruct.analysis.frf.semm.semm`)
+    form: str = "standard"
+    #: extended form with two or more measured outputs: ``n_omega x m_o``, each measured
+    #: output's coherence left out of the boundary
+    #: (:func:`~substruct.analysis.frf.semm.channel_coherence`)
+    channel_coherence: np.ndarray | None = None

@@ -8,18 +8,24 @@ outputs ``x`` inputs ``H``; :mod:`substruct.case.testlab_analysis`):
   and the path contributions :math:`H_{tc_j} f^{bl}_j` (:mod:`substruct.analysis.frf.tpa`);
   with ``method: pseudo_forces`` the ``interface`` points are pseudo-force points ``p`` of the
   source, :math:`F_{ps} = (H_{bp})^{+} u_b` (:mod:`substruct.analysis.frf.tpa_operational`);
+  with ``method: operational`` the transmissibility :math:`T = U_t U_i^{+}` from the
+  operating responses at the indicators and the targets under every condition but the
+  ``validation_condition``, its prediction :math:`\hat u_t = T u_i` of that condition and the
+  contributions :math:`T_{:,k} u_{i,k}` of the indicator paths;
 * ``analysis.semm``: ``H`` mixed with the measured receptance at the boundary
-  (:mod:`substruct.analysis.frf.semm`).
+  (:mod:`substruct.analysis.frf.semm`), standard or extended form; with the extended form and
+  two or more measured outputs, the channel coherence criterion too.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from substruct.analysis.frf.semm import semm
+from substruct.analysis.frf.semm import channel_coherence, semm
 from substruct.analysis.frf.tpa import (blocked_forces_in_situ, blocked_forces_matrix_inverse,
                                         on_board_validation, path_contributions)
-from substruct.analysis.frf.tpa_operational import pseudo_forces
+from substruct.analysis.frf.tpa_operational import (operational_contributions, pseudo_forces,
+                                                    transmissibility)
 from substruct.analysis.frf.vp_coupling import Regularisation
 from substruct.analysis.results import Receptance
 from substruct.case.loader import Case
@@ -46,6 +52,8 @@ def tpa_result(case: Case, H: Receptance) -> TpaResult:
     spec = case.analysis.tpa
     if spec is None:
         raise TypeError(f"case {case.name!r} asks for no transfer path analysis")
+    if spec.method == "operational":
+        return _operational(case)
     c, b, t = list(spec.interface), spec.measured_points(), list(spec.targets)
     u_b = spec.responses_at(b)
     how: str = spec.method
@@ -71,6 +79,24 @@ def tpa_result(case: Case, H: Receptance) -> TpaResult:
     return TpaResult(how, c, b, t, f, paths, val.predicted, val.measured, val.error)
 
 
+def _operational(case: Case) -> TpaResult:
+    """``analysis.tpa`` with ``method: operational`` (module docstring)."""
+    spec = case.analysis.tpa
+    assert spec is not None and spec.validation_condition is not None
+    i, t, k = list(spec.indicators), list(spec.targets), spec.validation_condition
+    U_i, U_t = spec.responses_at(i), spec.responses_at(t)
+    train = [j for j in range(U_i.shape[2]) if j != k]
+    try:
+        T = transmissibility(U_i[:, :, train], U_t[:, :, train])
+        u_i = U_i[:, :, k]
+        val = on_board_validation(T, u_i, U_t[:, :, k])
+        paths = operational_contributions(T, u_i)
+    except ValueError as err:
+        raise case.error(("analysis", "tpa"), str(err), spec.method) from None
+    return TpaResult("operational", i, i, t, u_i, paths, val.predicted, val.measured,
+                     val.error, T, k)
+
+
 def semm_result(case: Case, H: Receptance) -> SemmOutcome:
     """``analysis.semm`` on the receptances ``H`` (module docstring).
 
@@ -85,8 +111,11 @@ def semm_result(case: Case, H: Receptance) -> SemmOutcome:
     bo = outs if spec.boundary is None else list(spec.boundary.outputs)
     bi = ins if spec.boundary is None else list(spec.boundary.inputs)
     try:
-        res = semm(H.H, H.outputs, H.inputs, E, outs, ins, bo, bi)
+        res = semm(H.H, H.outputs, H.inputs, E, outs, ins, bo, bi, form=spec.form)
+        chan = channel_coherence(H.H, H.outputs, H.inputs, E, outs, ins) \
+            if spec.form == "extended" and len(outs) > 1 else None
     except ValueError as err:
         raise case.error(("analysis", "semm"), str(err), spec.measured) from None
     return SemmOutcome(list(H.outputs), list(H.inputs), res.Y, list(outs), list(ins),
-                       list(bo), list(bi), res.coherence, res.validation, res.indicator)
+                       list(bo), list(bi), res.coherence, res.validation, res.indicator,
+                       spec.form, chan)

@@ -10,14 +10,16 @@ receptance at its joined points, plain FRF parts, transformed parts) is coupled 
 .. math::  Y_c = Y - Y B_f^T \, (B_u Y B_f^T)^{\dagger} \, B_u Y ,
 
 with the parts' ``weaken`` components dropped from both :math:`B_u` and :math:`B_f` at their
-connections and the ``regularization`` given (the same in every part that gives one).
-Without either the result is checked against the generalized-inverse form.  The consistency
+connections, the ``regularization`` given (the same in every part that gives one) and the
+interface reduced to singular vectors by an ``interface:`` block (likewise one per coupling).
+Without any of them the result is checked against the generalized-inverse form.  The consistency
 indicators of every transformed part are returned with it.
 """
 
 from __future__ import annotations
 
 import re
+from dataclasses import replace
 from typing import Callable
 
 import numpy as np
@@ -31,6 +33,8 @@ from substruct.analysis.frf.virtual_point import (VirtualPoint, VptResult, check
                                                   consistency, virtual_point_transform)
 from substruct.analysis.frf.vp_coupling import (Regularisation, VpPart,
                                                 couple_virtual_points)
+from substruct.analysis.frf.vp_geometry import channel_geometry
+from substruct.analysis.frf.vp_reduction import InterfaceReduction
 from substruct.analysis.frf.vp_noise import (MeasuredPart, MonteCarloResult, NoiseStudy,
                                              TaskMap, monte_carlo_coupling)
 from substruct.analysis.results import Receptance
@@ -140,6 +144,43 @@ def _regularisation(case: Case) -> tuple[Regularisation, float]:
     return chosen if chosen is not None else (Regularisation(), 1.0)
 
 
+def _reduction(case: Case, reg_length: float | None
+               ) -> tuple[InterfaceReduction | None, float | None]:
+    """The one interface reduction the parts ask for and its length (``None`` if none does);
+    refused when parts differ or its length is not that of the regularization."""
+    chosen: tuple[InterfaceReduction, float] | None = None
+    first = ""
+    for k, s in enumerate(case.substructures):
+        if not isinstance(s, FrfSpec) or s.virtual_points is None:
+            continue
+        r = s.virtual_points.interface
+        if r is None:
+            continue
+        loc = ("substructures", k, "virtual_points", "interface")
+        red = InterfaceReduction(keep=r.keep, tolerance=r.tolerance)
+        if chosen is not None and chosen != (red, r.length):
+            raise case.error(loc, f"differs from that of {first}: the coupling has one "
+                             f"interface reduction", r.reduction)
+        if reg_length is not None and r.length != reg_length:
+            raise case.error((*loc, "length"), f"differs from the regularization's length "
+                             f"{reg_length!r}: the coupling scales its rotations once",
+                             r.length)
+        chosen, first = (red, r.length), s.name
+    return (None, None) if chosen is None else chosen
+
+
+def _keep_at_most(case: Case, reduction: InterfaceReduction | None, rows: int) -> None:
+    """Refuse a ``keep`` above the number of interface rows."""
+    if reduction is None or reduction.keep is None or reduction.keep <= rows:
+        return
+    for k, s in enumerate(case.substructures):
+        if isinstance(s, FrfSpec) and s.virtual_points is not None and \
+                s.virtual_points.interface is not None:
+            raise case.error(("substructures", k, "virtual_points", "interface", "keep"),
+                             f"more singular vectors than the {rows} interface rows of the "
+                             f"coupling", reduction.keep)
+
+
 def vp_frf_result(case: Case, model: Model, progress: Progress | None = None,
                   tasks: TaskMap | None = None
                   ) -> tuple[Receptance, dict[str, VptResult], MonteCarloResult | None]:
@@ -190,7 +231,9 @@ def vp_frf_result(case: Case, model: Model, progress: Progress | None = None,
         assert m.vpt is not None
         measured.append(m)
         parts.append(m.part(m.Y))
-        indicators[part.name] = consistency(m.vpt, m.Y)
+        geometry = channel_geometry(s.virtual_points.table(),
+                                    [(p.name, p.position) for p in s.virtual_points.points])
+        indicators[part.name] = replace(consistency(m.vpt, m.Y), geometry=geometry)
         weaken[part.name] = list(s.virtual_points.weaken)
     frf_names = {p.name for p in split.parts}
 
@@ -208,8 +251,14 @@ def vp_frf_result(case: Case, model: Model, progress: Progress | None = None,
     drop = [a for a, b in pairs for side in (a, b)
             if side.rsplit(":", 1)[-1] in weaken.get(parse_point(side)[0], [])]
     reg, length = _regularisation(case)
+    has_reg = any(isinstance(s, FrfSpec) and s.virtual_points is not None
+                  and s.virtual_points.regularization is not None for s in case.substructures)
+    reduction, red_length = _reduction(case, length if has_reg else None)
+    length = red_length if red_length is not None else length
+    _keep_at_most(case, reduction, sum(1 for a, _ in pairs if a not in drop))
     try:
-        res = couple_virtual_points(parts, pairs, reg, drop, drop, "coupled", length)
+        res = couple_virtual_points(parts, pairs, reg, drop, drop, "coupled", length,
+                                    reduction=reduction)
     except AnalysisInputError as err:
         raise case.error(("connections",), f"the interface receptance is singular ({err}): "
                          "connections that repeat each other, or a joint the channels do not "
@@ -240,18 +289,18 @@ def vp_frf_result(case: Case, model: Model, progress: Progress | None = None,
         except CheckError as err:
             raise CheckError(f"{err}; to accept it, raise analysis.frf.tolerance") from None
     how = "lm-fbs at virtual points" + (f" ({reg.kind})" if reg.kind != "none" else "") + \
-        (" (weakened)" if drop else "")
+        (" (weakened)" if drop else "") + (" (svd-reduced interface)" if reduction else "")
     coupled = Receptance(method=how, omega=w, H=H, inputs=list(spec.inputs),
                          outputs=list(spec.outputs), agreement=checks,
                          constraint_residual=residual, tolerance=spec.tolerance)
-    mc = _monte_carlo(case, measured, pairs, drop, reg, length, stacked, tasks)
+    mc = _monte_carlo(case, measured, pairs, drop, reg, length, stacked, tasks, reduction)
     return as_quantity(coupled, spec.quantity), indicators, mc
 
 
 def _monte_carlo(case: Case, measured: list[MeasuredPart], pairs: list[tuple[str, str]],
                  drop: list[str], reg: Regularisation, length: float,
-                 stacked: Callable[[str], str], tasks: TaskMap | None
-                 ) -> MonteCarloResult | None:
+                 stacked: Callable[[str], str], tasks: TaskMap | None,
+                 reduction: InterfaceReduction | None = None) -> MonteCarloResult | None:
     """The study of the one ``monte_carlo:`` block of the case (refused in a second part)."""
     found = [(k, s) for k, s in enumerate(case.substructures) if isinstance(s, FrfSpec)
              and s.virtual_points is not None and s.virtual_points.monte_carlo is not None]
@@ -269,7 +318,8 @@ def _monte_carlo(case: Case, measured: list[MeasuredPart], pairs: list[tuple[str
     assert spec is not None
     loc = ("substructures", k, "virtual_points", "monte_carlo")
     nominal = couple_virtual_points([m.part(m.Y) for m in measured], pairs, reg, drop, drop,
-                                    "coupled", length, check=False).part
+                                    "coupled", length, check=False,
+                                    reduction=reduction).part
     picked = []
     for key, given, labels in (("outputs", mc.outputs or spec.outputs, nominal.out_labels),
                                ("inputs", mc.inputs or spec.inputs, nominal.in_labels)):
@@ -279,7 +329,7 @@ def _monte_carlo(case: Case, measured: list[MeasuredPart], pairs: list[tuple[str
         picked.append(list(given))
     study = NoiseStudy(tuple(measured), tuple(pairs), tuple(stacked(p) for p in picked[0]),
                        tuple(stacked(p) for p in picked[1]), mc.level, reg, tuple(drop),
-                       tuple(drop), length)
+                       tuple(drop), length, reduction)
     res = monte_carlo_coupling(study, mc.samples, mc.seed, mc.percentiles, map=tasks)
     return MonteCarloResult(res.omega, picked[0], picked[1], res.level, res.samples, res.seed,
                             res.nominal, res.mean, res.std, res.percentiles, res.bands)

@@ -13,7 +13,11 @@ r"""The test-lab pictures (matplotlib), drawn from a result's ``virtual_points``
 * :func:`draw_monte_carlo`: per chosen output/input pair of ``virtual_points.monte_carlo``
   (the first :data:`MAX_PAIRS`), the nominal coupled :math:`|H_{oi}(\omega)|` (black) and the
   percentiles of :math:`|H_{oi}|` over the noisy samples (thin lines), the band between the
-  lowest and the highest percentile filled.
+  lowest and the highest percentile filled;
+* :func:`draw_semm`: the model mixing's coherence against :math:`\omega`: each measured
+  entry off the boundary (thin) and their mean, the validation indicator (black); with the
+  extended form, each measured output's channel coherence (left out of the boundary and
+  predicted by the others) on a second axis.
 
 ``plot_*`` write the figure as PNG (atomically) and return the path.
 """
@@ -34,6 +38,7 @@ if TYPE_CHECKING:
 
 __all__ = ["draw_consistency", "draw_paths", "draw_validation", "plot_consistency",
            "plot_paths", "plot_validation", "draw_monte_carlo", "plot_monte_carlo",
+           "draw_semm", "plot_semm",
            "MAX_TARGETS", "MAX_PAIRS"]
 
 #: Targets drawn in the path-contribution picture (the first ones).
@@ -167,8 +172,12 @@ def draw_validation(result: Result) -> Figure:
                 ls="--", label=f"{name} predicted")
     ax.set_yscale("log")
     ax.set_ylabel("|response|")
-    ax.set_title(f"on-board validation: blocked forces ({tpa.method}) at "
-                 f"{len(tpa.interface)} interface coordinate(s)")
+    if tpa.transmissibility is not None:
+        ax.set_title(f"operational TPA: condition {tpa.validation_condition} predicted by "
+                     f"the transmissibility from {len(tpa.indicators)} indicator(s)")
+    else:
+        ax.set_title(f"on-board validation: blocked forces ({tpa.method}) at "
+                     f"{len(tpa.interface)} interface coordinate(s)")
     ax.grid(True, alpha=0.3, which="both")
     ax.legend(fontsize="small", ncol=2)
     ax_err.plot(w, _positive(tpa.error), color="k", lw=1.2, label="relative error")
@@ -230,3 +239,56 @@ def draw_monte_carlo(result: Result, max_pairs: int = MAX_PAIRS) -> Figure:
 def plot_monte_carlo(result: Result, png_path: str | os.PathLike) -> Path:
     """:func:`draw_monte_carlo` written as PNG; return the path."""
     return _save(draw_monte_carlo(result), png_path)
+
+
+def draw_semm(result: Result) -> Figure:
+    """The coherence of the mixed model with the measurement (module docstring): lines
+    labelled ``<output> / <input>`` per validation entry, ``validation indicator``, and, on
+    the second axis of the extended form, one per measured output.
+
+    Raises:
+        ValueError: the result holds no model mixing.
+    """
+    from matplotlib.figure import Figure
+
+    semm = result.semm
+    if semm is None:
+        raise ValueError(f"result {result.case_name!r} holds no model mixing")
+    w = _omega(result)
+    chan = semm.channel_coherence
+    fig = Figure(figsize=(10, 7 if chan is not None else 4.5), dpi=110, layout="constrained")
+    axes = fig.subplots(2 if chan is not None else 1, 1, sharex=True, squeeze=False)[:, 0]
+    ax = axes[0]
+    rows, cols = np.nonzero(semm.validation)
+    for o, i in zip(rows, cols):
+        ax.plot(w, semm.coherence[:, o, i], lw=0.7, alpha=0.7,
+                label=f"{semm.measured_outputs[o]} / {semm.measured_inputs[i]}")
+    if rows.size:
+        ax.plot(w, semm.indicator, color="k", lw=1.6, label="validation indicator")
+    else:
+        ax.text(0.5, 0.5, "every measured entry is on the boundary: nothing validates",
+                transform=ax.transAxes, ha="center")
+    ax.set_ylim(-0.02, 1.05)
+    ax.set_ylabel("coherence")
+    ax.set_title(f"model mixing ({semm.form}): boundary {len(semm.boundary_outputs)} x "
+                 f"{len(semm.boundary_inputs)} of {len(semm.measured_outputs)} x "
+                 f"{len(semm.measured_inputs)} measured")
+    ax.grid(True, alpha=0.3)
+    if rows.size:
+        ax.legend(fontsize="small", ncol=2)
+    if chan is not None:
+        ax2 = axes[1]
+        for j, name in enumerate(semm.measured_outputs):
+            ax2.plot(w, chan[:, j], lw=1.1, label=name)
+        ax2.set_ylim(-0.02, 1.05)
+        ax2.set_ylabel("channel coherence")
+        ax2.set_title("each measured output left out of the boundary and predicted")
+        ax2.grid(True, alpha=0.3)
+        ax2.legend(fontsize="small", ncol=2)
+    axes[-1].set_xlabel("\u03c9 (rad/s)")
+    return fig
+
+
+def plot_semm(result: Result, png_path: str | os.PathLike) -> Path:
+    """:func:`draw_semm` written as PNG; return the path."""
+    return _save(draw_semm(result), png_path)

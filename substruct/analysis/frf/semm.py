@@ -28,6 +28,28 @@ inputs :math:`b_i` (columns, impacts) may differ, :math:`Y^N_{bb} = Y^N_{b_o b_i
   :math:`\lVert \Delta Y^S \rVert_F \le \lVert Y^N_{:b}(Y^N_{bb})^+\rVert_2
   \lVert \Delta E \rVert_F \lVert (Y^N_{bb})^+ Y^N_{b:}\rVert_2` (:func:`noise_gain`).
 
+Extended form (the paper's section 3.3).  The removed model is the numerical model at *all*
+its coordinates, not only its boundary block, so that the numerical dynamics are taken out
+everywhere before the measured ones are put in; the interface is still the boundary.  The
+single-line form becomes
+
+.. math::
+
+    Y^S = Y^N - Y^N\,(Y^N_{b:})^{+}\,\bigl(Y^N_{bb} - Y^E_{bb}\bigr)\,(Y^N_{:b})^{+}\,Y^N ,
+
+with :math:`Y^N_{b:}` the boundary rows (every numerical input) and :math:`Y^N_{:b}` the
+boundary columns (every numerical output).  Again :math:`Y^E_{bb} = Y^N_{bb}` gives
+:math:`Y^N`; and :math:`Y^S_{bb} = Y^N_{b:} (Y^N_{b:})^+ (\dots) (Y^N_{:b})^+ Y^N_{:b}` takes
+the measurement at the boundary whenever :math:`Y^N_{b:}` has full row rank and
+:math:`Y^N_{:b}` full column rank (no square boundary block needed), so the boundary may be
+every measured channel, however many.
+
+Channel coherence (the SEMM coherence criterion).  Each measured output ``j`` in turn is left
+out of the boundary and predicted by the mix of the others; the coherence of its predicted
+row with its measured row, averaged over the measured inputs, says per frequency whether the
+channel agrees with the rest of the measurement and the model (:func:`channel_coherence`; a
+mislabelled or flipped sensor stands out).
+
 Quality indicator.  Measured entries that are not on the boundary (validation entries: a
 sensor row or an impact column left out of ``b``) are predicted by the mix, not imposed; their
 coherence with the measurement, per entry and frequency,
@@ -50,7 +72,7 @@ import numpy as np
 
 from substruct.analysis.frf.vp_coupling import Regularisation, regularised_inverse
 
-__all__ = ["SemmResult", "semm", "coherence", "noise_gain"]
+__all__ = ["SemmResult", "semm", "coherence", "noise_gain", "channel_coherence"]
 
 
 @dataclass(frozen=True)
@@ -103,20 +125,25 @@ def _finite(name: str, Y: np.ndarray) -> None:
 def semm(Y_num: np.ndarray, num_out: Sequence[str], num_in: Sequence[str],
          Y_exp: np.ndarray, exp_out: Sequence[str], exp_in: Sequence[str],
          boundary_out: Sequence[str] | None = None, boundary_in: Sequence[str] | None = None,
-         reg: Regularisation = Regularisation()) -> SemmResult:
+         reg: Regularisation = Regularisation(), form: str = "standard") -> SemmResult:
     r"""Mix the numerical receptance ``Y_num`` (rows ``num_out``, columns ``num_in``) with the
     experimental ``Y_exp`` (rows ``exp_out``, columns ``exp_in``, a subset of the numerical
     coordinates) at the boundary (default: every measured row and column), by the single-line
     form of the module docstring, and the coherence indicator at the validation entries.
 
     ``reg`` chooses the pseudo-inverse of :math:`Y^N_{bb}` (default: singular values below
-    ``1e-12`` of the largest dropped).
+    ``1e-12`` of the largest dropped).  ``form="extended"`` uses the extended single-line
+    form (module docstring): the pseudo-inverses of the boundary rows and columns of the
+    whole numerical model instead of its boundary block.
 
     Raises:
         ValueError: shapes that do not match the labels, a measured or boundary coordinate
             that the numerical model lacks, a boundary coordinate that is not measured, more
-            boundary coordinates than the numerical model has, values that are not finite.
+            boundary coordinates than the numerical model has, values that are not finite, a
+            form that is neither ``standard`` nor ``extended``.
     """
+    if form not in ("standard", "extended"):
+        raise ValueError(f"SEMM: the form is standard or extended, got {form!r}")
     Y_num, Y_exp = np.asarray(Y_num), np.asarray(Y_exp)
     if Y_num.ndim != 3 or Y_num.shape[1:] != (len(num_out), len(num_in)):
         raise ValueError(f"SEMM: the numerical receptance has shape {list(Y_num.shape)}, "
@@ -137,9 +164,13 @@ def semm(Y_num: np.ndarray, num_out: Sequence[str], num_in: Sequence[str],
     mi = _index(num_in, exp_in, "measured input")
     R = Y_num[:, no][:, :, ni]                          # removed model Y^N_bb
     E = Y_exp[:, eo][:, :, ei]
-    P = regularised_inverse(R, reg)                     # (k, |b_i|, |b_o|)
-    left = Y_num[:, :, ni] @ P                          # Y^N_{:b} (Y^N_bb)^+
-    right = P @ Y_num[:, no, :]                         # (Y^N_bb)^+ Y^N_{b:}
+    if form == "extended":
+        left = Y_num @ regularised_inverse(Y_num[:, no, :], reg)     # Y^N (Y^N_{b:})^+
+        right = regularised_inverse(Y_num[:, :, ni], reg) @ Y_num    # (Y^N_{:b})^+ Y^N
+    else:
+        P = regularised_inverse(R, reg)                     # (k, |b_i|, |b_o|)
+        left = Y_num[:, :, ni] @ P                          # Y^N_{:b} (Y^N_bb)^+
+        right = P @ Y_num[:, no, :]                         # (Y^N_bb)^+ Y^N_{b:}
     Y_s = Y_num - left @ ((R - E) @ right)
     gamma = coherence(Y_s[:, mo][:, :, mi], Y_exp)
     valid = ~(np.isin(np.asarray(exp_out), bo)[:, None]
@@ -161,3 +192,28 @@ def noise_gain(Y_num: np.ndarray, num_out: Sequence[str], num_in: Sequence[str],
     left = np.linalg.norm(Y_num[:, :, ni] @ P, ord=2, axis=(1, 2))
     right = np.linalg.norm(P @ Y_num[:, no, :], ord=2, axis=(1, 2))
     return np.asarray(left * right)
+
+
+def channel_coherence(Y_num: np.ndarray, num_out: Sequence[str], num_in: Sequence[str],
+                      Y_exp: np.ndarray, exp_out: Sequence[str], exp_in: Sequence[str],
+                      reg: Regularisation = Regularisation(), form: str = "extended"
+                      ) -> np.ndarray:
+    r"""The SEMM coherence criterion per measured output (module docstring): ``(k, m_o)``,
+    column ``j`` the mean over the measured inputs of :math:`\gamma` between the row of
+    output ``j`` predicted by the mix with ``j`` left out of the boundary (every other
+    measured output and every measured input on it) and the measured row.
+
+    Raises:
+        ValueError: fewer than two measured outputs; as :func:`semm`.
+    """
+    outs = list(exp_out)
+    if len(outs) < 2:
+        raise ValueError("SEMM channel coherence needs at least two measured outputs")
+    Y_exp = np.asarray(Y_exp)
+    out = np.empty((len(Y_exp), len(outs)))
+    for j, name in enumerate(outs):
+        others = outs[:j] + outs[j + 1:]
+        res = semm(Y_num, num_out, num_in, Y_exp, outs, exp_in, others, list(exp_in), reg,
+                   form)
+        out[:, j] = res.coherence[:, j, :].mean(axis=1)
+    return out

@@ -29,6 +29,10 @@ the SVD :math:`Z = B_u Y B_f^T = U \Sigma V^H`:
   noise: choose ``rtol`` about the relative noise level of the data), or the ``rank`` largest;
 * ``tikhonov``: :math:`Z^\dagger = V \,\mathrm{diag}(\sigma_r / (\sigma_r^2 + \lambda^2))\, U^H`,
   :math:`\lambda = \alpha\, \sigma_1` with ``alpha`` given.
+
+**Singular-vector interface reduction** (``reduction``,
+:mod:`substruct.analysis.frf.vp_reduction`) replaces :math:`B_u`, :math:`B_f` by their
+projections on the dominant singular vectors of :math:`Z` over the band before the inversion.
 """
 
 from __future__ import annotations
@@ -40,6 +44,7 @@ import numpy as np
 
 from substruct.analysis.frf.coupling import generalized_inverse_fbs, lm_fbs
 from substruct.analysis.frf.virtual_point import VirtualPointTransform
+from substruct.analysis.frf.vp_reduction import InterfaceReduction, reduce_rows
 
 #: The components of a virtual point that are rotations.
 ROTATIONS = ("rx", "ry", "rz")
@@ -138,7 +143,8 @@ def regularised_inverse(Z: np.ndarray, reg: Regularisation) -> np.ndarray:
 
 def interface_fbs(Y: np.ndarray, Bu: np.ndarray, Bf: np.ndarray,
                   reg: Regularisation = Regularisation(), su: np.ndarray | None = None,
-                  sf: np.ndarray | None = None) -> np.ndarray:
+                  sf: np.ndarray | None = None,
+                  reduction: InterfaceReduction | None = None) -> np.ndarray:
     r""":math:`Y_c = Y - Y B_f^T (B_u Y B_f^T)^{\dagger} B_u Y` at every frequency, ``Y``
     square ``(k, n, n)``.  With ``Bu`` equal to ``Bf`` and ``reg.kind == "none"`` it is
     :func:`~substruct.analysis.frf.coupling.lm_fbs` (a linear solve).
@@ -147,13 +153,19 @@ def interface_fbs(Y: np.ndarray, Bu: np.ndarray, Bf: np.ndarray,
     singular values compare quantities of one unit:
     :math:`Z^\dagger = S_f (S_u Z S_f)^\dagger S_u` (a rotation row scaled by a length
     ``L``: :math:`L\theta` and :math:`m / L` have the units of a displacement and a force).
+    ``reduction`` first projects the scaled rows on the dominant singular vectors of
+    :math:`S_u Z S_f` over the band (:func:`~substruct.analysis.frf.vp_reduction.reduce_rows`;
+    the reduced rows are already scaled).
     """
-    if reg.kind == "none" and Bu.shape == Bf.shape and np.array_equal(Bu, Bf):
+    a = np.ones(len(Bu)) if su is None else np.asarray(su, dtype=float)
+    b = np.ones(len(Bf)) if sf is None else np.asarray(sf, dtype=float)
+    if reduction is not None:
+        Bu, Bf = reduce_rows(Bu, Bf, Bu @ Y @ Bf.T, a, b, reduction)
+        a, b = np.ones(len(Bu)), np.ones(len(Bf))
+    elif reg.kind == "none" and Bu.shape == Bf.shape and np.array_equal(Bu, Bf):
         return lm_fbs(Y, Bu)
     YBt = Y @ Bf.T
     BY = Bu @ Y
-    a = np.ones(len(Bu)) if su is None else np.asarray(su, dtype=float)
-    b = np.ones(len(Bf)) if sf is None else np.asarray(sf, dtype=float)
     Zs = a[None, :, None] * (BY @ Bf.T) * b[None, None, :]
     inv = b[None, :, None] * regularised_inverse(Zs, reg) * a[None, None, :]
     return Y - YBt @ (inv @ BY)
@@ -216,12 +228,14 @@ def couple_virtual_points(parts: Sequence[VpPart], pairs: Sequence[tuple[str, st
                           weaken_compatibility: Sequence[str] = (),
                           weaken_equilibrium: Sequence[str] = (),
                           name: str = "coupled", length: float = 1.0,
-                          check: bool = True) -> CoupledVp:
+                          check: bool = True,
+                          reduction: InterfaceReduction | None = None) -> CoupledVp:
     r"""Couple parts joined at ``pairs`` of ``"<part>@<vp>:<c>"`` coordinates (module
     docstring).  ``weaken_*`` name coordinates (a stacked label, or a component such as
     ``"rx"``, matched against a pair's first label) dropped from compatibility or equilibrium.
     ``length`` scales the rotation rows for the regularised inversion (:func:`interface_fbs`;
-    a length of the joint, such as the distance of its sensors from the virtual point).
+    a length of the joint, such as the distance of its sensors from the virtual point; it
+    scales them for the ``reduction`` to singular vectors too).
 
     Returns:
         The coupled receptances from every stacked input to every stacked output, and, without
@@ -247,9 +261,9 @@ def couple_virtual_points(parts: Sequence[VpPart], pairs: Sequence[tuple[str, st
         raise ValueError("no connection between the virtual points: nothing couples the parts")
     if not len(Bu) or not len(Bf):
         raise ValueError("every interface row is dropped by the weakening")
-    Yc = interface_fbs(Y, Bu, Bf, reg, su, sf)
+    Yc = interface_fbs(Y, Bu, Bf, reg, su, sf, reduction)
     agreement = float("nan")
-    if check and reg.kind == "none" and np.array_equal(Bu, Bf):
+    if check and reg.kind == "none" and reduction is None and np.array_equal(Bu, Bf):
         Yg = generalized_inverse_fbs(Y, Bu)[:, rows][:, :, cols]
         ref = Yc[:, rows][:, :, cols]
         agreement = float(np.abs(Yg - ref).max() / max(float(np.abs(ref).max()), 1e-300))

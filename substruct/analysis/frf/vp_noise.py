@@ -31,6 +31,7 @@ import numpy as np
 
 from substruct.analysis.frf.virtual_point import VirtualPointTransform
 from substruct.analysis.frf.vp_coupling import Regularisation, VpPart, couple_virtual_points
+from substruct.analysis.frf.vp_reduction import InterfaceReduction
 
 __all__ = ["TaskMap", "sample_task", "MeasuredPart", "NoiseStudy", "MonteCarloResult", "add_relative_noise",
            "coupled_sample", "monte_carlo_coupling", "MAX_SAMPLES"]
@@ -87,7 +88,7 @@ class NoiseStudy:
         pairs: the joined coordinates, as for ``couple_virtual_points``.
         outputs, inputs: the coupled receptances kept (stacked labels).
         level: the relative noise level :math:`\\varepsilon` (``>= 0``).
-        reg, weaken_compatibility, weaken_equilibrium, length: as for
+        reg, weaken_compatibility, weaken_equilibrium, length, reduction: as for
             ``couple_virtual_points``.
     """
 
@@ -100,6 +101,7 @@ class NoiseStudy:
     weaken_compatibility: tuple[str, ...] = ()
     weaken_equilibrium: tuple[str, ...] = ()
     length: float = 1.0
+    reduction: InterfaceReduction | None = None
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.level) and self.level >= 0):
@@ -118,7 +120,8 @@ def add_relative_noise(Y: np.ndarray, level: float, rng: np.random.Generator) ->
 
 def _coupled(study: NoiseStudy, parts: list[VpPart]) -> np.ndarray:
     res = couple_virtual_points(parts, study.pairs, study.reg, study.weaken_compatibility,
-                                study.weaken_equilibrium, length=study.length, check=False)
+                                study.weaken_equilibrium, length=study.length, check=False,
+                                reduction=study.reduction)
     return res.part.block(list(study.outputs), list(study.inputs))
 
 
