@@ -35,6 +35,7 @@ from substruct.analysis.transient.integrators import (
     integrate,
 )
 from substruct.analysis.frf.modal import RIGID_ROOT_FRACTION, static_solver
+from substruct.analysis.transient.fields import FieldStore
 from substruct.analysis.transient.record import Physical, Recorder
 from substruct.analysis.transient.options import TransientOptions
 
@@ -63,8 +64,10 @@ def coupled_basis(phys: Physical, count: int | None, solver: str
 
 
 def modal_run(phys: Physical, s: Scheme, h: float, n_steps: int, d0: np.ndarray,
-              v0: np.ndarray, opts: TransientOptions) -> Recorder:
-    """The modal form (module docstring), recorded like the direct forms."""
+              v0: np.ndarray, opts: TransientOptions, fields: FieldStore | None = None
+              ) -> Recorder:
+    """The modal form (module docstring), recorded like the direct forms (the fields of the
+    steps ``fields`` names go to it)."""
     Phi, omega = coupled_basis(phys, opts.modal_count, opts.modal_solver)
     M, K, B, f = phys.M, phys.K, phys.B, phys.f
     loads = phys.loads
@@ -103,7 +106,7 @@ def modal_run(phys: Physical, s: Scheme, h: float, n_steps: int, d0: np.ndarray,
     def restart(step: int, eta: np.ndarray, etav: np.ndarray, fv: np.ndarray) -> np.ndarray:
         return np.asarray(Be @ fv - Ke @ eta - (Ce @ etav if Ce is not None else 0.0))
 
-    rec = Recorder(mphys, Me, Ke, h, None, opts.field_every, offset=lambda step: R @ f[step])
+    rec = Recorder(mphys, Me, Ke, h, None, fields, offset=lambda step: R @ f[step])
     integrate(Me, Ce, Ke, Be, loads, StepState(eta0, etav0, r0), rec,
               StepControl(s, h, n_steps, lambda r: inv @ r, opts.every), restart=restart)
     return rec
