@@ -10,7 +10,7 @@ With the undamped coupled modes :math:`\Phi` (``A \Phi = 0``, :math:`\Phi^T M \P
 .. math::  R = G B - \Phi_e \Omega_e^{-2} \Phi_e^T B ,
 
 where ``G`` is the constrained static flexibility
-(:func:`substruct.analysis.frf.modal.static_solver`, inertia relief against rigid-body modes)
+(:func:`substruct.analysis.frf.modal_static.static_solver`, inertia relief against rigid-body modes)
 and :math:`\Phi_e` the elastic modes kept: the quasi-static response of the modes left out.
 With every coupled mode kept, :math:`R = 0` to rounding and the superposition is the direct
 integration in other coordinates (the integrators are linear and invariant under a change of
@@ -34,7 +34,8 @@ from substruct.analysis.transient.integrators import (
     effective_matrix,
     integrate,
 )
-from substruct.analysis.frf.modal import RIGID_ROOT_FRACTION, static_solver
+from substruct.analysis.frf.modal_basis import RIGID_ROOT_FRACTION
+from substruct.analysis.frf.modal_static import static_solver
 from substruct.analysis.transient.fields import FieldStore
 from substruct.analysis.transient.record import Physical, Recorder
 from substruct.analysis.transient.options import TransientOptions
