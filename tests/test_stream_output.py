@@ -87,9 +87,9 @@ def test_a_quantity_converted_as_the_blocks_pass_equals_the_converted_array(h5):
 
 
 @pytest.mark.parametrize("method", ["modal", "kkt"])
-def test_sweeps_computed_whole_are_sent_to_the_sink_unchanged(h5, method):
-    """The modal sweep and a small model's direct formulation (computed whole) reach the file
-    as their arrays."""
+def test_modal_and_small_direct_sweeps_reach_the_sink_unchanged(h5, method):
+    """The modal sweep (computed a block at a time) and a small model's direct formulation
+    (computed whole) reach the file as their arrays."""
     K, M, C, A = chains(20 if method == "kkt" else 60)
     n = K.shape[0]
     w = np.linspace(1.0, 150.0, 25)

@@ -21,7 +21,6 @@ and with :class:`~substruct.analysis.errors.AnalysisInputError` (or another of
 
 from __future__ import annotations
 
-import dataclasses
 from typing import Any, Sequence, cast
 
 import numpy as np
@@ -200,9 +199,9 @@ def system_receptance_sweep(system: ConstrainedSystem, omegas: Sequence[float] |
             (:class:`~substruct.analysis.frf.stream.FrequencySink`, wrapped in a
             :class:`~substruct.analysis.frf.stream.SweepTap` unless it is one); the result's
             ``H`` is then a :class:`~substruct.analysis.frf.stream.StreamedArray` (its summary
-            and selections).  The sparse production sweep computes block by block and never
-            holds the whole output; the other formulations send theirs once computed.  The
-            checks run on the same numbers either way.
+            and selections).  The sparse production sweep and the modal sweep compute block by
+            block and never hold the whole output; the other formulations send theirs once
+            computed.  The checks run on the same numbers either way.
 
     Raises:
         CheckError: a check disagrees by more than ``tolerance``.
@@ -217,11 +216,7 @@ def system_receptance_sweep(system: ConstrainedSystem, omegas: Sequence[float] |
         method = GENERALIZED_INVERSE
     tap = sink if isinstance(sink, SweepTap) or sink is None else SweepTap(sink)
     if method == "modal":
-        res = modal_receptance_sweep(system, omegas, inputs, outputs, options=opts)
-        if tap is None:
-            return res
-        feed(tap, res.H)
-        return dataclasses.replace(res, H=cast(np.ndarray, tap.array()))
+        return modal_receptance_sweep(system, omegas, inputs, outputs, options=opts, sink=tap)
     checks, tolerance, progress, what = opts.checks, opts.tolerance, opts.progress, opts.what
     n = system.n
     forces = sp.csc_array(inputs, dtype=float)

@@ -43,9 +43,11 @@ __all__ = ["run_command", "run_backend", "monte_carlo_case", "picture_paths", "w
            "stage_set"]
 
 
-def compute(case: Any, quiet: bool, frf_sink: Any = None, backend: Any = None) -> Result:
+def compute(case: Any, quiet: bool, frf_sink: Any = None, backend: Any = None,
+            field_sink: Any = None) -> Result:
     """Build and analyse ``case`` (in the child process of :func:`run_command`); the
-    receptances go to ``frf_sink`` as they are computed, if given
+    receptances go to ``frf_sink`` as they are computed, and a transient run's stored fields
+    to ``field_sink`` as they are recorded, if given
     (:func:`substruct.run.runner.run_case`); with a ``backend``
     (:class:`~substruct.studies.study_backend.Backend`, ``--workers`` or ``--scheduler``), the
     blocks of each level of an AMLS reduction are its tasks."""
@@ -57,7 +59,7 @@ def compute(case: Any, quiet: bool, frf_sink: Any = None, backend: Any = None) -
     model = runner.build_model(case, events)
     if backend is None:
         return runner.run_case(case, progress=bar, model=model, events=events,
-                              frf_sink=frf_sink)
+                              frf_sink=frf_sink, field_sink=field_sink)
     from substruct.studies.study_backend import BackendError, Session
 
     try:
@@ -66,7 +68,8 @@ def compute(case: Any, quiet: bool, frf_sink: Any = None, backend: Any = None) -
                 what = "Monte Carlo samples" if monte_carlo_case(case) else "AMLS tasks"
                 events("amls", f"{what} on {backend.describe()}", 0)
             return runner.run_case(case, progress=bar, model=model, events=events,
-                                   frf_sink=frf_sink, tasks=session.map)
+                                   frf_sink=frf_sink, tasks=session.map,
+                                   field_sink=field_sink)
     except BackendError as err:
         raise InputError(str(err)) from None
 
@@ -153,10 +156,11 @@ def stage_set(case: Any, args: argparse.Namespace, staging: Path, out: Path,
     The result stays in this process.  The result file is opened (under a temporary name)
     before the computation, and the receptance sweep writes its blocks of frequencies into it
     as they are computed (:func:`substruct.io.hdf5.result_file`): the whole receptance is
-    never in memory.  The summary and the pictures are drawn from what the sweep kept as the
-    blocks passed (its largest value, the first curves) or from a selection read back; the
-    rest of the result is written once the pictures are drawn, and the file is renamed into
-    place only then.  Only the names and the report go back to the parent.
+    never in memory; so do the fields a transient run stores.  The summary and the pictures
+    are drawn from what the sweep kept as the blocks passed (its largest value, the first
+    curves) or from a selection read back (the animation's frames); the rest of the result is
+    written once the pictures are drawn, and the file is renamed into place only then.  Only
+    the names and the report go back to the parent.
     """
     from substruct.io.paths import write_errors
 
@@ -164,20 +168,20 @@ def stage_set(case: Any, args: argparse.Namespace, staging: Path, out: Path,
     h5_name = f"{case.name}.h5"
     drawn: list[Path] = []
     with results.result_file(staging / h5_name, where=out) as h5:
-        result = compute(case, args.quiet, h5.frf_sink, backend)
+        result = compute(case, args.quiet, h5.frf_sink, backend, h5.field_sink)
         with write_errors(out):
             if pictures:
                 drawn = write_pictures(result, staging, case.name)
                 drawn += write_case_pictures(case, staging)
             result.attrs["pictures"] = "\n".join(p.name for p in drawn)
             h5.save(result)
-    with write_errors(out):
-        tr = result.transient
-        if pictures and tr is not None and len(tr.snapshot_t) and result.model.drawings:
-            movie = optional_module("viz.transient_animation")
-            gif = staging / f"{case.name}_transient.gif"
-            movie.write_transient_gif(result, gif)
-            drawn.append(gif)
+            # the animation reads its frames back from the file, still open
+            tr = result.transient
+            if pictures and tr is not None and len(tr.snapshot_t) and result.model.drawings:
+                movie = optional_module("viz.transient_animation")
+                gif = staging / f"{case.name}_transient.gif"
+                movie.write_transient_gif(result, gif)
+                drawn.append(gif)
     new = [h5_name, *(p.name for p in drawn)]
     return new, _report(args, case, result, [out / name for name in new])
 

@@ -22,8 +22,9 @@ The layout is documented in ``docs/results.md``; in short::
 :func:`save` writes to a temporary file in the target directory and renames it over the
 target, so an interrupted run never leaves a broken (or half-overwritten) result.
 :func:`result_file` opens that temporary file before the result is computed, so that a
-receptance sweep writes its blocks into it as they come (``/frf/H`` is then never whole in
-memory); it is renamed only once the result is saved.
+receptance sweep (and a transient run's stored fields) write their blocks into it as they come
+(``/frf/H`` and ``/transient/snapshots`` are then never whole in memory); it is renamed only
+once the result is saved.
 :func:`load` (:mod:`substruct.io.result_reader`, which checks every part of the file before
 trusting it) returns the same objects that were saved.
 """
@@ -65,6 +66,8 @@ _DEFAULT_UNITS = "consistent units of the case file; omega in rad/s"
 _STR = h5py.string_dtype("utf-8")
 #: Where a streamed sweep writes its receptances until the result moves them to ``/frf/H``.
 _STREAMED_FRF = "_frf_H_streaming"
+#: Where a transient run writes its stored fields until they move to ``/transient/snapshots``.
+_STREAMED_FIELDS = "_transient_snapshots_streaming"
 
 
 # ----------------------------------------------------------------------------- writing
@@ -91,10 +94,11 @@ def save(result: Result, path: str | os.PathLike, *, block_bytes: int = BLOCK_BY
 
 class ResultFile:
     """A result file open for writing, before its result is complete: :attr:`frf_sink`
-    takes the receptances of a sweep as they are computed
-    (:class:`~substruct.io.blocks.DatasetSink`, a dataset aside in the file), and
-    :meth:`save` then writes the rest of the result, the streamed receptances becoming
-    ``/frf/H`` without a copy (an HDF5 link moved).  The file is the one :func:`save` writes.
+    takes the receptances of a sweep as they are computed and :attr:`field_sink` the fields
+    a transient run stores as it records them (:class:`~substruct.io.blocks.DatasetSink`,
+    datasets aside in the file), and :meth:`save` then writes the rest of the result, the
+    streamed receptances becoming ``/frf/H`` and the fields ``/transient/snapshots`` without
+    a copy (HDF5 links moved).  The file is the one :func:`save` writes.
     """
 
     def __init__(self, f: h5py.File, block_bytes: int, chunk_bytes: int,
@@ -103,6 +107,7 @@ class ResultFile:
         self.options: dict[str, Any] = {"block_bytes": block_bytes,
                                         "chunk_bytes": chunk_bytes, "compression": compression}
         self.frf_sink = DatasetSink(f, _STREAMED_FRF, where=where, **self.options)
+        self.field_sink = DatasetSink(f, _STREAMED_FIELDS, where=where, **self.options)
         self.saved = False
 
     def save(self, result: Result) -> None:
@@ -130,7 +135,9 @@ class ResultFile:
             del f[_STREAMED_FRF]
         if result.transient is not None:
             write_transient(f.create_group("transient", track_order=True),
-                            result.transient, **self.options)
+                            result.transient, streamed=self.field_sink, **self.options)
+        if _STREAMED_FIELDS in f:  # a run streamed here whose result was not kept
+            del f[_STREAMED_FIELDS]
         if result.recovery:
             write_recovery(f.create_group("recovery", track_order=True), result.recovery)
         if result.random is not None:

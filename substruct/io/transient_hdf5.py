@@ -38,7 +38,7 @@ import numpy as np
 
 from substruct.analysis.results import DEFAULT_TOLERANCE
 from substruct.analysis.transient.results import ENERGY_LABELS, Transient
-from substruct.io.blocks import BLOCK_BYTES, CHUNK_BYTES, write_blocks
+from substruct.io.blocks import BLOCK_BYTES, CHUNK_BYTES, DatasetSink, write_blocks
 
 __all__ = ["write_transient", "read_transient", "ArrayReader"]
 
@@ -48,10 +48,13 @@ def _strings(g: h5py.Group, name: str, values: list[str]) -> None:
 
 
 def write_transient(g: h5py.Group, tr: Transient, *, block_bytes: int = BLOCK_BYTES,
-                    chunk_bytes: int = CHUNK_BYTES, compression: str | None = None) -> None:
+                    chunk_bytes: int = CHUNK_BYTES, compression: str | None = None,
+                    streamed: DatasetSink | None = None) -> None:
     """Write ``tr`` into the group ``g`` (module docstring); the snapshots of the whole field
     as a chunked dataset written ``block_bytes`` at a time
-    (:func:`substruct.io.blocks.write_blocks`)."""
+    (:func:`substruct.io.blocks.write_blocks`), or, when the run already wrote them into
+    ``streamed`` as it recorded them (``tr.snapshots`` read from that sink), that dataset
+    moved into place (an HDF5 link: no copy; the same dataset either way)."""
     for key in ("method", "integrator", "solver"):
         g.attrs[key] = str(getattr(tr, key))
     for key in ("rho_inf", "dt", "drift", "tolerance"):
@@ -69,8 +72,12 @@ def write_transient(g: h5py.Group, tr: Transient, *, block_bytes: int = BLOCK_BY
     _strings(g, "constraint_labels", tr.constraint_labels)
     _strings(g, "energy_labels", list(ENERGY_LABELS))
     g.create_dataset("snapshot_t", data=np.asarray(tr.snapshot_t, dtype=float))
-    write_blocks(g, "snapshots", np.asarray(tr.snapshots, dtype=float), block_bytes=block_bytes,
-                 chunk_bytes=chunk_bytes, compression=compression)
+    written = getattr(tr.snapshots, "sink", None)  # the sink the run wrote them to, if any
+    if isinstance(written, DatasetSink) and written is streamed:
+        g.file.move(written.dataset.name, f"{g.name}/snapshots")
+    else:
+        write_blocks(g, "snapshots", np.asarray(tr.snapshots, dtype=float),
+                     block_bytes=block_bytes, chunk_bytes=chunk_bytes, compression=compression)
     if tr.base_motion.size:
         d = g.create_dataset("base_motion", data=np.asarray(tr.base_motion, dtype=float))
         d.attrs["units"] = "length, length/time, length/time^2"

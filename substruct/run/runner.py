@@ -17,6 +17,7 @@ import scipy.sparse as sp
 from substruct.analysis.checks import require_finite
 from substruct.analysis.events import Phase
 from substruct.analysis.frf.stream import FrequencySink
+from substruct.analysis.transient.fields import FieldSink
 from substruct.analysis.results import Modes
 from substruct.linalg.amls_block import TaskMap
 from substruct.builder.frf_parts import assemble_frf_case, has_frf_parts
@@ -86,7 +87,7 @@ def build_model(case: Case, events: Phase | None = None,
 
 def run_case(case: Case, progress: Progress | None = None, model: Model | None = None,
              events: Phase | None = None, frf_sink: FrequencySink | None = None,
-             tasks: TaskMap | None = None) -> Result:
+             tasks: TaskMap | None = None, field_sink: FieldSink | None = None) -> Result:
     """Run the analyses of a case.
 
     Args:
@@ -100,6 +101,9 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
             block of frequencies at a time (:func:`substruct.run.analyses.frf_result`; the
             result file of ``substruct run``); the other receptance routes (FRF parts,
             virtual points, loss factor) compute theirs whole.
+        field_sink: where the fields a transient run stores (``field_every``) go as they
+            are recorded, a block of instants at a time (the result file of
+            ``substruct run``); ``None``: kept whole.
         tasks: where the blocks of an AMLS reduction (``analysis.modes.solver: amls``) run
             (:data:`substruct.linalg.amls_block.TaskMap`; ``None``: in this process).
 
@@ -196,7 +200,7 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
                  for _s in spec.histories() for lab in r.labels]
         # an overflow of the histories is refused below in one line, not warned about first
         with np.errstate(over="ignore", invalid="ignore"):
-            tr = transient_result(case, model, rows, names)
+            tr = transient_result(case, model, rows, names, field_sink)
         result.transient = split_recovered(plan, tr, len(case.analysis.transient.outputs),
                                            result.recovery) if plan else tr
     # specification analyses (substruct.run.spec_route)

@@ -31,6 +31,7 @@ from substruct.analysis.transient import (
     transient,
 )
 from substruct.analysis.transient.base import BaseMotion
+from substruct.analysis.transient.fields import FieldSink
 from substruct.analysis.transient.initial import InitialStateError
 from substruct.analysis.transient.results import Transient
 from substruct.builder.model import Model
@@ -204,10 +205,13 @@ def _initial(case: Case, model: Model) -> tuple[np.ndarray | None, np.ndarray | 
 
 
 def transient_result(case: Case, model: Model, extra: sp.csr_array | None = None,
-                     extra_names: list[str] | None = None) -> Transient:
+                     extra_names: list[str] | None = None,
+                     field_sink: FieldSink | None = None) -> Transient:
     """The time histories ``case.analysis.transient`` asks for; ``extra`` output rows (named
     ``extra_names``) are recorded after the case's outputs (the recovery of superelements'
-    interiors, :mod:`substruct.run.recovery`).
+    interiors, :mod:`substruct.run.recovery`).  The fields stored every ``field_every`` steps
+    go to ``field_sink`` a block at a time as they are recorded, if given (the result file of
+    ``substruct run``); else they are kept whole, and refused beyond the memory limit.
 
     Raises:
         CaseError: at ``analysis.transient``, for input the analysis cannot take.
@@ -218,7 +222,7 @@ def transient_result(case: Case, model: Model, extra: sp.csr_array | None = None
         raise TypeError(f"case {case.name!r} asks for no transient response")
     asm = model.assembly
     n, steps = asm.n_dof, spec.steps
-    if spec.field_every:
+    if spec.field_every and field_sink is None:
         need = 8.0 * n * (steps // spec.field_every + 1)
         if need > MEMORY_LIMIT:
             raise case.error(("analysis", "transient", "field_every"),
@@ -246,7 +250,8 @@ def transient_result(case: Case, model: Model, extra: sp.csr_array | None = None
         return transient(asm.M, asm.C, asm.K, asm.A, asm.b,
                          LoadHistory(B, f, spec.dt, steps, pairs=pairs, base=ground),
                          TransientOutputs(O, names),
-                         constraint_labels=asm.constraint_labels, initial=initial, options=opts)
+                         constraint_labels=asm.constraint_labels, initial=initial, options=opts,
+                         fields=field_sink)
     except InitialStateError as err:
         raise case.error(("analysis", "transient", "initial"), " ".join(str(err).split())
                          ) from None

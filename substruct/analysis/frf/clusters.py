@@ -155,11 +155,11 @@ def cluster_terms(clusters: tuple[Cluster, ...], paired: np.ndarray, P: np.ndarr
         Pc, Qc = P[:, c.index], Q[c.index]
         Z = np.linalg.solve(s[:, None, None] * c.GB[None] - c.GA[None],
                             np.broadcast_to(Qc, (s.size,) + Qc.shape))
-        out += np.einsum("qr,krp->kqp", Pc, Z)
+        out += Pc @ Z  # a product per frequency: the same whatever the other frequencies
         if paired[c.index[0]]:
             Zc = np.linalg.solve(s[:, None, None] * np.conj(c.GB)[None] - np.conj(c.GA)[None],
                                  np.broadcast_to(np.conj(Qc), (s.size,) + Qc.shape))
-            out += np.einsum("qr,krp->kqp", np.conj(Pc), Zc)
+            out += np.conj(Pc) @ Zc
     return out
 
 

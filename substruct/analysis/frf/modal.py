@@ -33,11 +33,19 @@ A damped model with rigid-body modes, and constraints tied to the force (``R != 
 refused with a one-line ``ValueError``.  The sweep itself costs one small matrix product per
 frequency; the direct solve (:func:`substruct.analysis.formulations.coupling.receptance`) at a few check
 frequencies is its cross-check.
+
+The roots and the sums over them are in :mod:`substruct.analysis.frf.modal_basis`, the
+residual flexibility in :mod:`substruct.analysis.frf.modal_static`.  The sweep computes a block
+of frequencies at a time: into the whole array, or, given a sink
+(:class:`~substruct.analysis.frf.stream.SweepTap`), into one block handed to it as soon as it
+is computed, the checked frequencies kept as the blocks pass; each frequency's value is the
+same either way (:func:`~substruct.analysis.frf.modal_basis.modal_terms`).
 """
+
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
 import numpy as np
@@ -49,38 +57,38 @@ from substruct.analysis.checks import (
     receptance_difference,
     require_agreement,
 )
-from substruct.analysis.formulations.coupling import receptance
-from substruct.analysis.frf.clusters import (
-    Cluster,
-    cluster_moment,
-    cluster_terms,
-    root_accuracy,
-    root_clusters,
-)
-from substruct.analysis.modes.amls import AmlsOptions, amls_damped_basis
-from substruct.analysis.modes.eigen import modes
 from substruct.analysis.errors import AnalysisInputError
-from substruct.analysis.system import ConstrainedSystem, SweepOptions
-from substruct.analysis.results import Modes, Receptance
+from substruct.analysis.formulations.coupling import receptance
+from substruct.analysis.frf.modal_basis import (
+    DEFAULT_CUTOFF,
+    RIGID_ROOT_FRACTION,
+    ModalBasis,
+    modal_basis,
+    modal_moment,
+    modal_terms,
+)
+from substruct.analysis.frf.modal_static import static_moments, static_solver
+from substruct.analysis.frf.stream import SweepTap
 from substruct.analysis.modes.sparse import has_damping
-from substruct.linalg.constraints import independent_rows
-from substruct.linalg.factorize import factorizer
+from substruct.analysis.results import Receptance
+from substruct.analysis.system import ConstrainedSystem, SweepOptions
 from substruct.vocabulary import GENERALIZED_INVERSE, KKT
 
-__all__ = ["MODAL_ABOVE", "ModalOptions", "frf_method", "DEFAULT_CUTOFF", "MODAL_CHECK_FREQUENCIES", "ModalBasis", "modal_basis",
-           "static_solver", "static_moments", "modal_terms", "modal_moment", "RESIDUAL_ORDER", "modal_receptance_sweep", "check_indices"]
+__all__ = ["MODAL_ABOVE", "ModalOptions", "frf_method", "DEFAULT_CUTOFF",
+           "MODAL_CHECK_FREQUENCIES", "ModalBasis", "modal_basis", "static_solver",
+           "static_moments", "modal_terms", "modal_moment", "RESIDUAL_ORDER",
+           "RIGID_ROOT_FRACTION", "BLOCK_BYTES", "modal_receptance_sweep", "check_indices"]
 
 #: ``method: auto`` takes the modal sweep above this many coordinates.
 MODAL_ABOVE = 2000
-#: Default cut-off: the modes up to this multiple of the highest frequency of the grid.
-DEFAULT_CUTOFF = 10.0
 #: Frequencies of the grid at which the direct solve checks the modal sweep.
 MODAL_CHECK_FREQUENCIES = 3
 #: Residual terms: none, the static flexibility (``G - sum_r T_r(0)``), or the Taylor terms
 #: up to ``s^2`` (:func:`static_moments`; error of the truncation then ``O((w / w_c)^3)``).
 RESIDUAL_ORDER = {"none": -1, "static": 0, "second-order": 2}
-#: A root below this fraction of the frequency scale is a rigid-body mode.
-RIGID_ROOT_FRACTION = 1e-6
+#: Bytes of receptances computed at a time when the sweep keeps the whole array (a sink
+#: sets its own block).
+BLOCK_BYTES = 64 << 20
 
 
 @dataclass(frozen=True)
@@ -117,225 +125,31 @@ def frf_method(method: str, n: int, R: sp.sparray | np.ndarray | None) -> str:
     return "modal" if n > MODAL_ABOVE and not tied else GENERALIZED_INVERSE
 
 
-@dataclass(frozen=True)
-class ModalBasis:
-    """The retained roots of the coupled system, as the modal sum needs them.
-
-    Attributes:
-        eigenvalues: elastic roots ``lambda_r`` (``Im >= 0``; one per conjugate pair).
-        shapes: ``n x N`` complex shapes ``u_r``.
-        norms: ``a_r = u_r^T (2 lambda_r M + C) u_r``.
-        paired: whether a root stands for a conjugate pair (``Im lambda_r > 0``).
-        rigid: ``n x r0`` rigid-body shapes, ``Phi_0^T M Phi_0 = I`` (undamped models only).
-        highest: the largest ``|lambda_r|`` computed (rad/s).
-        clusters: the repeated roots, summed through their projected pencils
-            (:mod:`substruct.analysis.frf.clusters`) instead of ``1 / a_r``.
-    """
-
-    eigenvalues: np.ndarray
-    shapes: np.ndarray
-    norms: np.ndarray
-    paired: np.ndarray
-    rigid: np.ndarray
-    highest: float
-    clusters: tuple[Cluster, ...] = ()
-
-    @property
-    def count(self) -> int:
-        """Number of retained elastic roots."""
-        return int(self.eigenvalues.size)
-
-
-def _modes(M: sp.csr_array, C: sp.csr_array | None, K: sp.csr_array, A: sp.csr_array,
-           count: int | None, solver: str) -> Modes:
-    return modes(M, C, K, A, count, solver=solver, what="frf (modal)")
-
-
-def modal_basis(M: sp.csr_array, C: sp.csr_array | None, K: sp.csr_array, A: sp.csr_array,
-                omega_max: float, *, count: int | None = None,
-                cutoff: float = DEFAULT_CUTOFF, solver: str = "auto",
-                amls: Any = None) -> ModalBasis:
-    r"""The roots of the coupled system up to ``cutoff * omega_max`` (or the lowest ``count``).
-
-    .. math::  |\lambda_r| \le c\, \omega_{max}
-
-    With ``count`` ``None`` the sparse solvers are asked for 20, 40, 80, ... roots until one
-    passes the cut-off (the dense solver computes all and keeps those below it).  With
-    ``solver="amls"`` one AMLS reduction gives every undamped mode below the cut-off (or the
-    lowest ``count``) and the damping is projected on them
-    (:func:`substruct.analysis.modes.amls.amls_damped_basis`, options ``amls``).  Repeated
-    roots are grouped (:func:`substruct.analysis.frf.clusters.root_clusters`), whatever basis
-    of their eigenspace the eigensolver gave.
-
-    Raises:
-        ValueError: a damped model with rigid-body modes.
-    """
-    n = K.shape[0]
-    damped = has_damping(C)
-    Cm = C if damped else None
-    limit = cutoff * omega_max
-    if solver == "amls":
-        opts = amls if amls is not None else AmlsOptions()
-        opts = replace(opts, omega_max=None if count is not None else limit)
-        md, _ = amls_damped_basis(M, Cm, K, A, None if count is None else min(int(count), n),
-                                  opts)
-    elif count is not None:
-        md = _modes(M, Cm, K, A, min(int(count), n), solver)
-    else:
-        k = min(20, n)
-        while True:
-            md = _modes(M, Cm, K, A, k, solver)
-            if len(md) < k or md.omega.max(initial=0.0) > limit or k >= n:
-                break
-            k = min(2 * k, n)
-        md = md.lowest(int(np.sum(md.omega <= limit)) + (1 if np.any(md.omega > limit) else 0))
-    lam = np.asarray(md.eigenvalues, dtype=complex)
-    U = np.asarray(md.shapes, dtype=complex)
-    highest = float(np.abs(lam).max(initial=0.0))
-    scale = max(omega_max, highest, 1e-300)
-    rigid = np.abs(lam) <= RIGID_ROOT_FRACTION * scale
-    if np.any(rigid) and damped:
-        raise AnalysisInputError("modal receptance of a damped model with rigid-body modes is not "
-                         "supported; use method: generalized-inverse")
-    Phi = U[:, rigid].real
-    if Phi.shape[1]:
-        L = np.linalg.cholesky(Phi.T @ (M @ Phi))
-        Phi = np.linalg.solve(L, Phi.T).T  # Phi_0^T M Phi_0 = I
-    lam, U = lam[~rigid], U[:, ~rigid]
-    MU = M @ U
-    CU = C @ U if damped and C is not None else np.zeros_like(U)
-    norms = np.einsum("ir,ir->r", U, 2 * lam[None, :] * MU + CU)
-    Cd = C if damped else None
-    accuracy = root_accuracy(M, Cd, K, A, lam, U, norms)
-    clusters = root_clusters(M, Cd, K, lam, U, lam.imag > 0, accuracy)
-    return ModalBasis(lam, U, norms, lam.imag > 0, Phi, highest, clusters)
-
-
-def _singles(basis: ModalBasis) -> np.ndarray:
-    """Whether each root is summed on its own (in no cluster)."""
-    single = np.ones(basis.count, dtype=bool)
-    for c in basis.clusters:
-        single[c.index] = False
-    return single
-
-
-def static_solver(K: sp.csr_array, M: sp.csr_array, A: sp.csr_array,
-                  rigid: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
-    r"""``F -> G_static F``: the static response of the constrained system, by one
-    factorization of the saddle-point matrix (inertia relief against the rigid shapes
-    ``Phi_0``, M-orthonormal).
-
-    .. math::  \begin{bmatrix} K & \beta A_k^T & M \Phi_0 \\ \beta A_k & 0 & 0 \\
-               \Phi_0^T M & 0 & 0 \end{bmatrix} x =
-               \begin{bmatrix} (I - M \Phi_0 \Phi_0^T) F \\ 0 \\ 0 \end{bmatrix}
-
-    ``A_k`` are the independent rows of ``A``, ``beta = |K| / |A_k|`` balances the blocks.
-
-    Raises:
-        ValueError: the constrained stiffness is singular (a mechanism the modes missed).
-    """
-    n = K.shape[0]
-    Ak = A[independent_rows(A).keep] if A.shape[0] else sp.csr_array((0, n))
-    normA = max(float(spla.norm(Ak)), 1e-300) if Ak.shape[0] else 1.0
-    beta = max(float(spla.norm(K)), 1e-300) / normA
-    MPhi = M @ rigid
-    r0, m = rigid.shape[1], Ak.shape[0]
-    blocks: list[list[sp.sparray | None]] = [[K]]
-    if m:
-        blocks = [[K, beta * Ak.T], [beta * Ak, None]]
-    if r0:
-        Mp = sp.csr_array(MPhi)
-        blocks = [row + [Mp if i == 0 else None] for i, row in enumerate(blocks)]
-        blocks.append([sp.csr_array(MPhi.T)] + [None] * len(blocks))
-    big = sp.csc_array(sp.block_array(blocks, format="csc"))
-    try:
-        solve = factorizer("saddle")(big)
-    except RuntimeError:
-        raise AnalysisInputError("the constrained stiffness is singular (a mechanism with no mass?); "
-                         "the modal receptance needs a static solve") from None
-
-    def flexibility(F: np.ndarray) -> np.ndarray:
-        F = np.asarray(F).reshape(n, -1)
-        if r0:
-            F = F - MPhi @ (rigid.T @ F)
-        rhs = np.vstack([F, np.zeros((big.shape[0] - n, F.shape[1]), dtype=F.dtype)])
-        x = solve(rhs)
-        x = x + solve(rhs - big @ x)  # one step of iterative refinement
-        return np.asarray(x[:n])
-
-    return flexibility
-
-
-def static_moments(flexibility: Callable[[np.ndarray], np.ndarray], M: sp.csr_array,
-                   C: sp.csr_array | None, E: np.ndarray, order: int) -> list[np.ndarray]:
-    r"""``X_k = H_k E`` for ``k = 0 .. order``: the Taylor coefficients of the constrained
-    receptance in :math:`s = i\omega` about ``s = 0``.
-
-    .. math::  H(s) = (K + s C + s^2 M)^{-1}_{A} = G - s\, G C G
-               + s^2 (G C G C G - G M G) + O(s^3)
-
-    (``G`` the constrained static flexibility; one back-substitution per term.)
-    """
-    X0 = flexibility(E)
-    out = [X0]
-    if order >= 1:
-        X1 = -flexibility(C @ X0) if C is not None else np.zeros_like(X0)
-        out.append(X1)
-    if order >= 2:
-        rhs = M @ X0 + (C @ X1 if C is not None else 0)
-        out.append(-flexibility(rhs))
-    return out
-
-
-def modal_terms(basis: ModalBasis, P: np.ndarray, Q: np.ndarray,
-                omegas: np.ndarray) -> np.ndarray:
-    r"""``sum_r T_r(omega_k)`` projected on outputs and inputs, ``(n_omega, q, p)``.
-
-    .. math::  \sum_r \frac{(O u_r)(u_r^T E)}{a_r (i \omega - \lambda_r)}
-               + \text{conjugates} - \frac{O \Phi_0 \Phi_0^T E}{\omega^2}
-
-    ``P = O U`` (``q x N``), ``Q = U^T E`` (``N x p``); the rigid part needs ``omega > 0``.
-    A cluster of repeated roots is summed through its projected pencil
-    (:func:`substruct.analysis.frf.clusters.cluster_terms`).
-    """
-    lam, a, pair = basis.eigenvalues, basis.norms, basis.paired
-    iw = 1j * np.asarray(omegas, dtype=float)[:, None]
-    single = _singles(basis)
-    f = np.where(single[None, :], 1.0 / (a[None, :] * (iw - lam[None, :])), 0)
-    g = np.where(pair[None, :] & single[None, :],
-                 1.0 / (np.conj(a)[None, :] * (iw - np.conj(lam)[None, :])), 0)
-    out = np.einsum("qr,kr,rp->kqp", P, f, Q, optimize=True)
-    if np.any(pair):
-        out += np.einsum("qr,kr,rp->kqp", np.conj(P), g, np.conj(Q), optimize=True)
-    if basis.clusters:
-        out += cluster_terms(basis.clusters, pair, P, Q, np.asarray(omegas, dtype=float))
-    return out
-
-
-def modal_moment(basis: ModalBasis, P: np.ndarray, Q: np.ndarray, k: int) -> np.ndarray:
-    r"""The coefficient of :math:`s^k` of the retained elastic terms about ``s = 0``:
-
-    .. math::  \sum_r -\frac{(O u_r)(u_r^T E)}{a_r \lambda_r^{k+1}} + \text{conjugates}
-    """
-    lam, a, pair = basis.eigenvalues, basis.norms, basis.paired
-    f = np.where(_singles(basis), -1.0 / (a * lam ** (k + 1)), 0)
-    out = (P * f[None, :]) @ Q
-    if np.any(pair):
-        g = np.where(pair, np.conj(f), 0)
-        out = out + (np.conj(P) * g[None, :]) @ np.conj(Q)
-    if basis.clusters:
-        out = out + cluster_moment(basis.clusters, pair, P, Q, k)
-    return np.asarray(out)
-
-
 def check_indices(count: int, k: int = MODAL_CHECK_FREQUENCIES) -> np.ndarray:
     """``k`` indices spread over a grid of ``count`` frequencies (first, last, between)."""
     return np.unique(np.round(np.linspace(0, count - 1, min(k, count))).astype(int))
 
 
+def _block_sum(basis: ModalBasis, P: np.ndarray, Q: np.ndarray, rigid: np.ndarray | None,
+               moments: list[np.ndarray]) -> Callable[[np.ndarray, np.ndarray], None]:
+    r"""``fill(w, out)``: ``out[k] = H(w_k)`` of :func:`modal_receptance_sweep`, a frequency at
+    a time (:func:`~substruct.analysis.frf.modal_basis.modal_terms`), then the rigid-body terms
+    ``- rigid / w^2`` and the residual moments :math:`\sum_k s^k D_k`."""
+    def fill(w: np.ndarray, out: np.ndarray) -> None:
+        modal_terms(basis, P, Q, w, out)
+        if rigid is not None:
+            out -= rigid[None] / w[:, None, None] ** 2
+        s = 1j * w
+        for k, Dk in enumerate(moments):
+            out += (s ** k)[:, None, None] * Dk[None]
+
+    return fill
+
+
 def modal_receptance_sweep(system: ConstrainedSystem, omegas: Sequence[float] | np.ndarray,
                            inputs: sp.sparray | np.ndarray, outputs: sp.sparray | np.ndarray,
-                           *, options: SweepOptions) -> Receptance:
+                           *, options: SweepOptions, sink: SweepTap | None = None
+                           ) -> Receptance:
     r"""Receptances at ``omegas`` by modal superposition plus residual flexibility, checked by
     the direct solve at ``n_check`` frequencies of the grid.
 
@@ -356,6 +170,12 @@ def modal_receptance_sweep(system: ConstrainedSystem, omegas: Sequence[float] | 
             ``options.checks`` are the direct formulations (``kkt`` if none) and
             ``options.tolerance`` the largest ``max |H_direct - H| / max |H|`` at the check
             frequencies.
+        sink: where the receptances go, a block of frequencies at a time as they are
+            computed (:class:`~substruct.analysis.frf.stream.SweepTap`: it keeps the checked
+            frequencies as the blocks pass); the result's ``H`` is then its
+            :class:`~substruct.analysis.frf.stream.StreamedArray`, and the sweep holds one
+            block, never the whole output.  The numbers are those of the sweep without a
+            sink, bit for bit.
 
     Returns:
         A :class:`~substruct.analysis.results.Receptance` with ``method`` naming the roots
@@ -386,20 +206,16 @@ def modal_receptance_sweep(system: ConstrainedSystem, omegas: Sequence[float] | 
                          "omega = 0")
     P = O @ basis.shapes
     Q = basis.shapes.T @ E
-    H = modal_terms(basis, P, Q, w)
-    if basis.rigid.shape[1]:
-        OPhi, PhiE = O @ basis.rigid, basis.rigid.T @ E
-        H -= (OPhi @ PhiE)[None] / w[:, None, None] ** 2
+    rigid = (O @ basis.rigid) @ (basis.rigid.T @ E) if basis.rigid.shape[1] else None
     if residual not in RESIDUAL_ORDER:
         raise ValueError(f"unknown residual {residual!r}; expected one of "
                          f"{', '.join(RESIDUAL_ORDER)}")
     order = RESIDUAL_ORDER[residual]
+    moments: list[np.ndarray] = []
     if order >= 0:
         flex = static_solver(Ks, Ms, As, basis.rigid)
         X = static_moments(flex, Ms, Cs if has_damping(Cs) else None, E, order)
-        s_k = 1j * w
-        for k, Xk in enumerate(X):
-            H += (s_k ** k)[:, None, None] * (O @ Xk - modal_moment(basis, P, Q, k))[None]
+        moments = [np.asarray(O @ Xk - modal_moment(basis, P, Q, k)) for k, Xk in enumerate(X)]
         vectors = np.hstack([basis.shapes, *X])
     else:
         vectors = basis.shapes
@@ -408,10 +224,28 @@ def modal_receptance_sweep(system: ConstrainedSystem, omegas: Sequence[float] | 
     constraint_residual = float((np.abs(As @ vectors).max(axis=0, initial=0.0) / size).max(
         initial=0.0)) if As.shape[0] and vectors.shape[1] else 0.0
     idx = check_indices(len(w), modal.n_check)
+    fill = _block_sum(basis, P, Q, rigid, moments)
+    shape = (len(w), O.shape[0], E.shape[1])
+    H: Any
+    if sink is None:
+        H = np.empty(shape, dtype=complex)
+        rows = max(1, BLOCK_BYTES // max(1, 16 * shape[1] * shape[2]))
+        for start in range(0, len(w), rows):
+            fill(w[start:start + rows], H[start:start + rows])
+        checked = H[idx]
+    else:
+        sink.keep(idx)
+        rows = max(1, min(len(w), int(sink.open(shape, np.dtype(complex)))))
+        block = np.empty((rows, *shape[1:]), dtype=complex)
+        for start in range(0, len(w), rows):
+            out = block[:min(rows, len(w) - start)]
+            fill(w[start:start + rows], out)
+            sink.write(start, out)
+        H, checked = sink.array(), sink.checked
     agreement = {}
     for check in check_methods("modal", list(checks) or [KKT]) if idx.size else []:
         Hd = receptance(Ks, Ms, Cs, As, w[idx], None, method=check, inputs=E, outputs=O)
-        agreement[f"{check} ({len(idx)} frequencies)"] = receptance_difference(Hd, H[idx])
+        agreement[f"{check} ({len(idx)} frequencies)"] = receptance_difference(Hd, checked)
     what_modes = f"modal: {basis.count} root(s) up to {basis.highest:.4g} rad/s" + \
         (" (AMLS basis)" if modal.solver == "amls" else "") + \
         (f", {basis.rigid.shape[1]} rigid" if basis.rigid.shape[1] else "") + \

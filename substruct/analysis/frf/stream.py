@@ -153,7 +153,7 @@ class SweepTap:
 
 def feed(sink: FrequencySink, H: np.ndarray) -> None:
     """Send a whole ``H`` (computed at once) to ``sink``, a block of views at a time (the
-    sweeps that are not computed by blocks: small models, modal superposition)."""
+    sweeps that are not computed by blocks: the direct formulations of small models)."""
     rows = max(1, sink.open(H.shape, H.dtype))
     for start in range(0, H.shape[0], rows):
         sink.write(start, H[start:start + rows])

@@ -10,7 +10,9 @@ null-space or modal form, each checked by the others.
 * :mod:`~substruct.analysis.transient.options`: what a run is given (loads, initial conditions,
   outputs, options), each checked once when made;
 * :mod:`~substruct.analysis.transient.record`, :mod:`~substruct.analysis.transient.results`:
-  what is recorded and returned.
+  what is recorded and returned;
+* :mod:`~substruct.analysis.transient.fields`: the stored fields, whole or a block at a time
+  into a sink.
 """
 
 from substruct.lazy import lazy_getattr

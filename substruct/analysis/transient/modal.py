@@ -10,7 +10,7 @@ With the undamped coupled modes :math:`\Phi` (``A \Phi = 0``, :math:`\Phi^T M \P
 .. math::  R = G B - \Phi_e \Omega_e^{-2} \Phi_e^T B ,
 
 where ``G`` is the constrained static flexibility
-(:func:`substruct.analysis.frf.modal.static_solver`, inertia relief against rigid-body modes)
+(:func:`substruct.analysis.frf.modal_static.static_solver`, inertia relief against rigid-body modes)
 and :math:`\Phi_e` the elastic modes kept: the quasi-static response of the modes left out.
 With every coupled mode kept, :math:`R = 0` to rounding and the superposition is the direct
 integration in other coordinates (the integrators are linear and invariant under a change of
@@ -34,7 +34,9 @@ from substruct.analysis.transient.integrators import (
     effective_matrix,
     integrate,
 )
-from substruct.analysis.frf.modal import RIGID_ROOT_FRACTION, static_solver
+from substruct.analysis.frf.modal_basis import RIGID_ROOT_FRACTION
+from substruct.analysis.frf.modal_static import static_solver
+from substruct.analysis.transient.fields import FieldStore
 from substruct.analysis.transient.record import Physical, Recorder
 from substruct.analysis.transient.options import TransientOptions
 
@@ -63,8 +65,10 @@ def coupled_basis(phys: Physical, count: int | None, solver: str
 
 
 def modal_run(phys: Physical, s: Scheme, h: float, n_steps: int, d0: np.ndarray,
-              v0: np.ndarray, opts: TransientOptions) -> Recorder:
-    """The modal form (module docstring), recorded like the direct forms."""
+              v0: np.ndarray, opts: TransientOptions, fields: FieldStore | None = None
+              ) -> Recorder:
+    """The modal form (module docstring), recorded like the direct forms (the fields of the
+    steps ``fields`` names go to it)."""
     Phi, omega = coupled_basis(phys, opts.modal_count, opts.modal_solver)
     M, K, B, f = phys.M, phys.K, phys.B, phys.f
     loads = phys.loads
@@ -103,7 +107,7 @@ def modal_run(phys: Physical, s: Scheme, h: float, n_steps: int, d0: np.ndarray,
     def restart(step: int, eta: np.ndarray, etav: np.ndarray, fv: np.ndarray) -> np.ndarray:
         return np.asarray(Be @ fv - Ke @ eta - (Ce @ etav if Ce is not None else 0.0))
 
-    rec = Recorder(mphys, Me, Ke, h, None, opts.field_every, offset=lambda step: R @ f[step])
+    rec = Recorder(mphys, Me, Ke, h, None, fields, offset=lambda step: R @ f[step])
     integrate(Me, Ce, Ke, Be, loads, StepState(eta0, etav0, r0), rec,
               StepControl(s, h, n_steps, lambda r: inv @ r, opts.every), restart=restart)
     return rec

@@ -1,5 +1,7 @@
 r"""What a transient run keeps of each recorded step: outputs at points, the constraint force of
-eq (5), the constraint residual, the energies, and the full field every k steps.
+eq (5), the constraint residual, the energies, and the full field every k steps (into a
+:class:`~substruct.analysis.transient.fields.FieldStore`: whole, or a block at a time to a
+sink).
 
 The constraint force is eq (5) read backwards,
 
@@ -12,7 +14,7 @@ through :math:`A_k A_k^T`, one sparse factorization; a redundant row gets 0).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable, Mapping, TypeAlias
+from typing import Callable, Mapping, TypeAlias, cast
 
 import numpy as np
 import scipy.sparse as sp
@@ -20,6 +22,7 @@ import scipy.sparse as sp
 from substruct.analysis.errors import CheckError
 from substruct.analysis.transient.integrators import LoadSteps, Scheme, Work
 from substruct.analysis.transient.base import Motion
+from substruct.analysis.transient.fields import FieldStore, StoredFields
 from substruct.linalg.factorize import factorizer
 from substruct.linalg.solve_type import Matrix
 
@@ -102,9 +105,10 @@ class Recorder:
     """Collects the recorded steps of one run (a :class:`substruct.analysis.transient.integrators.Sink`).
 
     ``M_x``, ``K_x``: the matrices of the integrated coordinates (for the energies);
-    ``forces``: ``Q -> lambda`` or ``None`` (no constraint forces); ``field_every``: keep the
-    full displacement every this many steps (0: never); ``offset``: added to the physical
-    displacement (the static correction of modal superposition), per step.
+    ``forces``: ``Q -> lambda`` or ``None`` (no constraint forces); ``fields``: where the full
+    displacement of the steps it names goes (``None``: kept of none); ``offset``: added to the
+    physical displacement (the static correction of modal superposition), per step.  The
+    displacement of the last step recorded is kept in any case (:attr:`last`).
     """
 
     phys: Physical
@@ -112,7 +116,7 @@ class Recorder:
     K_x: Matrix
     dt: float
     forces: Callable[[np.ndarray], np.ndarray] | None = None
-    field_every: int = 0
+    fields: FieldStore | None = None
     offset: Callable[[int], np.ndarray] | None = None
     t: list[float] = field(default_factory=list)
     d: list[np.ndarray] = field(default_factory=list)
@@ -122,8 +126,6 @@ class Recorder:
     residual: list[float] = field(default_factory=list)
     qmax: float = 0.0
     energy: list[list[float]] = field(default_factory=list)
-    field_t: list[float] = field(default_factory=list)
-    fields: list[np.ndarray] = field(default_factory=list)
     last: np.ndarray | None = None
 
     def __call__(self, step: int, x: np.ndarray, xd: np.ndarray, xdd: np.ndarray) -> None:
@@ -147,9 +149,8 @@ class Recorder:
             if p.C is not None:
                 Q = Q + p.C @ qd
             self.lam.append(self.forces(np.asarray(Q)))
-        if self.field_every and step % self.field_every == 0:
-            self.field_t.append(step * self.dt)
-            self.fields.append(np.array(q, copy=True))
+        if self.fields is not None and self.fields.wants(step):
+            self.fields.add(step, q)
         self.last = q
 
     def on_work(self, step: int, work: Work) -> None:
@@ -159,7 +160,9 @@ class Recorder:
 
     def arrays(self) -> dict[str, np.ndarray]:
         """The records as arrays (``t``, ``d``, ``v``, ``a``, ``lam``, ``residual``,
-        ``energy``, ``field_t``, ``field``)."""
+        ``energy``, ``field_t``, ``field``; ``field`` a
+        :class:`~substruct.analysis.transient.fields.StoredFields` when the fields went to a
+        sink)."""
         n_out = self.phys.O.shape[0]
         m = self.phys.A.shape[0]
 
@@ -167,12 +170,14 @@ class Recorder:
             return np.vstack(rows) if rows else np.zeros((len(self.t), width))
 
         n = self.phys.M.shape[0]
+        stored: np.ndarray | StoredFields = np.zeros((0, n)) if self.fields is None else \
+            self.fields.stored()
         return {"t": np.asarray(self.t), "d": stack(self.d, n_out), "v": stack(self.v, n_out),
                 "a": stack(self.a, n_out),
                 "lam": stack(self.lam, m) if self.forces is not None else np.zeros((0, m)),
                 "residual": np.asarray(self.residual), "energy": np.asarray(self.energy),
-                "field_t": np.asarray(self.field_t),
-                "field": np.vstack(self.fields) if self.fields else np.zeros((0, n))}
+                "field_t": np.zeros(0) if self.fields is None else self.fields.t,
+                "field": cast(np.ndarray, stored)}
 
 
 def energy_change(energy: np.ndarray) -> tuple[float, float]:

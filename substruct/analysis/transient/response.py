@@ -53,6 +53,7 @@ from substruct.analysis.transient.integrators import (
 from substruct.analysis.modes.krylov import eliminate
 from substruct.analysis.formulations.projection import constrained_acceleration
 from substruct.analysis.transient.base import BaseMotion, Motion, ground_history, influence
+from substruct.analysis.transient.fields import FieldSink, FieldStore, field_steps
 from substruct.analysis.transient.loads import for_scheme
 from substruct.analysis.transient.initial import InitialStateError, check_initial, static_state
 from substruct.analysis.transient.modal import modal_run
@@ -204,8 +205,10 @@ def restarter(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
 
 
 def direct_run(phys: Physical, form: str, s: Scheme, h: float, n_steps: int, d0: np.ndarray,
-               v0: np.ndarray, a0: np.ndarray, opts: TransientOptions) -> Recorder:
-    """One run of the generalized-inverse or the null-space form (module docstring)."""
+               v0: np.ndarray, a0: np.ndarray, opts: TransientOptions,
+               fields: FieldStore | None = None) -> Recorder:
+    """One run of the generalized-inverse or the null-space form (module docstring); the
+    fields of the steps ``fields`` names go to it."""
     M, C, K, B = phys.M, phys.C, phys.K, phys.B
     mo = phys.motion
     n = M.shape[0]
@@ -219,7 +222,7 @@ def direct_run(phys: Physical, form: str, s: Scheme, h: float, n_steps: int, d0:
         corr = (_correction(S, solve, phys.A, phys.b, phys.motion) if phys.A.shape[0]
                 else None)
         # the generalized-inverse form integrates q itself: no particular solution to add
-        rec = Recorder(dataclasses.replace(phys, qp=None), M, K, h, forces, opts.field_every)
+        rec = Recorder(dataclasses.replace(phys, qp=None), M, K, h, forces, fields)
         ground = None if mo is None else (lambda k: mo.e * mo.g[k, 2])
         integrate(M, C, K, B, phys.loads, StepState(d0, v0, a0), rec,
                   StepControl(s, h, n_steps, solve, opts.every), correction=corr,
@@ -250,7 +253,7 @@ def direct_run(phys: Physical, form: str, s: Scheme, h: float, n_steps: int, d0:
     solve = _spd_solver(S, opts.factorization)
     nphys = Physical(phys.M, phys.C, phys.K, phys.B, phys.f, phys.A, phys.b, phys.O, T, qp,
                      phys.motion, phys.pairs)
-    rec = Recorder(nphys, Mt, Kt, h, forces, opts.field_every)
+    rec = Recorder(nphys, Mt, Kt, h, forces, fields)
     integrate(Mt, Ct, Kt, Bt, loads, StepState(p0, pv0, pa0), rec,
               StepControl(s, h, n_steps, solve, opts.every),
               restart=restarter(Mt, Ct, Kt, Bt, sp.csr_array((0, Mt.shape[0]))))
@@ -271,7 +274,8 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
               K: sp.sparray | np.ndarray, A: sp.sparray | np.ndarray | None,
               b: np.ndarray | None, load: LoadHistory, outputs: TransientOutputs, *,
               constraint_labels: Sequence[str] = (), initial: InitialConditions | None = None,
-              options: TransientOptions | None = None) -> Transient:
+              options: TransientOptions | None = None,
+              fields: FieldSink | None = None) -> Transient:
     r"""Time histories of :math:`M \ddot q + C \dot q + K q = B f(t) + Q^c`, :math:`A q = b`
     (eqs 5, 10), by ``options.method``, checked by ``options.checks``.
 
@@ -289,6 +293,12 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
             at rest, :math:`q_0 = 0`).
         options: :class:`~substruct.analysis.transient.options.TransientOptions`: the form,
             its checks and their tolerance, the integrator, what is recorded.
+        fields: where the main form's fields (every ``options.field_every`` steps) go, a
+            block of instants at a time as they are recorded
+            (:class:`~substruct.analysis.transient.fields.FieldSink`; ``None``: kept whole).
+            The result's ``snapshots`` is then a
+            :class:`~substruct.analysis.transient.fields.StoredFields` (selections read back).
+            The checks compare the final fields, which every run keeps; they store none.
 
     Returns:
         :class:`~substruct.analysis.transient.results.Transient` of the main form, with the
@@ -357,14 +367,15 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
     phys = Physical(Ms, Cs, Ks, Bs, f, Ae, be, O, None, qp, motion,
                     for_scheme(load.pairs or {}, s))
 
-    def run(form: str) -> Recorder:
-        rec = (modal_run(phys, s, dt, n_steps, d0, v0, opts) if form == "modal" else
-               direct_run(phys, form, s, dt, n_steps, d0, v0, a0, opts))
+    def run(form: str, store: FieldStore | None = None) -> Recorder:
+        rec = (modal_run(phys, s, dt, n_steps, d0, v0, opts, store) if form == "modal" else
+               direct_run(phys, form, s, dt, n_steps, d0, v0, a0, opts, store))
         require_energy_balance(opts.what, form, np.asarray(rec.energy).reshape(-1, 4), s,
                                tolerance)
         return rec
 
-    main = run(method)
+    steps = field_steps(n_steps, opts.every, opts.field_every)
+    main = run(method, FieldStore(n, steps, dt, fields) if steps.size else None)
     agreement = {m: _difference(run(m), main) for m in check_methods(method, opts.checks)}
     require_agreement(opts.what, method, agreement, tolerance)
     r = main.arrays()
