@@ -2,7 +2,7 @@
 
     OMP_NUM_THREADS=1 python benchmarks/run_output.py [--frequencies 1000] [--repeat 3]
                                                       [--startup-repeat 9] [--quick]
-                                                      [--skip-startup]
+                                                      [--skip-startup | --startup-only]
 
 Big output: the two tied 200-mass chains of ``benchmarks/frf_sweep.py``, all 400 x 400
 receptances at ``--frequencies`` frequencies (1,000: a 2.56 GB result), each side a fresh
@@ -31,6 +31,8 @@ Start-up (e): the tapered rod of ``cases/tapered_rod_fe.yaml`` with 4,000 P2 ele
 coordinates, 6 modes and the variant without the constraint, each checked), ``substruct run
 --quiet --no-pictures``, against ``python -c "import numpy, scipy.sparse.linalg, h5py"``,
 in turn, ``--startup-repeat`` times; medians; target: the run at most 2x the bare imports.
+``--startup-only`` runs (e) alone.  The load average of the machine before and after (e) is
+printed: on a shared machine the ratio is steady only while the load is.
 Both with Python's bytecode cache on, as an installed package has it (without it, the
 ``substruct`` process compiles its 100-odd modules at every start: 0.15-0.3 s more).
 """
@@ -192,19 +194,24 @@ def startup(opts: argparse.Namespace, env: dict, work: Path) -> None:
            "--out", str(work / "rod"), "--force", "--quiet", "--no-pictures"]
     bare = [sys.executable, "-c", BARE]
     child(rod, env)  # a first run: the files of both in the page cache
+    load_before = os.getloadavg()[0]
     runs = [(child(rod, env), child(bare, env)) for _ in range(opts.startup_repeat)]
+    load_after = os.getloadavg()[0]
     cpu_r = statistics.median(r["cpu"] for r, _ in runs)
     cpu_b = statistics.median(b["cpu"] for _, b in runs)
     wall_r = statistics.median(r["wall"] for r, _ in runs)
     wall_b = statistics.median(b["wall"] for _, b in runs)
     print(f"\nStart-up: 8k-DOF rod (cases/tapered_rod_fe.yaml, 4,000 P2 elements), "
-          f"{opts.startup_repeat} alternate runs, medians")
+          f"{opts.startup_repeat} alternate runs, medians; load average {load_before:.1f} "
+          f"before, {load_after:.1f} after")
     print(f"{'row':58s} {'CPU s':>8s} {'wall s':>8s}")
     print(f"{'(e) substruct run --quiet --no-pictures, 8,006 coordinates':58s} "
           f"{cpu_r:8.2f} {wall_r:8.2f}")
     label = f'(e) python -c "{BARE}"'
     print(f"{label:58s} {cpu_b:8.2f} {wall_b:8.2f}")
     print(f"{'(e) ratio (target <= 2)':58s} {cpu_r / cpu_b:8.2f} {wall_r / wall_b:8.2f}")
+    print("each pair, CPU s (run | bare): " + ", ".join(
+        f"{r['cpu']:.2f} | {b['cpu']:.2f}" for r, b in runs))
 
 
 def main() -> None:
@@ -215,11 +222,14 @@ def main() -> None:
     parser.add_argument("--quick", action="store_true",
                         help="200 frequencies, one run, three start-up runs")
     parser.add_argument("--skip-startup", action="store_true", help="the big output only")
+    parser.add_argument("--startup-only", action="store_true", help="the start-up (e) only")
     parser.add_argument("--worker", choices=["library", "compare"], help=argparse.SUPPRESS)
     parser.add_argument("--raw", help=argparse.SUPPRESS)
     parser.add_argument("--h5", help=argparse.SUPPRESS)
     parser.add_argument("--shape", help=argparse.SUPPRESS)
     opts = parser.parse_args()
+    if opts.skip_startup and opts.startup_only:
+        parser.error("--skip-startup and --startup-only exclude each other")
     if opts.worker == "library":
         worker_library(opts.frequencies, opts.raw)
         return
@@ -242,7 +252,8 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         if not opts.skip_startup:
             startup(opts, env, Path(tmp))
-        big_output(opts, env, Path(tmp))
+        if not opts.startup_only:
+            big_output(opts, env, Path(tmp))
 
 
 if __name__ == "__main__":

@@ -4,11 +4,14 @@ output whole, its exit code kept)."""
 
 from __future__ import annotations
 
+import importlib.util
 import json
 import os
 import subprocess
 import sys
 from pathlib import Path
+
+import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 ENV = {**os.environ, "MPLBACKEND": "Agg", "OMP_NUM_THREADS": "1", "PYTHONPATH": str(ROOT)}
@@ -87,3 +90,91 @@ def test_a_program_calling_main_with_arguments_keeps_its_teardown(tmp_path):
             "sys.exit(7)\n")
     proc = _python(code)
     assert proc.returncode == 7 and "teardown ran" in proc.stderr, proc.stderr
+
+
+def _modules_of_whole_run(argv: list[str]) -> set[str]:
+    """The modules loaded by ``main(argv)`` with the computation in this process (not in the
+    forked child of :func:`substruct.cli.isolated.call_isolated`), so that what the child
+    would load is counted too."""
+    code = ("import sys, json, importlib\n"
+            "rc = importlib.import_module('substruct.cli.run_command')\n"
+            "rc.call_isolated = lambda fn: fn()\n"
+            "from substruct.cli.main import main\n"
+            f"code = main({argv!r})\n"
+            "print(json.dumps([code, sorted(sys.modules)]))\n")
+    proc = _python(code)
+    assert proc.returncode == 0, proc.stderr
+    code_, modules = json.loads(proc.stdout.strip().splitlines()[-1])
+    assert code_ == 0, proc.stderr
+    return set(modules)
+
+
+def test_a_modes_run_loads_no_picture_jit_or_other_analysis_route(tmp_path):
+    """The constrained rod's modes (and the variant without its constraint), without
+    pictures: no plotting, no Numba (the receptance kernels), none of the routes of the
+    analyses the case does not ask for."""
+    case = ROOT / "cases" / "tapered_rod_fe.yaml"
+    mods = _modules_of_whole_run(["run", str(case), "--out", str(tmp_path), "--quiet",
+                                  "--no-pictures"])
+    assert (tmp_path / "tapered_rod_fe.h5").is_file()
+    assert "substruct.run.runner" in mods and "substruct.analysis.modes.production" in mods
+    for unused in ("matplotlib", "numba", "substruct.viz.plotting", "substruct.run.frf_route",
+                   "substruct.run.vp_route", "substruct.run.spec_route",
+                   "substruct.run.base_frf_route", "substruct.run.transient_run",
+                   "substruct.run.testlab_route", "scipy.signal", "scipy.spatial"):
+        assert unused not in mods, unused
+
+
+def test_pardiso_is_loaded_without_a_search_for_its_library():
+    """With the mkl wheel installed, PARDISO's library is the wheel's own, and neither
+    ``ctypes.util.find_library`` (which runs ldconfig and the compiler) nor a walk of the
+    environment (``glob``) runs to find it."""
+    if importlib.util.find_spec("pypardiso") is None:
+        pytest.skip("pypardiso is not installed")
+    code = ("import ctypes.util, glob, json\n"
+            "calls = []\n"
+            "ctypes.util.find_library = lambda *a: calls.append(('find_library', a))\n"
+            "glob.glob = lambda *a, **k: calls.append(('glob', a)) or []\n"
+            "from substruct.linalg.pardiso import load_mkl_pardiso, mkl_wheel_library\n"
+            "path = mkl_wheel_library()\n"
+            "loaded = None\n"
+            "if path is not None:\n"
+            "    load_mkl_pardiso()\n"
+            "    import pypardiso\n"
+            "    loaded = pypardiso.ps.libmkl._name\n"
+            "print(json.dumps([path, calls, loaded]))\n")
+    proc = _python(code)
+    assert proc.returncode == 0, proc.stderr
+    path, calls, loaded = json.loads(proc.stdout.strip().splitlines()[-1])
+    if path is None:
+        pytest.skip("PARDISO's library is not from the mkl wheel")
+    assert calls == [] and loaded == path and os.path.isfile(path)
+
+
+def test_what_loading_made_is_not_left_to_the_next_young_collection():
+    """Objects made while the collector is paused (the case read, the layers loaded) go to the
+    oldest generation, so the first collection after the pause does not walk them all; they
+    stay collectable (a cycle made in the pause and dropped is freed by a full collection)."""
+    import gc
+    import weakref
+
+    from substruct.cli.files import collector_paused
+
+    class Node:
+        pass
+
+    assert gc.isenabled()
+    with collector_paused():
+        kept = [Node() for _ in range(1000)]
+        cycle = Node()
+        cycle.self = cycle  # type: ignore[attr-defined]
+        gone = weakref.ref(cycle)
+        del cycle
+    assert gc.isenabled()
+    assert all(gc.is_tracked(k) for k in kept)
+    young = {id(o) for o in gc.get_objects(generation=0)}
+    assert not any(id(k) in young for k in kept)
+    assert any(o is kept[0] for o in gc.get_objects(generation=2))
+    assert gone() is not None  # not collected yet: the pause made no collection
+    gc.collect()
+    assert gone() is None

@@ -10,7 +10,6 @@ import numpy as np
 import scipy.sparse as sp
 
 from substruct.builder.frames import build_frame
-from substruct.builder.nastran import build_nastran
 from substruct.builder.solids import build_solid
 from substruct.builder.superelements import build_superelement
 from substruct.case.loader import (
@@ -137,6 +136,8 @@ def make_substructures(case: Case, positions: dict[str, list[float]],
         elif isinstance(spec, SuperelementSpec):
             subs.append(build_superelement(case, i, spec))
         elif isinstance(spec, NastranSpec):
+            from substruct.builder.nastran import build_nastran  # Nastran: only when used
+
             subs.append(build_nastran(spec))
         # type: frf has no matrices: split off by substruct.builder.frf_parts
     return subs

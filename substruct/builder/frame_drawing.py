@@ -42,7 +42,6 @@ from substruct.assembly.links import NodeRef
 from substruct.assembly.stack import Assembly
 from substruct.builder.drawing import Drawing
 from substruct.builder.links import link_node
-from substruct.builder.nastran import rigid_element_grids
 from substruct.case.links import InterpolationLinkSpec, RigidLinkSpec
 from substruct.case.nastran import NastranSpec
 from substruct.substructure import Substructure
@@ -194,6 +193,8 @@ def bulk_spiders(case: Any, asm: Assembly) -> list[Drawing]:
         sub = subs.get(spec.name)
         if not isinstance(spec, NastranSpec) or sub is None or sub.position is None:
             continue
+        from substruct.builder.nastran import rigid_element_grids  # Nastran: only when used
+
         for card, ident, centre, others in rigid_element_grids(spec.bulk):
             nodes = []
             for g in [centre, *others]:

@@ -17,7 +17,6 @@ from substruct.assembly.links import (
 )
 from substruct.assembly.faces import face_node_refs, face_nodes, region_of, tributary_areas
 from substruct.assembly.stack import LinearConstraint, PointRef
-from substruct.builder.nastran import autospc, bulk_links, used_columns
 from substruct.builder.solids import solid_where
 from substruct.case.bdf_fields import BdfError
 from substruct.case.fields import parse_point
@@ -164,6 +163,8 @@ def case_links(case: Any, subs: Sequence[Substructure], points: Mapping[str, Poi
     origin: dict[str, Any] = {}
     for spec in case.substructures:
         if isinstance(spec, NastranSpec) and spec.name in by_name:
+            from substruct.builder.nastran import bulk_links  # Nastran: only when used
+
             for link, line, card, ident in bulk_links(spec.name, spec.bulk, by_name):
                 links.append(link)
                 origin[link.name] = (spec.bulk.source, line, card, ident)
@@ -187,6 +188,8 @@ def case_links(case: Any, subs: Sequence[Substructure], points: Mapping[str, Poi
     for sub in subs:
         spec = case.substructure(sub.name)
         if isinstance(spec, NastranSpec) and spec.bulk.autospc:
+            from substruct.builder.nastran import autospc, used_columns
+
             sub = autospc(sub, used_columns(sub, refs))
         out.append(sub)
     return out, rows

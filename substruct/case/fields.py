@@ -178,9 +178,15 @@ Distribution = Annotated[Any, AfterValidator(_spec)]
 
 
 class StrictModel(BaseModel):
-    """Base of every schema model: unknown keys and non-finite numbers are errors."""
+    """Base of every schema model: unknown keys and non-finite numbers are errors.
 
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, validate_default=False)
+    Each model's validator is built when it is first used (``defer_build``), not when its
+    class is defined: a case validates through one validator built for :class:`Case` rather
+    than one built for each of the schema's 80-odd models at import (0.03-0.05 s of start-up
+    saved, the same checks)."""
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, validate_default=False,
+                              defer_build=True)
 
 
 def memory_limit() -> float:

@@ -19,14 +19,16 @@ from __future__ import annotations
 import math
 import re
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 import yaml
 from pydantic import Field, PrivateAttr, ValidationInfo, model_validator
 
-from substruct.case.bdf import BulkData, read_bulk
 from substruct.case.errors import CaseError, FieldError
 from substruct.case.fields import Name, StrictModel
+
+if TYPE_CHECKING:  # the bulk data reader is imported when a Nastran file is read
+    from substruct.case.bdf import BulkData
 
 __all__ = ["NastranSpec", "BDF_SUFFIXES", "bdf_case"]
 
@@ -45,6 +47,8 @@ class NastranSpec(StrictModel):
 
     @model_validator(mode="after")
     def _read(self, info: ValidationInfo) -> "NastranSpec":
+        from substruct.case.bdf import read_bulk
+
         base = Path((info.context or {}).get("base_dir", "."))
         try:
             self._bulk = read_bulk(base / self.file, self.file)
@@ -72,6 +76,7 @@ def bdf_case(path: Path, source: str) -> str:
     Raises:
         BdfError: the file cannot be read or has no EIGRL.
     """
+    from substruct.case.bdf import read_bulk
     from substruct.case.bdf_fields import BdfError
     from substruct.case.fields import MAX_COUNT
 

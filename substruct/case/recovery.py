@@ -37,7 +37,6 @@ from pydantic import Field, PrivateAttr
 from substruct.case.errors import FieldError
 from substruct.case.fields import MAX_MATRIX_SIZE, Name, StrictModel
 from substruct.case.numbers import array_problem
-from substruct.case.superelement_files import read_matrix_file
 
 __all__ = ["RecoverySpec", "RECOVERY_OF", "MAX_LABEL", "MAX_LABEL_FILE", "load_recovery"]
 
@@ -158,6 +157,8 @@ def load_recovery(specs: list[RecoverySpec], base: Path, default_file: str | Non
         if file is None:
             raise FieldError((*loc, "file"), "the file of the recovery matrix (.op4 or .npz) is "
                              "required beside Abaqus matrix files", spec.matrix)
+        from substruct.case.superelement_files import read_matrix_file  # when a file is read
+
         got = read_matrix_file(file, base, (*loc, "file") if spec.file else "file",
                                {"R": spec.matrix}, [key] if isinstance(key, str) else [],
                                {"R": (*loc, "matrix")}, (".op4", ".npz"))

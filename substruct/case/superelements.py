@@ -65,11 +65,6 @@ from substruct.case.rigid_body import (
     rigid_body_frequency_ratio,
     rigid_body_vectors,
 )
-from substruct.case.superelement_files import (
-    BULK_SUFFIXES,
-    read_abaqus_files,
-    read_matrix_file,
-)
 
 __all__ = ["SuperelementSpec", "SE_COMPONENTS", "SYMMETRY_RTOL", "MAX_DOF_FILE"]
 
@@ -116,6 +111,8 @@ class SuperelementSpec(StrictModel):
                                          list[tuple[int, int]] | None]:
         """The named matrices (dense float64), the bytes per number of the data, the DOF-map
         member if ``dofs: {key: ...}`` and the DOF map of DMIG entries."""
+        from substruct.case.superelement_files import BULK_SUFFIXES, read_matrix_file
+
         names = {f: getattr(self, f) for f in _MATRICES if getattr(self, f) is not None}
         if self.file is None:
             return self._read_abaqus(base, names)
@@ -146,6 +143,8 @@ class SuperelementSpec(StrictModel):
             raise FieldError(("dofs", "key"), "names a member of file; Abaqus matrix files "
                              "hold one matrix each (give {file: map.csv} or a list)",
                              self.dofs["key"])
+        from substruct.case.superelement_files import read_abaqus_files  # when a file is read
+
         given = self._dof_rows(base, None) if self.dofs is not None else None
         got = read_abaqus_files(names, base, given)
         return got.matrices, got.nbytes, None, got.dofs

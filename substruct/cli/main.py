@@ -56,9 +56,13 @@ _RUN: dict[str, tuple[str, str]] = {
 
 
 def _command(name: str) -> Callable[[argparse.Namespace], int]:
-    """The function of command ``name``, its module imported now."""
+    """The function of command ``name``, its module imported now (the collector paused:
+    :func:`~substruct.cli.files.collector_paused`)."""
+    from substruct.cli.files import collector_paused
+
     module, function = _RUN[name]
-    return getattr(importlib.import_module(f"substruct.cli.{module}"), function)
+    with collector_paused():
+        return getattr(importlib.import_module(f"substruct.cli.{module}"), function)
 
 
 def _one_line(text: object) -> str:

@@ -31,14 +31,17 @@ residuals about a thousand times SciPy's on the benchmark KKT matrices without t
 from __future__ import annotations
 
 import ctypes
+import os
+import sys
 import weakref
+from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
 import scipy.sparse as sp
 
-__all__ = ["MTYPES", "PardisoError", "pardiso_available", "load_mkl_pardiso", "pardiso",
-           "pardiso_factor_entries"]
+__all__ = ["MTYPES", "PardisoError", "pardiso_available", "load_mkl_pardiso", "mkl_wheel_library",
+           "pardiso", "pardiso_factor_entries"]
 
 #: PARDISO's matrix type for each matrix kind of :mod:`substruct.linalg.backends`.
 MTYPES = {"spd": 2, "symmetric": -2, "complex-symmetric": 6, "real": 11, "complex": 13}
@@ -63,10 +66,53 @@ class PardisoError(RuntimeError):
                          f"{message or _MESSAGES.get(code, 'unknown error')}")
 
 
+def mkl_wheel_library() -> str | None:
+    """The path of the ``mkl_rt`` library the ``mkl`` wheel installed, from the wheel's own
+    list of its files (``None`` without the wheel, e.g. MKL from conda or the system).
+
+    Given to ``pypardiso`` (its ``PYPARDISO_MKL_RT``) while it is imported: without it,
+    ``pypardiso`` searches for the library with ``ctypes.util.find_library`` (which runs
+    ``ldconfig``, the C compiler and the linker) and then by walking every folder of the
+    environment, 0.15-0.25 s of CPU time at each start of a process that factorizes.
+    """
+    from importlib import metadata
+
+    try:
+        files = metadata.files("mkl") or []
+    except metadata.PackageNotFoundError:
+        return None
+    for file in sorted((f for f in files if "mkl_rt" in f.name), key=lambda f: len(str(f))):
+        path = Path(str(file.locate()))
+        try:
+            ctypes.CDLL(str(path))  # loaded once: pypardiso's load of it is then a lookup
+        except OSError:
+            continue
+        return str(path)
+    return None
+
+
+def _import_pypardiso() -> Any:
+    """``import pypardiso``, its library named by :func:`mkl_wheel_library` when the user has
+    not named one (``PYPARDISO_MKL_RT``); the variable is not left set."""
+    if "pypardiso" in sys.modules or "PYPARDISO_MKL_RT" in os.environ:
+        import pypardiso
+
+        return pypardiso
+    found = mkl_wheel_library()
+    if found is not None:
+        os.environ["PYPARDISO_MKL_RT"] = found
+    try:
+        import pypardiso  # optional dependency: x86_64 Linux and Windows wheels (with mkl)
+    finally:
+        if found is not None:
+            os.environ.pop("PYPARDISO_MKL_RT", None)
+    return pypardiso
+
+
 def load_mkl_pardiso() -> Any:
     """The ``pardiso`` routine of the ``mkl_rt`` library ``pypardiso`` found (imported here,
     each call, so an uninstalled ``pypardiso`` raises :class:`ImportError`)."""
-    import pypardiso  # optional dependency: x86_64 Linux and Windows wheels (with mkl)
+    pypardiso = _import_pypardiso()
 
     if not _LIB:
         fn = pypardiso.ps.libmkl.pardiso

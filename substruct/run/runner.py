@@ -35,7 +35,6 @@ from substruct.run.analyses import (
     modes_result,
     rows_receptance,
 )
-from substruct.run.frf_route import coupled_frf_result
 from substruct.run.recovery import (
     recover_frf,
     recover_modes,
@@ -43,16 +42,6 @@ from substruct.run.recovery import (
     recovery_rows,
     split_recovered,
 )
-from substruct.run.base_frf_route import base_frf_result
-from substruct.run.recovery_frf_parts import frf_parts_rows_receptance
-from substruct.run.spec_route import (
-    loss_frf_result,
-    loss_rows_receptance,
-    random_result,
-    srs_result,
-)
-from substruct.run.transient_run import transient_result
-from substruct.run.vp_route import has_virtual_points, vp_frf_result
 from substruct.run.result import Result
 from substruct.substructure import Substructure
 
@@ -152,6 +141,10 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
                 what=f"modes (variant {variant.name})", events=events, tasks=tasks)
     frf = case.analysis.frf
     if frf is not None:
+        from substruct.run.frf_route import coupled_frf_result  # the routes: when used
+        from substruct.run.spec_route import loss_frf_result
+        from substruct.run.vp_route import has_virtual_points, vp_frf_result
+
         # TPA and SEMM read the whole receptance back: the sweep is kept in memory for them
         testlab = case.analysis.tpa is not None or case.analysis.semm is not None
         if events is not None:
@@ -184,14 +177,20 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
                    f"{rec_rows.shape[0]} row(s)", len(omegas))
         got: tuple[np.ndarray, np.ndarray] | None
         if has_frf_parts(case):  # coupled by LM-FBS, the rows as outputs of the FE part
+            from substruct.run.recovery_frf_parts import frf_parts_rows_receptance
+
             got = frf_parts_rows_receptance(case, model, rec_rows)
         else:
+            from substruct.run.spec_route import loss_rows_receptance
+
             rows_of = rows_receptance if frf.loss_factor is None else loss_rows_receptance
             with np.errstate(over="ignore", invalid="ignore"):
                 got = omegas, rows_of(case, model, rec_rows, omegas)
         if got is not None:
             recover_frf(plan, got[1], got[0], list(frf.inputs), result.recovery)
     if case.analysis.transient is not None:
+        from substruct.run.transient_run import transient_result
+
         if events is not None:
             events("sweep", f"transient: {case.analysis.transient.steps} steps, "
                    f"{asm.n_dof} coordinates", case.analysis.transient.steps)
@@ -205,12 +204,18 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
                                            result.recovery) if plan else tr
     # specification analyses (substruct.run.spec_route)
     if case.analysis.random is not None:
+        from substruct.run.spec_route import random_result
+
         result.random = random_result(case, model)
         require_finite("random", psd=result.random.psd)
     if case.analysis.base_frf is not None:
+        from substruct.run.base_frf_route import base_frf_result
+
         result.base_frf = base_frf_result(case, model)
         require_finite("base_frf", transmissibility=result.base_frf.T)
     if case.analysis.srs is not None and result.transient is not None:
+        from substruct.run.spec_route import srs_result
+
         result.srs = srs_result(case, result.transient)
     _require_finite_result(result)
     return result
@@ -222,6 +227,8 @@ def _refuse_unrecovered_receptances(case: Case, recovers: bool) -> None:
     frf = case.analysis.frf
     if not recovers or frf is None:
         return
+    from substruct.run.vp_route import has_virtual_points  # the route: when used
+
     why = ("virtual points" if has_virtual_points(case) else
            "a decoupled part" if any(getattr(s, "decouple", False)
                                      for s in case.substructures) else None)
