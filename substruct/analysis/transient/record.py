@@ -104,7 +104,8 @@ class Recorder:
     ``M_x``, ``K_x``: the matrices of the integrated coordinates (for the energies);
     ``forces``: ``Q -> lambda`` or ``None`` (no constraint forces); ``field_every``: keep the
     full displacement every this many steps (0: never); ``offset``: added to the physical
-    displacement (the static correction of modal superposition), per step.
+    displacement (the static correction of modal superposition), per step; ``basis``: the
+    modes of a modal run (how many, by what).
     """
 
     phys: Physical
@@ -114,6 +115,7 @@ class Recorder:
     forces: Callable[[np.ndarray], np.ndarray] | None = None
     field_every: int = 0
     offset: Callable[[int], np.ndarray] | None = None
+    basis: str = ""
     t: list[float] = field(default_factory=list)
     d: list[np.ndarray] = field(default_factory=list)
     v: list[np.ndarray] = field(default_factory=list)
