@@ -136,7 +136,7 @@ class RandomAnalysis(BaseDrivenResponse):
 
     frequencies: Omega
     #: a direct formulation, or modal: the receptances summed over the coupled modes
-    method: FormulationName | Literal["modal"] = GENERALIZED_INVERSE
+    method: Literal["generalized-inverse", "null-space", "kkt", "modal"] = GENERALIZED_INVERSE
     #: how method: modal sums the modes (as analysis.frf.modal; the AMLS basis included)
     modal: ModalFrf | None = None
     forces: list[ForcePsd] = Field(default_factory=list)
