@@ -27,6 +27,7 @@ from substruct.case.fields import (
 )
 from substruct.case.numbers import MAX_MAGNITUDE, RANGE
 from substruct.case.frequency_grid import Omega
+from substruct.case.modal_spec import AmlsSpec, ModalFrf
 from substruct.case.spec_analysis import (
     BaseFrfAnalysis,
     BasePsd,
@@ -46,7 +47,6 @@ from substruct.vocabulary import (
     FormulationName,
     FrfMethod,
     Quantity,
-    Residual,
     Solver,
 )
 
@@ -101,17 +101,6 @@ class ModesBand(StrictModel):
         return self
 
 
-class AmlsSpec(StrictModel):
-    """How ``solver: amls`` reduces (:mod:`substruct.analysis.modes.amls`): every block keeps
-    its modes up to ``cutoff`` times the highest wanted frequency; subdomains of at most
-    ``leaf_size`` coordinates; ``iterations`` subspace iterations with the full factorization
-    after the reduction."""
-
-    cutoff: Annotated[Number, Field(gt=1)] = 5.0
-    leaf_size: Annotated[int, Field(ge=8, le=1_000_000)] = 1000
-    iterations: Annotated[int, Field(ge=0, le=10)] = 0
-
-
 class ModesAnalysis(StrictModel):
     """Coupled modes (eqs 28-34) by ``method``, checked by the ``check`` formulations; with a
     ``band``, only the modes in it, ``count`` at most (Nastran's EIGRL ``V1``, ``V2``)."""
@@ -132,28 +121,6 @@ class ModesAnalysis(StrictModel):
 
     @model_validator(mode="after")
     def _amls_block(self) -> "ModesAnalysis":
-        if self.amls is not None and self.solver != "amls":
-            raise FieldError("amls", f"the amls block is for solver: amls; the solver is "
-                             f"{self.solver}", "{...}")
-        return self
-
-
-class ModalFrf(StrictModel):
-    """How ``method: modal`` sums the coupled modes (:mod:`substruct.analysis.frf.modal`)."""
-
-    #: the number of modes kept (default: those up to cutoff x the highest frequency)
-    count: Count | None = None
-    cutoff: Annotated[Number, Field(ge=1)] = 10.0
-    residual: Residual = "second-order"
-    #: frequencies of the grid at which the direct solve checks the modal sum
-    check_frequencies: Annotated[int, Field(ge=0, le=100)] = 3
-    #: amls: every root below the cut-off on the AMLS basis, damping projected on it
-    solver: Solver = "auto"
-    #: the reduction of solver: amls (its defaults if blank)
-    amls: AmlsSpec | None = None
-
-    @model_validator(mode="after")
-    def _amls_block(self) -> "ModalFrf":
         if self.amls is not None and self.solver != "amls":
             raise FieldError("amls", f"the amls block is for solver: amls; the solver is "
                              f"{self.solver}", "{...}")

@@ -23,6 +23,7 @@ from substruct.case.fields import (
     memory_limit,
 )
 from substruct.case.frequency_grid import Omega
+from substruct.case.modal_spec import ModalFrf
 from substruct.case.random_cross import CrossPsd, check_cross
 from substruct.vocabulary import DEFAULT_TOLERANCE, GENERALIZED_INVERSE, FormulationName
 
@@ -107,15 +108,14 @@ class NamedBasePsd(BasePsd):
 
 class BaseDrivenResponse(StrictModel):
     """What a random response and a base-driven receptance share: the outputs, the motion
-    they are given as (absolute displacement, velocity or acceleration), the formulation and
-    its checks, and the structural damping; and the rule that names several base inputs
+    they are given as (absolute displacement, velocity or acceleration), the checks of the
+    formulation (each has its own ``method``), and the structural damping; and the rule that names several base inputs
     once each."""
 
     outputs: Annotated[list[Point], Field(min_length=1)]
     #: what the outputs' response is of (absolute motion; per base acceleration, the
     #: acceleration is the transmissibility proper)
     quantity: Literal["displacement", "velocity", "acceleration"] = "acceleration"
-    method: FormulationName = GENERALIZED_INVERSE
     check: list[FormulationName] = Field(default_factory=list)
     tolerance: Positive = DEFAULT_TOLERANCE
     #: structural damping: one loss factor on all of K, or {substructure: eta}
@@ -135,6 +135,10 @@ class RandomAnalysis(BaseDrivenResponse):
     ``bases`` (uncorrelated, or pairs correlated by ``cross``)."""
 
     frequencies: Omega
+    #: a direct formulation, or modal: the receptances summed over the coupled modes
+    method: Literal["generalized-inverse", "null-space", "kkt", "modal"] = GENERALIZED_INVERSE
+    #: how method: modal sums the modes (as analysis.frf.modal; the AMLS basis included)
+    modal: ModalFrf | None = None
     forces: list[ForcePsd] = Field(default_factory=list)
     #: correlated pairs of inputs (:mod:`substruct.case.random_cross`)
     cross: list[CrossPsd] = Field(default_factory=list)
@@ -150,6 +154,12 @@ class RandomAnalysis(BaseDrivenResponse):
                              "(forces), a base acceleration PSD (base) or several (bases), one "
                              "of the three")
         self.check_named_once(self.bases)
+        if self.modal is not None and self.method != "modal":
+            raise FieldError("modal", f"the modal block is for method: modal; the method is "
+                             f"{self.method}", "{...}")
+        if self.method == "modal" and self.loss_factor is not None:
+            raise FieldError("method", "a loss factor is taken by the direct formulations "
+                             "only (generalized-inverse, null-space, kkt)", self.method)
         check_cross(self.input_names() if self.base is None else [], self.cross)
         f = self.frequencies.grid()
         if np.any(f <= 0):
@@ -184,6 +194,7 @@ class BaseFrfAnalysis(BaseDrivenResponse):
     base ``base`` or several named ones ``bases`` (the supports of ``analysis.random``)."""
 
     omega: Omega
+    method: FormulationName = GENERALIZED_INVERSE
     #: the unit of the omega grid's values (rad/s or Hz)
     units: Literal["rad/s", "Hz"] = "rad/s"
     base: BaseSupports | None = None

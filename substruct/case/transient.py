@@ -29,6 +29,7 @@ from substruct.case.fields import (
     StrictModel,
     gigabytes,
 )
+from substruct.case.modal_spec import TransientModal
 from substruct.case.transient_files import MAX_TABLE_ROWS, read_table
 from substruct.case.transient_signals import Signal, TransientLoad, load_values
 from substruct.vocabulary import (
@@ -178,6 +179,8 @@ class TransientAnalysis(StrictModel):
     field_every: Annotated[int, Field(ge=0, le=MAX_STEPS)] = 0
     #: modes of the modal form (default: all of a small model)
     modal_count: Count | None = None
+    #: how the modal form finds its modes (solver, AMLS cut-off, residual)
+    modal: TransientModal | None = None
 
     @field_validator("initial", mode="before")
     @classmethod
@@ -214,6 +217,14 @@ class TransientAnalysis(StrictModel):
                              f"allowed: take a longer dt, a shorter t_end or fewer loads",
                              len(self.loads))
         forms = {self.method, *self.check}
+        if self.modal is not None and "modal" not in forms:
+            raise FieldError("modal", "the modal block is for the modal form: give method: "
+                             "modal or check: [modal]", "{...}")
+        if self.modal is not None and self.modal.cutoff is not None and \
+                self.modal_count is not None:
+            raise FieldError(("modal", "cutoff"), f"keep the modes below a cut-off or the "
+                             f"lowest modal_count ({self.modal_count}), not both",
+                             self.modal.cutoff)
         table, records = memory_need(self.steps, self.every, len(self.loads),
                                      len(self.outputs), len(forms),
                                      len(forms & {"null-space", "modal"}))

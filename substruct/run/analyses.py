@@ -45,6 +45,7 @@ from substruct.analysis.frf.stream import FrequencySink, SweepTap
 from substruct.analysis.modes.amls import AmlsOptions
 from substruct.analysis.results import Modes, Receptance
 from substruct.linalg.amls_block import TaskMap
+from substruct.run.modal_options import modal_options
 from substruct.assembly.stack import Assembly
 from substruct.builder.model import Model
 from substruct.case.fields import gigabytes
@@ -222,10 +223,7 @@ def frf_result(case: Case, model: Model, progress: Progress | None,
 def _modal_options(case: Case) -> ModalOptions:
     spec = case.analysis.frf
     assert spec is not None
-    block = spec.modal.amls
-    return ModalOptions(spec.modal.count, spec.modal.cutoff, spec.modal.residual,
-                        spec.modal.check_frequencies, spec.modal.solver,
-                        AmlsOptions(**block.model_dump()) if block is not None else None)
+    return modal_options(spec.modal)
 
 
 def rows_receptance(case: Case, model: Model, rows: sp.csr_array,

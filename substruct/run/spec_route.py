@@ -14,7 +14,10 @@ loss factors of ``analysis.frf``, a thin adapter to :mod:`substruct.analysis.frf
   forces or several named ``bases`` (one column of ``E`` each) uncorrelated (a diagonal
   :math:`S_f`) or correlated pair by pair by ``cross``
   (:func:`~substruct.case.random_cross.cross_matrix`, checked Hermitian positive semidefinite
-  at every frequency);
+  at every frequency); with ``method: modal`` the receptances are summed over the coupled
+  modes (:func:`~substruct.analysis.frf.modal.modal_receptance_sweep`, the AMLS basis with
+  ``modal.solver: amls``), per base acceleration in relative coordinates
+  (:func:`~substruct.analysis.frf.base_modal.modal_base_drive_sweep`);
 * srs: Smallwood's filter on each output's absolute acceleration, sampled every recorded step.
 
 Input the analyses cannot take becomes a :class:`~substruct.case.loader.CaseError` naming the
@@ -29,9 +32,10 @@ from typing import Sequence
 import numpy as np
 import scipy.sparse as sp
 
-from substruct.analysis.api import Progress, SweepOptions
+from substruct.analysis.api import Progress, SweepOptions, receptance_sweep
 from substruct.analysis.errors import INPUT_ERRORS, CheckError
 from substruct.analysis.frf.base_drive import base_drive_sweep
+from substruct.analysis.frf.base_modal import modal_base_drive_sweep
 from substruct.analysis.frf.quantity import as_quantity
 from substruct.analysis.frf.random import (
     check_spectral_matrix,
@@ -48,6 +52,7 @@ from substruct.builder.model import Model
 from substruct.case.analysis import LossFactorSpec
 from substruct.case.loader import Case
 from substruct.case.random_cross import cross_matrix
+from substruct.run.modal_options import modal_options
 from substruct.run.spec_results import RandomResponse, ShockSpectra
 from substruct.vocabulary import DERIVATIVE_ORDER
 
@@ -223,13 +228,21 @@ def random_result(case: Case, model: Model) -> RandomResponse:
             raise case.error((*loc, "cross"), str(err).replace(
                 "a cross-spectral", "the input cross-spectral"),
                 [list(c.between) for c in spec.cross]) from None
+    modal = spec.method == "modal"
+    options = SweepOptions(**sweep_kw(spec, names, spec.outputs), what="random",
+                           modal=modal_options(spec.modal) if modal else None)
     try:
-        if bases:
+        if bases and modal:
+            E = base_columns(case, model, [b.at for b in bases], loc, spec.base is not None)
+            rec = modal_base_drive_sweep(asm.K, asm.M, asm.C, asm.A, w, E, outputs,
+                                         per="acceleration", options=options)
+        elif modal:
+            inputs = sp.csc_array(asm.rows([model.points[p] for p in names]).T)
+            rec = receptance_sweep(asm.system, w, inputs, outputs, options=options)
+        elif bases:
             E = base_columns(case, model, [b.at for b in bases], loc, spec.base is not None)
             rec = base_drive_sweep(asm.K, asm.M, asm.C, asm.A, w, E, outputs,
-                                   per="acceleration", loss=parts,
-                                   options=SweepOptions(**sweep_kw(spec, names, spec.outputs),
-                                                        what="random"))
+                                   per="acceleration", loss=parts, options=options)
         else:
             inputs = sp.csc_array(asm.rows([model.points[p] for p in names]).T)
             rec = hysteretic_sweep(asm.K, asm.M, asm.C, asm.A, w, inputs, outputs, parts,

@@ -17,6 +17,7 @@ around those calls only); a check beyond the tolerance stays a
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -30,6 +31,7 @@ from substruct.analysis.transient import (
     TransientOutputs,
     transient,
 )
+from substruct.analysis.modes.amls import AmlsOptions
 from substruct.analysis.transient.base import BaseMotion
 from substruct.analysis.transient.fields import FieldSink
 from substruct.analysis.transient.initial import InitialStateError
@@ -39,6 +41,7 @@ from substruct.case.fields import MEMORY_LIMIT, gigabytes
 from substruct.case.expressions import ExpressionError
 from substruct.case.loader import Case
 from substruct.analysis.transient.loads import merge_pairs, step_pairs
+from substruct.case.modal_spec import TransientModal
 from substruct.case.transient import load_values
 from substruct.case.transient_files import npz_vector
 from substruct.case.transient_signals import waveform
@@ -204,6 +207,16 @@ def _initial(case: Case, model: Model) -> tuple[np.ndarray | None, np.ndarray | 
     return d0, v0
 
 
+def _modal(block: TransientModal | None) -> dict[str, Any]:
+    """The modal form's options of ``analysis.transient.modal`` (none if not given)."""
+    if block is None:
+        return {}
+    amls = block.amls
+    return dict(modal_solver=block.solver, modal_cutoff=block.cutoff,
+                modal_residual=block.residual,
+                modal_amls=None if amls is None else AmlsOptions(**amls.model_dump()))
+
+
 def transient_result(case: Case, model: Model, extra: sp.csr_array | None = None,
                      extra_names: list[str] | None = None,
                      field_sink: FieldSink | None = None) -> Transient:
@@ -245,7 +258,8 @@ def transient_result(case: Case, model: Model, extra: sp.csr_array | None = None
         opts = TransientOptions(method=spec.method, checks=spec.check, tolerance=spec.tolerance,
                                 integrator=spec.integrator, rho_inf=spec.spectral_radius,
                                 every=spec.every, field_every=spec.field_every,
-                                forces=spec.constraint_forces, modal_count=spec.modal_count)
+                                forces=spec.constraint_forces, modal_count=spec.modal_count,
+                                **_modal(spec.modal))
         initial = InitialConditions(d0=d0, v0=v0, static=spec.initial.static)
         return transient(asm.M, asm.C, asm.K, asm.A, asm.b,
                          LoadHistory(B, f, spec.dt, steps, pairs=pairs, base=ground),

@@ -18,6 +18,15 @@ coordinates); with fewer, the difference is the dynamic part of the truncated mo
 ground adds :math:`r g(t)` and the effective loads :math:`-M r \ddot g - C r \dot g - K r g`
 (:mod:`substruct.analysis.transient.base`).  The modal
 equations are integrated by the same scheme and step as the direct forms.
+
+With ``modal_solver="amls"`` the modes are those of an AMLS reduction
+(:func:`substruct.analysis.modes.amls.amls_coupled_modes`), every one below
+``modal_cutoff`` times the step's Nyquist frequency :math:`\pi / dt`: approximate (Ritz)
+modes, still :math:`M`- and :math:`K`-orthogonal after the Rayleigh-Ritz of
+:func:`coupled_basis`, so the modal equations stay uncoupled and ``R`` is still the exact
+static flexibility minus the static part of the modes kept (the mode-acceleration method):
+the answer converges to the direct integration as the cut-off grows, and with every mode of
+every block kept it is the direct integration to rounding.
 """
 
 from __future__ import annotations
@@ -26,6 +35,9 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
+from dataclasses import replace
+
+from substruct.analysis.modes.amls import AmlsOptions, amls_coupled_modes
 from substruct.analysis.modes.eigen import SPARSE_ABOVE, modes
 from substruct.analysis.transient.integrators import (
     Scheme,
@@ -38,7 +50,7 @@ from substruct.analysis.frf.modal_basis import RIGID_ROOT_FRACTION
 from substruct.analysis.frf.modal_static import static_solver
 from substruct.analysis.transient.fields import FieldStore
 from substruct.analysis.transient.record import Physical, Recorder
-from substruct.analysis.transient.options import TransientOptions
+from substruct.analysis.transient.options import MODAL_CUTOFF, TransientOptions
 
 __all__ = ["MODAL_DEFAULT_COUNT", "coupled_basis", "modal_run"]
 
@@ -46,22 +58,36 @@ __all__ = ["MODAL_DEFAULT_COUNT", "coupled_basis", "modal_run"]
 MODAL_DEFAULT_COUNT = 40
 
 
-def coupled_basis(phys: Physical, count: int | None, solver: str
-                  ) -> tuple[np.ndarray, np.ndarray]:
-    r"""``(Phi, omega)``: undamped coupled modes, :math:`\Phi^T M \Phi = I`,
+def coupled_basis(phys: Physical, count: int | None, solver: str, *,
+                  omega_max: float | None = None, amls: AmlsOptions | None = None
+                  ) -> tuple[np.ndarray, np.ndarray, str]:
+    r"""``(Phi, omega, label)``: undamped coupled modes, :math:`\Phi^T M \Phi = I`,
     :math:`\Phi^T K \Phi = \operatorname{diag}(\omega^2)` (re-orthonormalized by a small
-    Rayleigh-Ritz, so repeated frequencies are orthogonal too)."""
+    Rayleigh-Ritz, so repeated frequencies are orthogonal too), and how they were found.
+
+    ``solver="amls"``: the AMLS modes below ``omega_max`` (or the lowest ``count``), options
+    ``amls``; the label names the reduction and its largest relative residual
+    :math:`\|K u - \omega^2 M u\| / \|K u\|`.
+    """
     n = phys.M.shape[0]
-    if count is None and n > SPARSE_ABOVE:
-        count = MODAL_DEFAULT_COUNT
-    md = modes(phys.M, None, phys.K, phys.A, count, solver=solver, what="transient (modal)")
+    if solver == "amls":
+        opts = replace(amls if amls is not None else AmlsOptions(),
+                       omega_max=None if count is not None else omega_max)
+        md, _, label = amls_coupled_modes(phys.M, None, phys.K, phys.A, count, opts)
+        label = f"{len(md)} modes by {label}"
+    else:
+        if count is None and n > SPARSE_ABOVE:
+            count = MODAL_DEFAULT_COUNT
+        md = modes(phys.M, None, phys.K, phys.A, count, solver=solver,
+                   what="transient (modal)")
+        label = f"{len(md)} modes"
     U = np.asarray(md.shapes).real
     Mr, Kr = U.T @ (phys.M @ U), U.T @ (phys.K @ U)
     w2, rot = sla.eigh((Kr + Kr.T) / 2, (Mr + Mr.T) / 2)
     Phi = U @ rot
     scale = max(float(np.abs(w2).max(initial=0.0)), 1e-300)
     w2 = np.where(w2 < RIGID_ROOT_FRACTION ** 2 * scale, 0.0, w2)
-    return Phi, np.sqrt(w2)
+    return Phi, np.sqrt(w2), label
 
 
 def modal_run(phys: Physical, s: Scheme, h: float, n_steps: int, d0: np.ndarray,
@@ -69,7 +95,9 @@ def modal_run(phys: Physical, s: Scheme, h: float, n_steps: int, d0: np.ndarray,
               ) -> Recorder:
     """The modal form (module docstring), recorded like the direct forms (the fields of the
     steps ``fields`` names go to it)."""
-    Phi, omega = coupled_basis(phys, opts.modal_count, opts.modal_solver)
+    cutoff = MODAL_CUTOFF if opts.modal_cutoff is None else opts.modal_cutoff
+    Phi, omega, label = coupled_basis(phys, opts.modal_count, opts.modal_solver,
+                                      omega_max=cutoff * np.pi / h, amls=opts.modal_amls)
     M, K, B, f = phys.M, phys.K, phys.B, phys.f
     loads = phys.loads
     rigid = omega == 0.0
@@ -86,12 +114,12 @@ def modal_run(phys: Physical, s: Scheme, h: float, n_steps: int, d0: np.ndarray,
         Bd = np.hstack([Bd, -(K @ qp)[:, None]])
         loads = loads.widened(np.ones((f.shape[0], 1)))
         f = loads.f
-    if Bd.shape[1]:
+    if Bd.shape[1] and opts.modal_residual == "static":
         G = static_solver(sp.csr_array(K), sp.csr_array(M), phys.A, Phi[:, rigid])
         Pe, we = Phi[:, ~rigid], omega[~rigid]
         R = G(Bd) - Pe @ ((Pe.T @ Bd) / (we ** 2)[:, None])
     else:
-        R = np.zeros((M.shape[0], 0))
+        R = np.zeros((M.shape[0], Bd.shape[1]))
     k = Phi.shape[1]
     Me, Ke = np.eye(k), np.diag(omega ** 2)
     Ce = None if phys.C is None else Phi.T @ (phys.C @ Phi)
@@ -107,7 +135,8 @@ def modal_run(phys: Physical, s: Scheme, h: float, n_steps: int, d0: np.ndarray,
     def restart(step: int, eta: np.ndarray, etav: np.ndarray, fv: np.ndarray) -> np.ndarray:
         return np.asarray(Be @ fv - Ke @ eta - (Ce @ etav if Ce is not None else 0.0))
 
-    rec = Recorder(mphys, Me, Ke, h, None, fields, offset=lambda step: R @ f[step])
+    rec = Recorder(mphys, Me, Ke, h, None, fields, offset=lambda step: R @ f[step],
+                   basis=label)
     integrate(Me, Ce, Ke, Be, loads, StepState(eta0, etav0, r0), rec,
               StepControl(s, h, n_steps, lambda r: inv @ r, opts.every), restart=restart)
     return rec

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Mapping, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 import scipy.sparse as sp
@@ -27,7 +27,14 @@ from substruct.analysis.transient.initial import InitialStateError
 from substruct.analysis.transient.integrators import Scheme, scheme
 from substruct.vocabulary import GENERALIZED_INVERSE, TRANSIENT_FORMS
 
-__all__ = ["LoadHistory", "InitialConditions", "TransientOutputs", "TransientOptions"]
+__all__ = ["LoadHistory", "InitialConditions", "TransientOutputs", "TransientOptions",
+           "MODAL_CUTOFF", "MODAL_RESIDUALS"]
+
+#: The AMLS modes of the modal form: those below this multiple of the step's Nyquist
+#: frequency :math:`\pi / dt`, unless told.
+MODAL_CUTOFF = 1.0
+#: The modal form's treatment of the modes left out: their static part, or nothing.
+MODAL_RESIDUALS = ("static", "none")
 
 
 def _count(name: str, value: object, least: int) -> None:
@@ -117,7 +124,7 @@ class TransientOutputs:
 
 @dataclass(frozen=True)
 class TransientOptions:
-    """How a transient run is made.
+    r"""How a transient run is made.
 
     Attributes:
         method, checks: forms of :data:`~substruct.vocabulary.TRANSIENT_FORMS`: the one
@@ -130,11 +137,24 @@ class TransientOptions:
         forces: compute the constraint forces.
         factorization: of the effective matrix (:func:`substruct.linalg.factorize.factorizer`).
         modal_count: the modes of the modal form (``None``: all of a dense model).
-        modal_solver: their eigensolver strategy (:func:`substruct.analysis.api.choose_solver`).
+        modal_solver: their eigensolver strategy (:func:`substruct.analysis.api.choose_solver`),
+            or ``"amls"``: the modes of an AMLS reduction
+            (:func:`substruct.analysis.modes.amls.amls_coupled_modes`), every one below
+            ``modal_cutoff`` times the step's Nyquist frequency :math:`\pi / dt` (or the
+            lowest ``modal_count``).
+        modal_cutoff: with ``modal_solver="amls"``, that multiple (> 0; ``None``:
+            :data:`MODAL_CUTOFF`).
+        modal_amls: with ``modal_solver="amls"``, the reduction
+            (:class:`~substruct.analysis.modes.amls.AmlsOptions`; its defaults if ``None``).
+        modal_residual: ``"static"``, the static correction of the modes left out (the
+            mode-acceleration method), or ``"none"`` (the bare modal sum, to show what the
+            correction is worth).
 
     Raises:
         ValueError: an unknown form or integrator, ``rho_inf`` outside ``[0, 1]``, a
-            negative or NaN tolerance, ``every < 1``, ``field_every < 0``, ``modal_count < 1``.
+            negative or NaN tolerance, ``every < 1``, ``field_every < 0``, ``modal_count < 1``,
+            a ``modal_cutoff`` not positive, a ``modal_cutoff`` or ``modal_amls`` without
+            ``modal_solver="amls"``, an unknown ``modal_residual``.
     """
 
     method: str = GENERALIZED_INVERSE
@@ -149,6 +169,9 @@ class TransientOptions:
     factorization: str = "auto"
     modal_count: int | None = None
     modal_solver: str = "auto"
+    modal_cutoff: float | None = None
+    modal_amls: Any = None  # AmlsOptions (read by the modal form only)
+    modal_residual: str = "static"
     #: the integration scheme of ``integrator`` and ``rho_inf``
     scheme: Scheme = field(init=False, repr=False, compare=False)
 
@@ -163,5 +186,15 @@ class TransientOptions:
         _count("field_every", self.field_every, 0)
         if self.modal_count is not None:
             _count("modal_count", self.modal_count, 1)
+        if self.modal_residual not in MODAL_RESIDUALS:
+            raise ValueError(f"unknown modal_residual {self.modal_residual!r}; expected one "
+                             f"of {', '.join(MODAL_RESIDUALS)}")
+        if self.modal_cutoff is not None and not (math.isfinite(self.modal_cutoff)
+                                                  and self.modal_cutoff > 0):
+            raise ValueError(f"modal_cutoff must be > 0, got {self.modal_cutoff!r}")
+        if self.modal_solver != "amls" and (self.modal_cutoff is not None
+                                            or self.modal_amls is not None):
+            raise ValueError(f"modal_cutoff and modal_amls are for modal_solver amls, got "
+                             f"{self.modal_solver!r}")
         object.__setattr__(self, "checks", tuple(self.checks))
         object.__setattr__(self, "scheme", scheme(self.integrator, self.rho_inf))

@@ -107,8 +107,9 @@ class Recorder:
     ``M_x``, ``K_x``: the matrices of the integrated coordinates (for the energies);
     ``forces``: ``Q -> lambda`` or ``None`` (no constraint forces); ``fields``: where the full
     displacement of the steps it names goes (``None``: kept of none); ``offset``: added to the
-    physical displacement (the static correction of modal superposition), per step.  The
-    displacement of the last step recorded is kept in any case (:attr:`last`).
+    physical displacement (the static correction of modal superposition), per step; ``basis``:
+    the modes of a modal run (how many, by what).  The displacement of the last step recorded
+    is kept in any case (:attr:`last`).
     """
 
     phys: Physical
@@ -118,6 +119,7 @@ class Recorder:
     forces: Callable[[np.ndarray], np.ndarray] | None = None
     fields: FieldStore | None = None
     offset: Callable[[int], np.ndarray] | None = None
+    basis: str = ""
     t: list[float] = field(default_factory=list)
     d: list[np.ndarray] = field(default_factory=list)
     v: list[np.ndarray] = field(default_factory=list)

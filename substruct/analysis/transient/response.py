@@ -388,7 +388,8 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
                      drift=float(r["residual"].max(initial=0.0) / max(main.qmax, 1e-300)),
                      energy=r["energy"], snapshot_t=r["field_t"], snapshots=r["field"],
                      agreement=agreement, tolerance=float(tolerance),
-                     solver="dense step" if n <= DENSE_STEP else opts.factorization,
+                     solver=(main.basis if method == "modal" else
+                             "dense step" if n <= DENSE_STEP else opts.factorization),
                      base_motion=(np.zeros((0, 3)) if motion is None else
                                   motion.g[np.rint(r["t"] / dt).astype(int)]),
                      base_influence=(np.zeros(0) if motion is None else
