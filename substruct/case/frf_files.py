@@ -11,7 +11,11 @@ r"""Reading receptances from files: NPZ and Universal File Format dataset 58.
   (frequency) in Hz; ordinate displacement (8), velocity (11) or acceleration (12) over
   excitation force (13), the last two turned into receptances exactly,
   :math:`H = V / (i\omega)`, :math:`H = A / (i\omega)^2`, with :math:`\omega = 2\pi f > 0`;
-  a real ordinate (data types 2, 4) is a receptance with no imaginary part.  A function given
+  a real ordinate (data types 2, 4) is a receptance with no imaginary part.  The units of a
+  dataset 164 before the functions are honoured (:func:`substruct.case.uff_units.function_to_si`:
+  a displacement over force at translations is multiplied by :math:`f_F / f_L`); the units
+  exponents of records 8-10 (fields 2-4) are either all blank or 0 or those that 58's
+  Addendum A gives the data type at the direction, and refused otherwise.  A function given
   twice (the same response and reference, after the sign of the directions) is read once if
   both copies are equal and refused otherwise.  If the file has node datasets (15, 2411),
   every response and reference node must be one of them.  The ASCII form stores the abscissa
@@ -32,6 +36,7 @@ import numpy as np
 
 from substruct.case.npz_files import npz_members, read_npz
 from substruct.case.uff_records import Uff58, read_uff_records
+from substruct.case.uff_units import function_to_si, unit_exponents
 
 __all__ = ["DIRECTIONS", "MAX_FRF_FILE", "GRID_DIGITS_RTOL", "read_frf_file", "uff_label",
            "label_node_dir", "grid_problem", "FUNCTION_TYPES", "ORDINATES"]
@@ -126,6 +131,13 @@ def _as_receptance(f: Uff58) -> np.ndarray:
         raise ValueError(f"{w}: records 9-10 field 1, ordinate {f.numerator} over "
                          f"{f.denominator}: only displacement, velocity or acceleration (8, "
                          "11, 12) over excitation force (13) is read")
+    for k, (code, d) in enumerate(((18, 0), (f.numerator, f.rsp_dir), (13, f.ref_dir))):
+        given = f.exponents[k] if f.exponents else (0, 0, 0)
+        own = (*unit_exponents(code, d), 0)
+        if any(given) and tuple(given) != own:
+            raise ValueError(f"{w}: record {8 + k} fields 2-4, units exponents (length, force,"
+                             f" temperature) {list(given)}: data type {code} at direction {d} "
+                             f"has {list(own)} (58 Addendum A)")
     if f.spacing == 1 and not f.x_inc > 0:
         raise ValueError(f"{w}: record 7 field 5, abscissa increment {f.x_inc:g}: even "
                          "spacing needs a positive increment")
@@ -162,7 +174,8 @@ def _read_uff58(path: Path) -> tuple[np.ndarray, list[str], np.ndarray]:
             raise ValueError(f"{f.where}: the function {rsp}/{ref} has another abscissa "
                              f"than the first ({f.x.size} vs {x.size} points)")
         sign = np.sign(f.rsp_dir) * np.sign(f.ref_dir)
-        data = sign * _as_receptance(f)
+        data = sign * function_to_si(read.units, f.numerator, f.rsp_dir, 13,
+                                     f.ref_dir) * _as_receptance(f)
         if (rsp, ref) in entries:
             first, where = entries[(rsp, ref)]
             if not np.array_equal(first, data):

@@ -19,6 +19,10 @@ file are signed to the positive axis (:mod:`substruct.case.frf_files`), so the c
 name of the case) has the direction :math:`+A_{disp}[k]` at the node's global position; a
 response node's channels are sensors, a reference node's impacts.
 
+Lengths (node coordinates, the origins of 2420 and the points of 18) are in the file's units:
+with a dataset 164 before them they are divided by its length factor
+(:func:`substruct.case.uff_units.length_to_si`), so positions are in meters.
+
 Honoured: cartesian systems (type 0), 18 with method 1, translations (codes 1-3).  Refused in
 one line: cylindrical and spherical systems, other methods, a system defined twice or not
 orthonormal (2420, to 1e-6) or degenerate (18: the three points on a line), a node in a system
@@ -35,13 +39,14 @@ import numpy as np
 
 from substruct.case.channels import ChannelTable, parse_channels
 from substruct.case.uff_records import UffFile, UffSystem, read_uff_records
+from substruct.case.uff_units import length_to_si
 
 __all__ = ["uff_coordinate_systems", "node_positions", "channels_from_uff"]
 
 _AXES = ("x", "y", "z")
 
 
-def _from_18(s: UffSystem, known: dict[int, tuple[np.ndarray, np.ndarray]]
+def _from_18(s: UffSystem, known: dict[int, tuple[np.ndarray, np.ndarray]], scale: float
              ) -> tuple[np.ndarray, np.ndarray]:
     if s.method != 1:
         raise ValueError(f"{s.where}: method of definition {s.method} is not supported (1: "
@@ -50,7 +55,7 @@ def _from_18(s: UffSystem, known: dict[int, tuple[np.ndarray, np.ndarray]]
         raise ValueError(f"{s.where}: reference coordinate system {s.ref} is not defined "
                          "before it")
     A_ref, o_ref = known[s.ref]
-    o, p, q = (o_ref + A_ref.T @ np.asarray(v, dtype=float) for v in s.matrix)
+    o, p, q = (o_ref + A_ref.T @ (scale * np.asarray(v, dtype=float)) for v in s.matrix)
     ex, xz = p - o, q - o
     scale = max(float(np.linalg.norm(ex)), float(np.linalg.norm(xz)), 1e-300)
     ez = np.cross(ex, xz)
@@ -62,14 +67,15 @@ def _from_18(s: UffSystem, known: dict[int, tuple[np.ndarray, np.ndarray]]
 
 
 def uff_coordinate_systems(uff: UffFile) -> dict[int, tuple[np.ndarray, np.ndarray]]:
-    """Every coordinate system of the file, label -> ``(A, o)`` (module docstring), with the
-    global system 0.
+    """Every coordinate system of the file, label -> ``(A, o)`` (module docstring; ``o`` in
+    meters), with the global system 0.
 
     Raises:
         ValueError: a system that is not cartesian, defined twice, not orthonormal or
             degenerate, or an 18 of another method or reference.
     """
     out: dict[int, tuple[np.ndarray, np.ndarray]] = {0: (np.eye(3), np.zeros(3))}
+    scale = length_to_si(uff.units)
     for s in uff.systems:
         if s.kind != 0:
             kind = {1: "cylindrical", 2: "spherical"}.get(s.kind, f"of type {s.kind}")
@@ -83,22 +89,23 @@ def uff_coordinate_systems(uff: UffFile) -> dict[int, tuple[np.ndarray, np.ndarr
                     np.abs(A @ A.T - np.eye(3)).max() > 1e-6 or np.linalg.det(A) < 0:
                 raise ValueError(f"{s.where}: the axes of coordinate system {s.label} "
                                  "(records 5-7) are not a right-handed orthonormal triad")
-            out[s.label] = (A, np.array(s.matrix[3], dtype=float))
+            out[s.label] = (A, scale * np.array(s.matrix[3], dtype=float))
         else:
-            out[s.label] = _from_18(s, out)
+            out[s.label] = _from_18(s, out, scale)
     return out
 
 
 def node_positions(uff: UffFile, systems: dict[int, tuple[np.ndarray, np.ndarray]]
                    ) -> dict[int, tuple[np.ndarray, np.ndarray]]:
-    """Every node with coordinates: label -> ``(global position, A of its displacement
-    system)``.
+    """Every node with coordinates: label -> ``(global position in meters, A of its
+    displacement system)``.
 
     Raises:
         ValueError: a node in a coordinate system the file does not define, or coordinates
             that are not finite.
     """
     out = {}
+    scale = length_to_si(uff.units)
     for label, node in uff.node_table.items():
         for cs, what in ((node.def_cs, "definition"), (node.disp_cs, "displacement")):
             if cs not in systems:
@@ -108,7 +115,8 @@ def node_positions(uff: UffFile, systems: dict[int, tuple[np.ndarray, np.ndarray
             raise ValueError(f"node {label}: coordinates that are not finite, got "
                              f"{list(node.xyz)}")
         A, o = systems[node.def_cs]
-        out[label] = (o + A.T @ np.asarray(node.xyz, dtype=float), systems[node.disp_cs][0])
+        out[label] = (o + A.T @ (scale * np.asarray(node.xyz, dtype=float)),
+                      systems[node.disp_cs][0])
     return out
 
 
