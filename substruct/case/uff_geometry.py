@@ -33,6 +33,7 @@ a channel that is both a response and a reference.
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -158,4 +159,6 @@ def channels_from_uff(path: str | os.PathLike) -> ChannelTable:
             d = A[abs(code) - 1]
             rows.append(dict(name=name, node=str(node), x=pos[0], y=pos[1], z=pos[2],
                              dx=d[0], dy=d[1], dz=d[2], kind=kind))
-    return parse_channels(rows, p.name)
+    table = parse_channels(rows, p.name)
+    header = () if uff.header is None else tuple(uff.header.attributes().items())
+    return replace(table, units="" if uff.units is None else "m", header=header)
