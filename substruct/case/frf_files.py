@@ -165,11 +165,14 @@ def _read_uff58(path: Path) -> tuple[np.ndarray, list[str], np.ndarray]:
             if read.nodes is not None and node not in read.nodes:
                 raise ValueError(f"{f.where}: record 6 field {which} {node} is not a node of "
                                  "the file's datasets 15/2411")
-        try:
-            rsp = uff_label(f.rsp_node, f.rsp_dir)
-            ref = uff_label(f.ref_node, f.ref_dir)
-        except ValueError as err:
-            raise ValueError(f"{f.where}: record 6: {err}") from None
+        pair = []
+        for node, code, which in ((f.rsp_node, f.rsp_dir, "7 (response direction)"),
+                                  (f.ref_node, f.ref_dir, "10 (reference direction)")):
+            try:
+                pair.append(uff_label(node, code))
+            except ValueError as err:
+                raise ValueError(f"{f.where}: record 6 field {which}: {err}") from None
+        rsp, ref = pair
         if f.x.shape != x.shape or not np.allclose(f.x, x, rtol=1e-12, atol=0):
             raise ValueError(f"{f.where}: the function {rsp}/{ref} has another abscissa "
                              f"than the first ({f.x.size} vs {x.size} points)")
