@@ -183,3 +183,25 @@ def test_a_damaged_channels_group_is_refused(run, tmp_path, edit, message):
         load(path)
     text = str(err.value)
     assert "not a substruct result" in text and message in text and "\n" not in text, text
+
+
+def test_a_uff_table_keeps_its_units_and_header_in_the_result(run, tmp_path):
+    from substruct.case.channel_geometry import PartChannels
+    from substruct.case.uff_geometry import channels_from_uff
+    from substruct.io.hdf5 import save
+    from test_uff_units import FOOT, _cs2420, _header151, _nodes2411, _units164
+    from uff_plain import ascii58
+
+    path = tmp_path / "lab.uff"
+    path.write_text(_header151() + _units164() + _cs2420() + _nodes2411()
+                    + ascii58([10.0, 20.0], [1.0, 2.0], rsp=(1, 2), ref=(2, 1)))
+    table = channels_from_uff(path)
+    assert table.units == "m" and dict(table.header)["model_name"] == "bracket test"
+    np.testing.assert_allclose(table.get("1.y").position, np.array([8.0, 1.0, 3.0]) * FOOT,
+                               rtol=0, atol=1e-15)
+    _, result = run
+    mine = dataclasses.replace(result, channels={"A": PartChannels(table, ("J",),
+                                                                   np.zeros((1, 3)))})
+    save(mine, tmp_path / "uffgeo.h5")
+    back = load(tmp_path / "uffgeo.h5").channels["A"]
+    assert back.table == table and back.points == ("J",)

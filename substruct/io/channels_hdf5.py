@@ -21,13 +21,13 @@ with its names and dates as string attributes.  Read back through
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import h5py
 import numpy as np
 
-from substruct.case.channel_geometry import PartChannels
-from substruct.case.channels import Channel, ChannelTable, parse_channels
+if TYPE_CHECKING:  # the case layer (pydantic) only when a result has channels
+    from substruct.case.channel_geometry import PartChannels
 
 __all__ = ["write_channel_geometry", "read_channel_geometry"]
 
@@ -79,6 +79,8 @@ def read_channel_geometry(rd: Any, groups: list[h5py.Group]) -> dict[str, PartCh
     Raises:
         ValueError: one line naming the group and what is wrong.
     """
+    from substruct.case.channel_geometry import PartChannels
+    from substruct.case.channels import Channel, ChannelTable, parse_channels
     from substruct.case.errors import CaseError
 
     out: dict[str, PartChannels] = {}
