@@ -75,7 +75,8 @@ def test_real_ordinate_is_a_receptance_without_imaginary_part(tmp_path):
     ({"denominator": 9}, ["ordinate 8 over 9"]),
     ({"num_pts": 5}, ["record 12 holds 12 values, record 7 declares 15"]),
     ({"num_pts": 3}, ["record 12 holds more values than the 9 that record 7 declares"]),
-    ({"rsp": (1, 0)}, ["record 6: UFF direction 0 is not one of 1..6"]),
+    ({"rsp": (1, 0)}, ["record 6 field 7 (response direction): UFF direction 0 is not one "
+                       "of 1..6"]),
 ])
 def test_header_codes_refused(tmp_path, codes, fragments):
     path = _file(tmp_path, ascii58(F, H, **codes))

@@ -81,10 +81,14 @@ class Channel:
 
 @dataclass(frozen=True)
 class ChannelTable:
-    """The channels of a test, in file order."""
+    """The channels of a test, in file order; ``units`` the length unit of the positions
+    when the file states it (``"m"``: a Universal File with a units dataset 164, converted),
+    ``header`` the names and dates of a Universal File's header (151), as ``(key, text)``."""
 
     channels: tuple[Channel, ...]
     source: str = "<channels>"
+    units: str = ""
+    header: tuple[tuple[str, str], ...] = ()
 
     def of_kind(self, kind: str) -> list[Channel]:
         """The channels of one kind, in file order."""

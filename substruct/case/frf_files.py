@@ -11,7 +11,12 @@ r"""Reading receptances from files: NPZ and Universal File Format dataset 58.
   (frequency) in Hz; ordinate displacement (8), velocity (11) or acceleration (12) over
   excitation force (13), the last two turned into receptances exactly,
   :math:`H = V / (i\omega)`, :math:`H = A / (i\omega)^2`, with :math:`\omega = 2\pi f > 0`;
-  a real ordinate (data types 2, 4) is a receptance with no imaginary part.  A function given
+  a real ordinate (data types 2, 4) is a receptance with no imaginary part.  The units of a
+  dataset 164 before the functions are honoured (the records are read in SI,
+  :func:`substruct.case.uff_units.to_si`: a displacement over force at translations is
+  multiplied by :math:`f_F / f_L`); the units
+  exponents of records 8-10 (fields 2-4) are either all blank or 0 or those that 58's
+  Addendum A gives the data type at the direction, and refused otherwise.  A function given
   twice (the same response and reference, after the sign of the directions) is read once if
   both copies are equal and refused otherwise.  If the file has node datasets (15, 2411),
   every response and reference node must be one of them.  The ASCII form stores the abscissa
@@ -32,6 +37,7 @@ import numpy as np
 
 from substruct.case.npz_files import npz_members, read_npz
 from substruct.case.uff_records import Uff58, read_uff_records
+from substruct.case.uff_units import unit_exponents
 
 __all__ = ["DIRECTIONS", "MAX_FRF_FILE", "GRID_DIGITS_RTOL", "read_frf_file", "uff_label",
            "label_node_dir", "grid_problem", "FUNCTION_TYPES", "ORDINATES"]
@@ -126,6 +132,13 @@ def _as_receptance(f: Uff58) -> np.ndarray:
         raise ValueError(f"{w}: records 9-10 field 1, ordinate {f.numerator} over "
                          f"{f.denominator}: only displacement, velocity or acceleration (8, "
                          "11, 12) over excitation force (13) is read")
+    for k, (code, d) in enumerate(((18, 0), (f.numerator, f.rsp_dir), (13, f.ref_dir))):
+        given = f.exponents[k] if f.exponents else (0, 0, 0)
+        own = (*unit_exponents(code, d), 0)
+        if any(given) and tuple(given) != own:
+            raise ValueError(f"{w}: record {8 + k} fields 2-4, units exponents (length, force,"
+                             f" temperature) {list(given)}: data type {code} at direction {d} "
+                             f"has {list(own)} (58 Addendum A)")
     if f.spacing == 1 and not f.x_inc > 0:
         raise ValueError(f"{w}: record 7 field 5, abscissa increment {f.x_inc:g}: even "
                          "spacing needs a positive increment")
@@ -153,11 +166,14 @@ def _read_uff58(path: Path) -> tuple[np.ndarray, list[str], np.ndarray]:
             if read.nodes is not None and node not in read.nodes:
                 raise ValueError(f"{f.where}: record 6 field {which} {node} is not a node of "
                                  "the file's datasets 15/2411")
-        try:
-            rsp = uff_label(f.rsp_node, f.rsp_dir)
-            ref = uff_label(f.ref_node, f.ref_dir)
-        except ValueError as err:
-            raise ValueError(f"{f.where}: record 6: {err}") from None
+        pair = []
+        for node, code, which in ((f.rsp_node, f.rsp_dir, "7 (response direction)"),
+                                  (f.ref_node, f.ref_dir, "10 (reference direction)")):
+            try:
+                pair.append(uff_label(node, code))
+            except ValueError as err:
+                raise ValueError(f"{f.where}: record 6 field {which}: {err}") from None
+        rsp, ref = pair
         if f.x.shape != x.shape or not np.allclose(f.x, x, rtol=1e-12, atol=0):
             raise ValueError(f"{f.where}: the function {rsp}/{ref} has another abscissa "
                              f"than the first ({f.x.size} vs {x.size} points)")

@@ -19,6 +19,10 @@ file are signed to the positive axis (:mod:`substruct.case.frf_files`), so the c
 name of the case) has the direction :math:`+A_{disp}[k]` at the node's global position; a
 response node's channels are sensors, a reference node's impacts.
 
+Lengths are in meters when the file has a units dataset 164: its records are read in SI
+(:func:`substruct.case.uff_units.to_si`); the table then records the unit ``m`` and the
+file's header (151).
+
 Honoured: cartesian systems (type 0), 18 with method 1, translations (codes 1-3).  Refused in
 one line: cylindrical and spherical systems, other methods, a system defined twice or not
 orthonormal (2420, to 1e-6) or degenerate (18: the three points on a line), a node in a system
@@ -29,6 +33,7 @@ a channel that is both a response and a reference.
 from __future__ import annotations
 
 import os
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -150,4 +155,6 @@ def channels_from_uff(path: str | os.PathLike) -> ChannelTable:
             d = A[abs(code) - 1]
             rows.append(dict(name=name, node=str(node), x=pos[0], y=pos[1], z=pos[2],
                              dx=d[0], dy=d[1], dz=d[2], kind=kind))
-    return parse_channels(rows, p.name)
+    table = parse_channels(rows, p.name)
+    header = () if uff.header is None else tuple(uff.header.attributes().items())
+    return replace(table, units="" if uff.units is None else "m", header=header)

@@ -1,5 +1,9 @@
-r"""The records of a Universal File: the functions of dataset 58 (ASCII and binary ``58b``) and
-the nodes of datasets 15 and 2411 and the coordinate systems of 18 and 2420, read in one pass with every size checked first.
+r"""The records of a Universal File: the functions of dataset 58 (ASCII and binary ``58b``),
+the nodes of datasets 15 and 2411, the coordinate systems of 18 and 2420, the header (151) and
+the units (164, :mod:`substruct.case.uff_units`), read in one pass with every size checked
+first.  A 164 must come before every dataset whose numbers it scales (58, 15, 2411, 18, 2420)
+and at most once; a second 151 is refused too.  The records are returned in SI
+(:func:`substruct.case.uff_units.to_si`).
 
 The file is read line by line (no line longer than :data:`MAX_UFF_LINE` bytes), never whole.  A
 58 dataset is parsed by the fixed columns of its specification (records 6-11:
@@ -10,9 +14,7 @@ before it, to fit in :data:`~substruct.case.fields.MEMORY_LIMIT`.  Record 12 mus
 exactly the values declared (``ASCII``: the columns of the spec's case 1-8 formats; ``58b``:
 the bytes of its values in the declared precision, as many as its id line declares, or the
 count ``pyuff`` writes there, one value a point: ``num_pts * 8`` for doubles).  What the codes mean is checked by the caller
-(:mod:`substruct.case.frf_files`).  The header datasets 151 and 164 are read and honoured
-(:mod:`substruct.case.uff_units`: the file's numbers are converted to SI).  Other datasets are
-skipped.
+(:mod:`substruct.case.frf_files`).  Other datasets are skipped.
 """
 
 from __future__ import annotations
@@ -20,17 +22,17 @@ from __future__ import annotations
 import os
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import BinaryIO, Iterator
 
 import numpy as np
 
 from substruct.case.fields import MEMORY_LIMIT
+from substruct.case.uff_lines import (MAX_UFF_LINE, UffLines, fixed_field, floats, ints,
+                                     is_delimiter)
 from substruct.case.uff_units import UffHeader, UffUnits, parse_151, parse_164, to_si
 
-__all__ = ["Uff58", "UffNode", "UffSystem", "UffFile", "read_uff_records", "MAX_UFF_LINE", "MAX_POINTS"]
+__all__ = ["Uff58", "UffNode", "UffSystem", "UffFile", "read_uff_records", "MAX_UFF_LINE",
+           "MAX_POINTS"]
 
-#: Longest line read (the specification's records are 80 columns).
-MAX_UFF_LINE = 1024
 #: Most points a function may declare (ten times the frequencies an analysis may have).
 MAX_POINTS = 1_000_000
 
@@ -50,6 +52,8 @@ class Uff58:
         x_min, x_inc: record 7 fields 4, 5.
         abscissa, numerator, denominator: the specific data types of records 8, 9, 10.
         abscissa_units: record 8 field 6 (the axis units label).
+        exponents: records 8, 9, 10 fields 2-4 (length, force, temperature units exponents;
+            blank is 0).
         x: the abscissa, ``num_pts`` values.
         y: the ordinate, complex, ``num_pts`` values.
     """
@@ -72,6 +76,7 @@ class Uff58:
     denominator: int
     x: np.ndarray
     y: np.ndarray
+    exponents: tuple[tuple[int, ...], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -105,8 +110,8 @@ class UffSystem:
 @dataclass(frozen=True)
 class UffFile:
     """The functions (58) of a file, the node numbers its datasets 15 and 2411 define
-    (``None`` if it has neither), those nodes and the coordinate systems of 18 and 2420 (in
-    SI), and its model header (151) and units (164) if it has them."""
+    (``None`` if it has neither), those nodes, the coordinate systems of 18 and 2420, the
+    header (151) and the units (164); lengths and functions in SI (:func:`to_si`)."""
 
     functions: list[Uff58]
     nodes: set[int] | None
@@ -116,55 +121,11 @@ class UffFile:
     units: UffUnits | None = None
 
 
-class _Lines:
-    """Lines of a binary stream, each at most :data:`MAX_UFF_LINE` bytes, counted."""
-
-    def __init__(self, fh: BinaryIO, name: str, size: int):
-        self.fh, self.name, self.size, self.number = fh, name, size, 0
-
-    def next(self) -> bytes | None:
-        raw = self.fh.readline(MAX_UFF_LINE + 2)
-        if not raw:
-            return None
-        self.number += 1
-        if len(raw) > MAX_UFF_LINE and not raw.endswith(b"\n"):
-            raise ValueError(f"{self.name}: line {self.number} is longer than {MAX_UFF_LINE} "
-                             "characters: not a Universal File")
-        return raw.rstrip(b"\r\n")
-
-    def left(self) -> int:
-        return self.size - self.fh.tell()
-
-    def until_delimiter(self, what: str) -> Iterator[bytes]:
-        """The lines up to the closing ``-1`` of a dataset (not included); ``what`` names the
-        dataset (or record) in the error when the file ends before it."""
-        while True:
-            line = self.next()
-            if line is None:
-                raise ValueError(f"{what} ends without the closing -1")
-            if _is_delimiter(line):
-                return
-            yield line
-
-
-def _is_delimiter(line: bytes) -> bool:
-    return line.strip() == b"-1" and line[:6] == b"    -1"
-
-
-def _field(text: str, a: int, b: int, kind: type, what: str) -> int | float:
-    raw = text[a:b].strip()
-    try:
-        return kind(raw.replace("D", "E").replace("d", "e")) if kind is float else kind(raw)
-    except ValueError:
-        raise ValueError(f"{what}: {raw!r} is not {'an integer' if kind is int else 'a number'}"
-                         ) from None
-
-
-def _header(lines: _Lines, where: str) -> list[str]:
+def _header(lines: UffLines, where: str) -> list[str]:
     out: list[str] = []
     for _ in range(11):
         line = lines.next()
-        if line is None or _is_delimiter(line):
+        if line is None or is_delimiter(line):
             raise ValueError(f"{where}: ends after {len(out)} of its 11 header records")
         out.append(line.decode("latin-1"))
     return out
@@ -175,7 +136,7 @@ _WIDTHS = {(2, 1): [13] * 6, (2, 0): [13] * 6, (5, 1): [13] * 6, (5, 0): [13] * 
            (4, 1): [20] * 4, (6, 1): [20] * 4, (4, 0): [13, 20, 13, 20], (6, 0): [13, 20, 20]}
 
 
-def _ascii_data(lines: _Lines, where: str, count: int, widths: list[int]) -> np.ndarray:
+def _ascii_data(lines: UffLines, where: str, count: int, widths: list[int]) -> np.ndarray:
     values = np.empty(count, dtype=float)
     k = 0
     for line in lines.until_delimiter(f"{where}: record 12"):
@@ -203,7 +164,7 @@ def _ascii_data(lines: _Lines, where: str, count: int, widths: list[int]) -> np.
     return values
 
 
-def _binary_data(lines: _Lines, where: str, count: int, single: bool, order: str
+def _binary_data(lines: UffLines, where: str, count: int, single: bool, order: str
                  ) -> np.ndarray:
     need = count * (4 if single else 8)
     raw = lines.fh.read(need)
@@ -213,21 +174,21 @@ def _binary_data(lines: _Lines, where: str, count: int, single: bool, order: str
     rest = lines.next()
     if rest is not None and rest == b"":  # a line break before the closing -1
         rest = lines.next()
-    if rest is None or not _is_delimiter(rest):
+    if rest is None or not is_delimiter(rest):
         raise ValueError(f"{where}: record 12 holds more data than the {need} bytes "
                          "declared (no closing -1 after them)")
     dtype = np.dtype(f"{order}{'f4' if single else 'f8'}")
     return np.frombuffer(raw, dtype=dtype).astype(float)
 
 
-def _function(lines: _Lines, where: str, kind: str, budget: list[float]) -> Uff58:
+def _function(lines: UffLines, where: str, kind: str, budget: list[float]) -> Uff58:
     """Parse one 58 dataset after its type line ``kind`` (``"58"`` or ``"58b ..."``)."""
     binary = len(kind) > 6 and kind[6] in "bB"
     if binary:
-        order = _field(kind, 7, 13, int, f"{where}: id line field 3 (byte ordering)")
-        fp = _field(kind, 13, 19, int, f"{where}: id line field 4 (floating point format)")
-        n_ascii = _field(kind, 19, 31, int, f"{where}: id line field 5 (ASCII lines)")
-        declared = int(_field(kind, 31, 43, int, f"{where}: id line field 6 (bytes)"))
+        order = fixed_field(kind, 7, 13, int, f"{where}: id line field 3 (byte ordering)")
+        fp = fixed_field(kind, 13, 19, int, f"{where}: id line field 4 (floating point format)")
+        n_ascii = fixed_field(kind, 19, 31, int, f"{where}: id line field 5 (ASCII lines)")
+        declared = int(fixed_field(kind, 31, 43, int, f"{where}: id line field 6 (bytes)"))
         if order not in (1, 2):
             raise ValueError(f"{where}: id line field 3, byte ordering {order}: not 1 (little "
                              "endian) or 2 (big endian)")
@@ -242,15 +203,18 @@ def _function(lines: _Lines, where: str, kind: str, budget: list[float]) -> Uff5
     rec6 = [(0, 5, "field 1 (function type)"), (20, 30, "field 4 (load case)"),
             (41, 51, "field 6 (response node)"), (51, 55, "field 7 (response direction)"),
             (66, 76, "field 9 (reference node)"), (76, 80, "field 10 (reference direction)")]
-    f6 = [int(_field(r6, a, b, int, f"{where}: record 6 {what}")) for a, b, what in rec6]
-    ord_type = int(_field(r7, 0, 10, int, f"{where}: record 7 field 1 (ordinate data type)"))
-    num_pts = int(_field(r7, 10, 20, int, f"{where}: record 7 field 2 (number of points)"))
-    spacing = int(_field(r7, 20, 30, int, f"{where}: record 7 field 3 (abscissa spacing)"))
-    x_min = float(_field(r7, 30, 43, float, f"{where}: record 7 field 4 (abscissa minimum)"))
-    x_inc = float(_field(r7, 43, 56, float, f"{where}: record 7 field 5 (abscissa increment)"))
-    types = [int(_field(head[k], 0, 10, int, f"{where}: record {k + 1} field 1 (specific "
+    f6 = [int(fixed_field(r6, a, b, int, f"{where}: record 6 {what}")) for a, b, what in rec6]
+    ord_type = int(fixed_field(r7, 0, 10, int, f"{where}: record 7 field 1 (ordinate data type)"))
+    num_pts = int(fixed_field(r7, 10, 20, int, f"{where}: record 7 field 2 (number of points)"))
+    spacing = int(fixed_field(r7, 20, 30, int, f"{where}: record 7 field 3 (abscissa spacing)"))
+    x_min = float(fixed_field(r7, 30, 43, float, f"{where}: record 7 field 4 (abscissa minimum)"))
+    x_inc = float(fixed_field(r7, 43, 56, float, f"{where}: record 7 field 5 (abscissa increment)"))
+    types = [int(fixed_field(head[k], 0, 10, int, f"{where}: record {k + 1} field 1 (specific "
                         "data type)")) for k in (7, 8, 9)]
     units = head[7][47:67].strip()
+    exps = tuple(tuple(0 if not head[k][a:a + 5].strip() else int(fixed_field(
+        head[k], a, a + 5, int, f"{where}: record {k + 1} field {a // 5} (units exponent)"))
+        for a in (10, 15, 20)) for k in (7, 8, 9))
     if ord_type not in (2, 4, 5, 6):
         raise ValueError(f"{where}: record 7 field 1, ordinate data type {ord_type}: not 2, 4 "
                          "(real) or 5, 6 (complex)")
@@ -288,20 +252,11 @@ def _function(lines: _Lines, where: str, kind: str, budget: list[float]) -> Uff5
         x, data = x_min + x_inc * np.arange(num_pts), table
     y = data[:, 0] + 1j * data[:, 1] if complex_ else data[:, 0].astype(complex)
     return Uff58(where, f6[0], f6[1], f6[2], f6[3], f6[4], f6[5], ord_type, num_pts, spacing,
-                 x_min, x_inc, types[0], units, types[1], types[2], x, y)
+                 x_min, x_inc, types[0], units, types[1], types[2], x, y,
+                 exps)
 
 
-def _ints(text: str, n: int, what: str) -> list[int]:
-    return [int(_field(text, 10 * i, 10 * i + 10, int, f"{what} field {i + 1}"))
-            for i in range(n)]
-
-
-def _floats(text: str, n: int, width: int, what: str) -> tuple[float, ...]:
-    return tuple(float(_field(text, width * i, width * i + width, float,
-                              f"{what} field {i + 1}")) for i in range(n))
-
-
-def _nodes(lines: _Lines, kind: int, into: set[int], table: dict[int, UffNode],
+def _nodes(lines: UffLines, kind: int, into: set[int], table: dict[int, UffNode],
            where: str) -> None:
     """The nodes of a 15 (``4I10,3E13.5``, one a line) or 2411 (``4I10`` then ``3D25.16``,
     two lines a node) dataset."""
@@ -312,13 +267,13 @@ def _nodes(lines: _Lines, kind: int, into: set[int], table: dict[int, UffNode],
         line = raw.decode("latin-1")
         what = f"{where}: line {lines.number}"
         if kind == 2411 and k % 2 == 1:
-            xyz = _floats(line, 3, 25, f"{what} (record 2)")
+            xyz = floats(line, 3, 25, f"{what} (record 2)")
         else:
-            head = _ints(line, 3, f"{what} (record 1)")
+            head = ints(line, 3, f"{what} (record 1)")
             into.add(head[0])
             if kind == 2411 or not line[40:].strip():  # 15 without coordinates: a label
                 continue
-            xyz = _floats(line[40:], 3, 13, f"{what} (coordinates)")
+            xyz = floats(line[40:], 3, 13, f"{what} (coordinates)")
         if head[0] in table:
             raise ValueError(f"{what}: node {head[0]} is defined twice")
         table[head[0]] = UffNode(head[0], head[1], head[2], (xyz[0], xyz[1], xyz[2]))
@@ -326,7 +281,7 @@ def _nodes(lines: _Lines, kind: int, into: set[int], table: dict[int, UffNode],
         raise ValueError(f"{where}: node {head[0]} has no coordinates record")
 
 
-def _systems(lines: _Lines, kind: int, into: list[UffSystem], where: str) -> None:
+def _systems(lines: UffLines, kind: int, into: list[UffSystem], where: str) -> None:
     """The coordinate systems of a 2420 (part records 1-2, then records 3-8 per system) or
     an 18 (records 1-4 per system) dataset."""
     rows = [raw.decode("latin-1") for raw in lines.until_delimiter(f"{where}:")]
@@ -337,19 +292,23 @@ def _systems(lines: _Lines, kind: int, into: list[UffSystem], where: str) -> Non
     for i in range(0, len(body), per):
         what = f"{where}: coordinate system {i // per + 1}"
         if kind == 2420:
-            label, cs_type, _ = _ints(body[i], 3, f"{what} (record 3)")
-            matrix = tuple(_floats(body[i + 2 + r], 3, 25, f"{what} (record {5 + r})")
+            label, cs_type, _ = ints(body[i], 3, f"{what} (record 3)")
+            matrix = tuple(floats(body[i + 2 + r], 3, 25, f"{what} (record {5 + r})")
                            for r in range(4))
             into.append(UffSystem(label, cs_type, 2420, 0, 0, matrix, what))
         else:
-            label, cs_type, ref, _, method = _ints(body[i], 5, f"{what} (record 1)")
-            six = _floats(body[i + 2], 6, 13, f"{what} (record 3)")
-            xz = _floats(body[i + 3], 3, 13, f"{what} (record 4)")
+            label, cs_type, ref, _, method = ints(body[i], 5, f"{what} (record 1)")
+            six = floats(body[i + 2], 6, 13, f"{what} (record 3)")
+            xz = floats(body[i + 3], 3, 13, f"{what} (record 4)")
             into.append(UffSystem(label, cs_type, 18, ref, method,
                                   (six[:3], six[3:], xz), what))
 
 
-def _skip(lines: _Lines, where: str) -> None:
+def _rows(lines: UffLines, where: str) -> list[str]:
+    return [raw.decode("latin-1") for raw in lines.until_delimiter(f"{where}:")]
+
+
+def _skip(lines: UffLines, where: str) -> None:
     for _ in lines.until_delimiter(f"{where}:"):
         pass
 
@@ -369,9 +328,10 @@ def read_uff_records(path: str | os.PathLike) -> UffFile:
     systems: list[UffSystem] = []
     header: UffHeader | None = None
     units: UffUnits | None = None
+    first_data = ""
     budget = [0.0]
     with open(p, "rb") as fh:
-        lines = _Lines(fh, p.name, size)
+        lines = UffLines(fh, p.name, size)
         k = 0
         while True:
             line = lines.next()
@@ -379,7 +339,7 @@ def read_uff_records(path: str | os.PathLike) -> UffFile:
                 break
             if not line.strip():
                 continue
-            if not _is_delimiter(line):
+            if not is_delimiter(line):
                 raise ValueError(f"{p.name}: line {lines.number}: {line[:40]!r} where a "
                                  "dataset starts ('    -1')")
             start = lines.number
@@ -394,26 +354,29 @@ def read_uff_records(path: str | os.PathLike) -> UffFile:
                 raise ValueError(f"{p.name}: line {lines.number}: dataset number "
                                  f"{kind[:6].strip()!r} is not an integer") from None
             where = f"{p.name}: dataset {k} ({number}, line {start})"
-            if number == 58:
+            if number in (58, 15, 2411, 18, 2420) and not first_data:
+                first_data = where.split(": ", 1)[1]
+            if number == 164:
+                if first_data:
+                    raise ValueError(f"{where}: units after {first_data}, whose numbers they "
+                                     "would scale: give the units (164) before the data")
+                if units is not None:
+                    raise ValueError(f"{where}: units given twice (first in "
+                                     f"{units.where.split(': ', 1)[1]})")
+                units = parse_164(_rows(lines, where), where)
+            elif number == 151:
+                if header is not None:
+                    raise ValueError(f"{where}: a second header (151; first in "
+                                     f"{header.where.split(': ', 1)[1]})")
+                header = parse_151(_rows(lines, where), where)
+            elif number == 58:
                 functions.append(_function(lines, where, kind, budget))
             elif number in (15, 2411):
                 nodes = set() if nodes is None else nodes
                 _nodes(lines, number, nodes, table, where)
             elif number in (18, 2420):
                 _systems(lines, number, systems, where)
-            elif number in (151, 164):
-                rows = [r.decode("latin-1") for r in lines.until_delimiter(f"{where}:")]
-                if number == 151 and header is not None:
-                    raise ValueError(f"{where}: a second model header (151)")
-                header = parse_151(rows, where) if number == 151 else header
-                u = parse_164(rows, where) if number == 164 else units
-                if units is not None and u is not None and \
-                        (u.length, u.force) != (units.length, units.force):
-                    raise ValueError(f"{where}: units code {u.code} differ from those of "
-                                     f"{units.where.split(': ', 1)[-1]} (code {units.code})")
-                units = u
             else:
                 _skip(lines, where)
-    if units is not None:
-        functions, table, systems = to_si(units, functions, table, systems)
+    functions, table, systems = to_si(units, functions, table, systems)
     return UffFile(functions, nodes, table, systems, header, units)

@@ -172,7 +172,7 @@ def stage_set(case: Any, args: argparse.Namespace, staging: Path, out: Path,
         with write_errors(out):
             if pictures:
                 drawn = write_pictures(result, staging, case.name)
-                drawn += write_case_pictures(case, staging)
+                drawn += write_case_pictures(case, staging, result)
             result.attrs["pictures"] = "\n".join(p.name for p in drawn)
             h5.save(result)
             # the animation reads its frames back from the file, still open
@@ -232,13 +232,16 @@ def picture_paths(case: Any, out: Path) -> list[Path]:
     return paths
 
 
-def write_case_pictures(case: Any, out: Path) -> list[Path]:
-    """The pictures drawn from the case itself: the virtual-point geometry (channels and
-    virtual points of every part with ``virtual_points:``, :mod:`substruct.viz.vp_geometry_picture`)."""
+def write_case_pictures(case: Any, out: Path, result: Result | None = None) -> list[Path]:
+    """The virtual-point geometry picture (channels and virtual points of every part with
+    ``virtual_points:``, :mod:`substruct.viz.vp_geometry_picture`), drawn from the geometry
+    the result keeps (``/channels``) when it has one, else from the case."""
     if not any(getattr(s, "virtual_points", None) is not None for s in case.substructures):
         return []
     geo = optional_module("viz.vp_geometry_picture")
-    return [Path(geo.plot_vp_geometry(geo.vp_geometry(case), out / f"{case.name}_vp_geometry.png",
+    parts = geo.geometry_of(result.channels) if result is not None and result.channels \
+        else geo.vp_geometry(case)
+    return [Path(geo.plot_vp_geometry(parts, out / f"{case.name}_vp_geometry.png",
                                       f"{case.name}: virtual-point geometry"))]
 
 

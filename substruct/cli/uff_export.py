@@ -19,15 +19,16 @@ __all__ = ["export_dispatch", "export_uff_command", "uff_target"]
 
 
 def uff_target(result: Any, out: str | None, result_path: str) -> tuple[Path, str]:
-    """The folder and file name of the UFF export: ``--out`` itself if it ends in ``.uff``,
+    """The folder and file name of the UFF export: ``--out`` itself if it ends in ``.uff``
+    or ``.unv``,
     else ``<case>.uff`` in ``--out`` (default: the result's folder).  The case name is read
     from the result file, so it becomes a file name only through
     :func:`~substruct.io.paths.safe_stem` (a name ``../x`` or ``/var/x`` stays in the
     folder)."""
     from substruct.io.paths import safe_stem
 
-    if out is not None and Path(out).suffix.lower() == ".uff":
-        return check_out_file(out, "--out", (".uff",))
+    if out is not None and Path(out).suffix.lower() in (".uff", ".unv"):
+        return check_out_file(out, "--out", (".uff", ".unv"))
     folder = out if out is not None else str(Path(result_path).parent)
     name = f"{safe_stem(result.case_name)}.uff"
     return check_out_dir(folder, "--out", [name]), name

@@ -47,6 +47,7 @@ from substruct.analysis.results import Modes, Receptance
 from substruct.io.blocks import BLOCK_BYTES, CHUNK_BYTES, DatasetSink, write_blocks
 from substruct.io.file_set import TEMP_PREFIX
 from substruct.io.paths import write_errors
+from substruct.io.channels_hdf5 import write_channel_geometry
 from substruct.io.recovery_hdf5 import write_recovery
 from substruct.io.spec_hdf5 import write_base_frf, write_random, write_srs
 from substruct.io.tpa_hdf5 import write_semm, write_tpa
@@ -152,6 +153,9 @@ class ResultFile:
             if result.monte_carlo is not None:
                 write_monte_carlo(vg.create_group("monte_carlo", track_order=True),
                                   result.monte_carlo)
+        if result.channels:
+            write_channel_geometry(f.create_group("channels", track_order=True),
+                                   result.channels)
         if result.tpa is not None:
             write_tpa(f.create_group("tpa", track_order=True), result.tpa)
         if result.semm is not None:

@@ -30,6 +30,7 @@ import scipy.sparse as sp
 
 from substruct.analysis.results import DEFAULT_TOLERANCE, Modes, Receptance
 from substruct.builder.drawing import Drawing
+from substruct.io.channels_hdf5 import read_channel_geometry
 from substruct.io.recovery_hdf5 import read_recovery
 from substruct.io.tpa_hdf5 import read_semm, read_tpa
 from substruct.io.transient_hdf5 import read_transient
@@ -326,6 +327,12 @@ def _read(f: h5py.File) -> Result:
                     if "base_frf" in f else None,
                     attrs={k: v for k, v in root.items() if k not in RESERVED_ATTRS})
     _testlab(rd, f, result)
+    if f.get("channels", getlink=True) is not None:
+        try:
+            result.channels = read_channel_geometry(
+                rd, _numbered(rd.members(f, "channels"), "/channels"))
+        except ValueError as exc:
+            raise _Bad(str(exc)) from None
     return result
 
 

@@ -19,6 +19,10 @@ modes as 55 and 2414, the nodes of both as 15 (55 and 15 written by ``pyuff``).
   analysis type 3 (complex eigenvalue), data at nodes, data type 6 (double complex), one value
   a node (``x``), written ``2D25.16`` (50 columns: within the 80 of a record); the eigenvalue
   to 17 digits in record 2 (the dataset name), as records 12-13 hold only ``E13.5``.
+* **a virtual-point result** (one with channel geometry, ``/channels``): the header (151),
+  the units (164, SI), the nodes (2411) at the virtual points and channels and the channels' coordinate systems
+  (2420) first, the 58 functions at those nodes and directions
+  (:mod:`substruct.io.uff_channels`); no 15.
 * **15**: the nodes ``1 .. N`` of the 55 and 58 datasets at ``x = k`` (the model's
   coordinates are generalized ones, not points in space): integers, exact in ``E13.5`` up to 999,999 nodes;
   above that the double-precision node dataset **2411** (``3D25.16``) is written instead.
@@ -297,31 +301,28 @@ def read_uff(path: str | os.PathLike) -> list[dict[str, Any]]:
 
 
 def uff_path(result: Result, out: str | os.PathLike) -> Path:
-    """Where :func:`export_uff` writes: ``out`` if it ends in ``.uff``, else
+    """Where :func:`export_uff` writes: ``out`` if it ends in ``.uff`` or ``.unv``, else
     ``out/<case>.uff`` (the case name read from the result through
     :func:`~substruct.io.paths.safe_stem`: never a path outside ``out``)."""
     from substruct.io.paths import safe_stem
 
     p = Path(out)
-    return p if p.suffix.lower() == ".uff" else p / f"{safe_stem(result.case_name)}.uff"
+    return p if p.suffix.lower() in (".uff", ".unv") else \
+        p / f"{safe_stem(result.case_name)}.uff"
 
 
 def export_uff(result: Result, out: str | os.PathLike, force: bool = False) -> Path:
     """Write the result's receptances (58), modes (55, and 2414 in double precision) and the
     nodes of both (15, or 2411 above :data:`E13_EXACT_NODES`: the model's coordinates, then
     the other points of the receptances, :func:`frf_nodes`) to one UFF file
-    (:func:`uff_path`), atomically; return its path.  A result of virtual points whose parts
-    carry their channel geometry, without modes, is written with the test's geometry instead
-    (:func:`substruct.io.uff_channels.export_channels_uff`).
+    (:func:`uff_path`), atomically; return its path.  A result that keeps the channel
+    geometry of its virtual points (``/channels``) is written with the test's header, units,
+    nodes and systems instead of 15 (:mod:`substruct.io.uff_channels`).
 
     Raises:
         FileExistsError: the file exists and ``force`` is not set.
         ValueError: a result with neither modes nor receptances.
     """
-    from substruct.io.uff_channels import export_channels_uff, has_channel_geometry
-
-    if result.modes is None and has_channel_geometry(result):
-        return export_channels_uff(result, out, force)
     path = uff_path(result, out)
     if path.exists() and not force:
         raise FileExistsError(f"{path} exists; use --force to overwrite it")
@@ -332,7 +333,14 @@ def export_uff(result: Result, out: str | os.PathLike, force: bool = False) -> P
     if modes is not None and modes.shapes.shape[0] != len(coordinates):
         coordinates = [f"coordinate {k + 1}" for k in range(modes.shapes.shape[0])]
     points = [] if frf is None else [*frf.outputs, *frf.inputs]
-    nodes, n = frf_nodes(points, coordinates)
+    geometry = None
+    if result.channels:
+        from substruct.io.uff_channels import channel_nodes, geometry_sets
+
+        geometry = channel_nodes(points, coordinates, result.channels)
+        nodes, n = geometry.where, len(geometry.xyz)
+    else:
+        nodes, n = frf_nodes(points, coordinates)
     if modes is not None and len(modes):
         sets += uff55_sets(modes, result.case_name)
         text = uff2414_text(modes, result.case_name)
@@ -340,7 +348,10 @@ def export_uff(result: Result, out: str | os.PathLike, force: bool = False) -> P
         sets += uff58_sets(frf.omega, frf.H, frf.outputs, frf.inputs, frf.quantity, nodes)
     if not sets:
         raise ValueError(f"{result.case_name}: no modes and no receptances to export")
-    sets.insert(0, uff15_set(n) if n <= E13_EXACT_NODES else uff2411_set(n))
+    if geometry is not None:
+        sets[:0] = geometry_sets(geometry, result.case_name)
+    else:
+        sets.insert(0, uff15_set(n) if n <= E13_EXACT_NODES else uff2411_set(n))
     with atomic_path(path, suffix=".uff") as tmp:
         write_uff(tmp, sets, text)
     return path

@@ -1,127 +1,148 @@
-r"""Universal File export of a test's geometry with its receptances: a virtual-point or coupled
-result whose parts carry their channel geometry (``/virtual_points/<i>/geometry``) is written
-as
+r"""The test geometry of a virtual-point result in a Universal File: a header (151: the case
+name, written by substruct), the units (164), the nodes (2411) of its virtual points and
+channels and their coordinate systems (2420), so that the 58 functions of :func:`substruct.io.uff.export_uff` carry real node numbers and direction
+codes.
 
-* **151** model header (the case name, ``substruct``) and **164** units (code 1, SI: factors 1;
-  the positions are written in the channel tables' length unit, taken as metres);
-* **2420** one cartesian coordinate system per channel, its x axis the channel's direction
-  (records 5-7 the rows of :math:`A`: :math:`e`, then :math:`e \times a / |\cdot|` and
-  :math:`e \times (e \times a) / |\cdot|` with :math:`a` the global axis least aligned with
-  :math:`e`, a right-handed orthonormal triad; record 8 the origin, zero);
-* **2411** one node per channel (at its position, displacement system its own) and one per
-  virtual point (at its position, the global system), ``1P3D25.16``: 17 significant digits,
-  so the positions and directions read back to the last bit;
-* **58** (binary, :func:`substruct.io.uff.uff58_bytes`) one function per output/input pair:
-  a channel ``<part>@ch:<name>`` at its node, direction ``+1`` (its system's x axis, the
-  channel's direction); a virtual-point coordinate ``<part>@vp:<point>:<ux..rz>`` at the
-  point's node, directions 1-6 in the global system.
+* a virtual-point coordinate ``<part>@vp:<point>:<c>`` (``c`` one of ``ux uy uz rx ry rz``)
+  is the node of ``(part, point)``, at the point's position, in the global system (0), with
+  the direction code 1..6 of ``c``;
+* a channel that passes through, ``<part>@ch:<name>``, is a node of its own at the channel's
+  position (coordinates in the global system), whose displacement system is a 2420 system
+  of the same label with the rows :math:`A = [e;\ e_2;\ e_3]`: :math:`e` the channel's
+  direction, :math:`e_2` the unit part of the global axis least aligned with :math:`e`
+  orthogonal to it, :math:`e_3 = e \times e_2` (right-handed); the direction code is 1 (+x
+  of that system, which is :math:`e` to the last bit); the system's origin (record 8) is the
+  channel's position;
+* anything else (an extra interface mode ``vp:<point>:e<k>``, a coordinate of a
+  finite-element part) keeps the node of :func:`substruct.io.uff.frf_nodes`, at ``(k, 0, 0)``.
 
-Read back by :mod:`substruct.case.uff_geometry` (positions and directions) and
-:mod:`substruct.case.uff_records` (the functions), the channels land where the result's
-geometry puts them, exactly.  Refused: an output or input that is neither a channel nor a
-virtual-point coordinate of a part with a geometry (its place is not known).
+Coordinates are written ``%25.16e`` (17 significant digits: the doubles themselves), so the
+positions and directions read back (:mod:`substruct.case.uff_geometry`) are the result's
+exactly.  The 164 dataset says SI (code 1, factors 1): substruct converts no units, so the
+file's numbers are those of the case and its channel tables, SI when they are (a table read
+from a Universal File with a 164 is in meters).
 """
 
 from __future__ import annotations
 
-import os
-from pathlib import Path
-from typing import Any
+from dataclasses import dataclass, field
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from substruct.io.hdf5 import atomic_path
-from substruct.io.uff import uff58_bytes, uff58_sets, uff_path
-from substruct.run.result import Result
+from substruct.case.channel_geometry import PartChannels
 
-__all__ = ["has_channel_geometry", "channel_axes", "channel_uff_text", "export_channels_uff"]
+__all__ = ["ChannelNodes", "channel_nodes", "channel_frame", "geometry_sets", "VP_CODES"]
 
-_DELIM = "    -1\n"
-_VP_CODES = {"ux": 1, "uy": 2, "uz": 3, "rx": 4, "ry": 5, "rz": 6}
+#: Direction codes of the virtual-point components.
+VP_CODES = {"ux": 1, "uy": 2, "uz": 3, "rx": 4, "ry": 5, "rz": 6}
 
 
-def has_channel_geometry(result: Result) -> bool:
-    """Whether every part of the result's virtual points carries its channel geometry."""
-    vps = result.virtual_points or {}
-    return bool(vps) and all(v.geometry is not None for v in vps.values())
+@dataclass
+class ChannelNodes:
+    """The nodes of the points of a result with channels.
 
-
-def channel_axes(e: np.ndarray) -> np.ndarray:
-    r"""A right-handed orthonormal triad (rows) whose first row is the unit vector ``e``
-    exactly (module docstring)."""
-    e = np.asarray(e, dtype=float)
-    a = np.zeros(3)
-    a[int(np.argmin(np.abs(e)))] = 1.0
-    y = np.cross(e, a)
-    y /= np.linalg.norm(y)
-    z = np.cross(e, y)
-    z /= np.linalg.norm(z)
-    return np.array([e, y, z])
-
-
-def _d25(values: np.ndarray) -> str:
-    return "".join(f"{float(v):25.16E}" for v in values) + "\n"
-
-
-def channel_uff_text(result: Result) -> tuple[str, dict[str, tuple[int, int]]]:
-    """The 151, 164, 2420 and 2411 datasets of the result's geometry (module docstring), and
-    the ``(node, direction)`` of every channel and virtual-point coordinate by its point
-    name (``<part>@ch:<name>``, ``<part>@vp:<point>:<ux..rz>``)."""
-    head = (f"{_DELIM}   151\n{result.case_name[:80]}\nsubstruct test geometry and "
-            f"receptances\nsubstruct\n\n\n\nsubstruct\n\n{_DELIM}"
-            f"{_DELIM}   164\n{1:10d}{'SI - mks (Newton)':<20}{2:10d}\n"
-            f"{1.0:25.17E}{1.0:25.17E}{1.0:25.17E}\n{273.15:25.17E}\n{_DELIM}")
-    systems: list[str] = []
-    nodes: list[str] = []
-    where: dict[str, tuple[int, int]] = {}
-    label = 0
-    for part, ind in (result.virtual_points or {}).items():
-        geo = ind.geometry
-        if geo is None:
-            continue
-        for name, pos, d in zip(geo.names, geo.positions, geo.directions):
-            label += 1
-            A = channel_axes(d)
-            systems.append(f"{label:10d}{0:10d}{8:10d}\n{part}@ch:{name}"[:80] + "\n"
-                           + "".join(_d25(row) for row in A) + _d25(np.zeros(3)))
-            nodes.append(f"{label:10d}{0:10d}{label:10d}{8:10d}\n" + _d25(pos))
-            where[f"{part}@ch:{name}"] = (label, 1)
-        for name, pos in zip(geo.point_names, geo.point_positions):
-            label += 1
-            nodes.append(f"{label:10d}{0:10d}{0:10d}{8:10d}\n" + _d25(pos))
-            for comp, code in _VP_CODES.items():
-                where[f"{part}@vp:{name}:{comp}"] = (label, code)
-    text = head
-    if systems:
-        text += f"{_DELIM}  2420\n{1:10d}\nsubstruct channels\n" + "".join(systems) + _DELIM
-    text += f"{_DELIM}  2411\n" + "".join(nodes) + _DELIM
-    return text, where
-
-
-def export_channels_uff(result: Result, out: str | os.PathLike, force: bool = False) -> Path:
-    """Write the result's geometry and receptances as one UFF file (module docstring;
-    :func:`~substruct.io.uff.uff_path`), atomically; return its path.
-
-    Raises:
-        FileExistsError: the file exists and ``force`` is not set.
-        ValueError: no receptances, or an output or input without a place.
+    Attributes:
+        where: point name -> ``(node, direction code)``.
+        xyz: node -> global position (every node ``1 .. n``).
+        disp_cs: node -> the label of its displacement system (0 global).
+        systems: label -> ``(A, origin)`` of the 2420 systems written.
     """
-    path = uff_path(result, out)
-    if path.exists() and not force:
-        raise FileExistsError(f"{path} exists; use --force to overwrite it")
-    frf = result.frf
-    if frf is None:
-        raise ValueError(f"{result.case_name}: no receptances to export with the channels")
-    text, where = channel_uff_text(result)
-    for point in [*frf.outputs, *frf.inputs]:
-        if point not in where:
-            raise ValueError(f"UFF export with channels: {point!r} is neither a channel nor a "
-                             "virtual-point coordinate of a part with a stored geometry")
-    sets: list[dict[str, Any]] = uff58_sets(frf.omega, frf.H, frf.outputs, frf.inputs,
-                                            frf.quantity, where)
-    with atomic_path(path, suffix=".uff") as tmp:
-        with open(tmp, "wb") as fh:
-            fh.write(text.encode("ascii", "replace"))
-            for s in sets:
-                fh.write(uff58_bytes(s))
-    return path
+
+    where: dict[str, tuple[int, int]] = field(default_factory=dict)
+    xyz: dict[int, np.ndarray] = field(default_factory=dict)
+    disp_cs: dict[int, int] = field(default_factory=dict)
+    systems: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+
+
+def channel_frame(e: Sequence[float]) -> np.ndarray:
+    r"""The rows :math:`[e;\ e_2;\ e_3]` of a right-handed orthonormal system whose first
+    axis is the unit vector ``e`` itself (module docstring)."""
+    u = np.asarray(e, dtype=float)
+    a = np.zeros(3)
+    a[int(np.argmin(np.abs(u)))] = 1.0
+    e2 = a - (a @ u) * u
+    e2 /= np.linalg.norm(e2)
+    return np.array([u, e2, np.cross(u, e2)])
+
+
+def _split(name: str, channels: Mapping[str, PartChannels]
+           ) -> tuple[str, str, str] | None:
+    """``(part, kind, rest)`` of a virtual-point or channel point of a part with channels."""
+    part, at, local = name.partition("@")
+    if not at or part not in channels:
+        return None
+    kind, _, rest = local.partition(":")
+    pc = channels[part]
+    if kind == "vp":
+        point, _, comp = rest.rpartition(":")
+        if point in pc.points and comp in VP_CODES:
+            return part, "vp", rest
+    elif kind == "ch" and any(c.name == rest for c in pc.table.channels):
+        return part, "ch", rest
+    return None
+
+
+def channel_nodes(points: Sequence[str], coordinates: Sequence[str],
+                  channels: Mapping[str, PartChannels]) -> ChannelNodes:
+    """Node and direction of every point (module docstring): the others first by
+    :func:`substruct.io.uff.frf_nodes` (nodes ``1 .. m``, at ``(k, 0, 0)``), then one node per
+    virtual point and per channel, numbered after them in the order of ``points``."""
+    from substruct.io.uff import frf_nodes
+
+    mine = [p for p in points if _split(p, channels) is not None]
+    others, last = frf_nodes([p for p in points if p not in set(mine)], coordinates)
+    out = ChannelNodes(dict(others))
+    for k in range(1, last + 1):
+        out.xyz[k], out.disp_cs[k] = np.array([float(k), 0.0, 0.0]), 0
+    owners: dict[tuple[str, str], int] = {}
+    for p in mine:
+        if p in out.where:
+            continue
+        got = _split(p, channels)
+        assert got is not None
+        part, kind, rest = got
+        pc = channels[part]
+        if kind == "vp":
+            point, _, comp = rest.rpartition(":")
+            key = (part, f"vp:{point}")
+            if key not in owners:
+                last += 1
+                owners[key] = last
+                xyz = pc.point_xyz[pc.points.index(point)]
+                out.xyz[last], out.disp_cs[last] = np.array(xyz, dtype=float), 0
+            out.where[p] = (owners[key], VP_CODES[comp])
+        else:
+            c = pc.table.get(rest)
+            last += 1
+            pos = np.array(c.position, dtype=float)
+            out.xyz[last], out.disp_cs[last] = pos, last
+            out.systems[last] = (channel_frame(c.direction), pos)
+            out.where[p] = (last, 1)
+    return out
+
+
+def geometry_sets(nodes: ChannelNodes, name: str) -> list[dict[str, Any]]:
+    """The 151 (the case ``name``), 164 (SI), 2411 (every node) and 2420 (the channels'
+    systems, if any) datasets of ``nodes``, as ``pyuff`` writes them."""
+    import pyuff
+
+    labels = np.array(sorted(nodes.xyz), dtype=int)
+    xyz = np.array([nodes.xyz[k] for k in labels], dtype=float).reshape(-1, 3)
+    sets = [pyuff.prepare_151(model_name=name[:80], description="substruct test geometry "
+                              "and receptances", db_app="substruct", program="substruct"),
+            pyuff.prepare_164(units_code=1, units_description="SI: meter (newton)",
+                              temp_mode=1, length=1.0, force=1.0, temp=1.0,
+                              temp_offset=0.0),
+            pyuff.prepare_2411(node_nums=labels, def_cs=np.zeros(len(labels), dtype=int),
+                               disp_cs=np.array([nodes.disp_cs[k] for k in labels], dtype=int),
+                               color=np.ones(len(labels), dtype=int), x=xyz[:, 0],
+                               y=xyz[:, 1], z=xyz[:, 2])]
+    if nodes.systems:
+        cs = sorted(nodes.systems)
+        sets.append(pyuff.prepare_2420(
+            Part_UID=1, Part_Name=f"substruct {name}"[:80], CS_sys_labels=cs,
+            CS_types=[0] * len(cs), CS_colors=[8] * len(cs),
+            CS_names=[f"channel node {k}" for k in cs],
+            CS_matrices=[np.vstack([nodes.systems[k][0], nodes.systems[k][1]]) for k in cs]))
+    return sets

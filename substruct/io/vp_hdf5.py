@@ -12,10 +12,6 @@ One numbered group per part, ``/virtual_points/<i>/``, attribute ``part``, and t
 ``specific_u``         ``n_sensors x n_omega``: :math:`\rho_{u,i}`
 ``impacts``            the impact channels' names
 ``specific_f``         ``n_impacts x n_omega``: :math:`\rho_{f,j}`
-``geometry/``          the part's channel table and virtual points: ``channels``, ``kinds``
-                       (sensor or impact), ``positions`` and ``directions`` (``n x 3``, the
-                       table's length unit, unit directions), ``points``,
-                       ``point_positions`` (``m x 3``)
 =====================  =================================================================
 
 and ``/virtual_points/monte_carlo`` the coupled result's sensitivity to noise
@@ -33,7 +29,6 @@ from substruct.io.transient_hdf5 import ArrayReader
 
 if TYPE_CHECKING:  # the writer is imported by every result write: the analysis only when used
     from substruct.analysis.frf.virtual_point import VptResult
-    from substruct.analysis.frf.vp_geometry import ChannelGeometry
     from substruct.analysis.frf.vp_noise import MonteCarloResult
 
 __all__ = ["write_virtual_points", "read_virtual_points", "write_monte_carlo",
@@ -63,42 +58,6 @@ def write_virtual_points(group: h5py.Group, parts: dict[str, VptResult]) -> None
             [np.asarray(ind.overall_f[n], dtype=float) for n in ind.overall_u]))
         _table(g, "sensors", "specific_u", ind.specific_u)
         _table(g, "impacts", "specific_f", ind.specific_f)
-        if ind.geometry is not None:
-            _write_geometry(g.create_group("geometry", track_order=True), ind.geometry)
-
-
-def _write_geometry(g: h5py.Group, geo: ChannelGeometry) -> None:
-    """The part's channels and virtual points (module docstring)."""
-    for key, names in (("channels", geo.names), ("kinds", geo.kinds),
-                       ("points", geo.point_names)):
-        g.create_dataset(key, data=np.array(names, dtype=object), dtype=_STR,
-                         shape=(len(names),))
-    for key, arr in (("positions", geo.positions), ("directions", geo.directions),
-                     ("point_positions", geo.point_positions)):
-        g.create_dataset(key, data=np.asarray(arr, dtype=float).reshape(-1, 3))
-    g["directions"].attrs["units"] = "1"
-
-
-def _group(g: h5py.Group, name: str) -> h5py.Group:
-    """``g/name``, a group reached by a hard link (never a soft or external one)."""
-    link = g.get(name, getlink=True)
-    node = g.get(name)
-    if not isinstance(link, h5py.HardLink) or not isinstance(node, h5py.Group):
-        raise ValueError(f"{g.name}/{name} is not a group of this file")
-    return node
-
-
-def _read_geometry(rd: ArrayReader, g: h5py.Group) -> ChannelGeometry:
-    from substruct.analysis.frf.vp_geometry import ChannelGeometry
-
-    names, kinds, points = (rd.strings(g, key) for key in ("channels", "kinds", "points"))
-    arrays = [rd.array(g, key, "f", 2, (n, 3)) for key, n in (
-        ("positions", len(names)), ("directions", len(names)),
-        ("point_positions", len(points)))]
-    try:
-        return ChannelGeometry(names, kinds, arrays[0], arrays[1], points, arrays[2])
-    except ValueError as err:
-        raise ValueError(f"{g.name}: {err}") from None
 
 
 def read_virtual_points(rd: ArrayReader, groups: list[h5py.Group], k: int
@@ -131,8 +90,7 @@ def read_virtual_points(rd: ArrayReader, groups: list[h5py.Group], k: int
                     raise ValueError(f"{g.name}/{key} holds values that are not consistency "
                                      f"indicators (finite, in [0, 1])")
                 tables.append(dict(zip(names, v)))
-        geo = _read_geometry(rd, _group(g, "geometry")) if "geometry" in g else None
-        out[name] = VptResult(tables[0], tables[1], tables[2], tables[3], geo)
+        out[name] = VptResult(*tables)
     return out
 
 

@@ -23,6 +23,7 @@ from substruct.run.spec_results import BaseFrf, RandomResponse, ShockSpectra
 
 if TYPE_CHECKING:  # the test-lab analysis (and its case layer) only where it is used
     from substruct.analysis.frf.virtual_point import VptResult
+    from substruct.case.channel_geometry import PartChannels
     from substruct.analysis.frf.vp_noise import MonteCarloResult
     from substruct.run.testlab_results import SemmOutcome, TpaResult
 
@@ -79,3 +80,6 @@ class Result:
     tpa: TpaResult | None = None
     #: the mixed model of analysis.semm
     semm: SemmOutcome | None = None
+    #: the channel tables and virtual points of a virtual-point case, by part
+    #: (:mod:`substruct.case.channel_geometry`)
+    channels: dict[str, PartChannels] = field(default_factory=dict)

@@ -154,6 +154,8 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
         if has_virtual_points(case):
             result.frf, result.virtual_points, result.monte_carlo = vp_frf_result(
                 case, model, progress, tasks)
+            from substruct.case.channel_geometry import case_channels  # when used
+            result.channels = case_channels(case)
         elif frf.loss_factor is not None:
             result.frf = loss_frf_result(case, model, progress)
         else:

@@ -19,7 +19,6 @@ indicators of every transformed part are returned with it.
 from __future__ import annotations
 
 import re
-from dataclasses import replace
 from typing import Callable
 
 import numpy as np
@@ -33,7 +32,6 @@ from substruct.analysis.frf.virtual_point import (VirtualPoint, VptResult, check
                                                   consistency, virtual_point_transform)
 from substruct.analysis.frf.vp_coupling import (Regularisation, VpPart,
                                                 couple_virtual_points)
-from substruct.analysis.frf.vp_geometry import channel_geometry
 from substruct.analysis.frf.vp_reduction import InterfaceReduction
 from substruct.analysis.frf.vp_noise import (MeasuredPart, MonteCarloResult, NoiseStudy,
                                              TaskMap, monte_carlo_coupling)
@@ -231,9 +229,7 @@ def vp_frf_result(case: Case, model: Model, progress: Progress | None = None,
         assert m.vpt is not None
         measured.append(m)
         parts.append(m.part(m.Y))
-        geometry = channel_geometry(s.virtual_points.table(),
-                                    [(p.name, p.position) for p in s.virtual_points.points])
-        indicators[part.name] = replace(consistency(m.vpt, m.Y), geometry=geometry)
+        indicators[part.name] = consistency(m.vpt, m.Y)
         weaken[part.name] = list(s.virtual_points.weaken)
     frf_names = {p.name for p in split.parts}
 

@@ -12,7 +12,8 @@ One 3D axis per part, in that part's own coordinates (the channel table's):
 The arrows are :math:`\mathbf r \to \mathbf r + \ell\,\mathbf e` with :math:`\ell` a tenth of the
 largest extent of the part's points (a twentieth of a unit when they all coincide), so the
 picture does not depend on the units; the axes have equal aspect, so directions are drawn
-true.  :func:`vp_geometry` collects the numbers drawn; :func:`draw_vp_geometry` draws them;
+true.  :func:`vp_geometry` collects the numbers drawn from a case, :func:`geometry_of` from the
+``/channels`` a result keeps; :func:`draw_vp_geometry` draws them;
 :func:`plot_vp_geometry` writes the PNG (atomically) and returns the path.
 """
 
@@ -30,7 +31,9 @@ from substruct.io.hdf5 import atomic_path
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["PartGeometry", "vp_geometry", "arrow_length", "draw_vp_geometry",
+    from substruct.case.channel_geometry import PartChannels
+
+__all__ = ["PartGeometry", "geometry_of", "vp_geometry", "arrow_length", "draw_vp_geometry",
            "plot_vp_geometry"]
 
 
@@ -55,26 +58,29 @@ class PartGeometry:
     point_xyz: np.ndarray
 
 
-def vp_geometry(case: Any) -> dict[str, PartGeometry]:
-    """Part name -> :class:`PartGeometry` for every substructure of ``case`` with
-    ``virtual_points:`` (the channel table read when the case was loaded)."""
+def geometry_of(channels: dict[str, PartChannels]) -> dict[str, PartGeometry]:
+    """Part name -> :class:`PartGeometry` of the channel geometry a result keeps
+    (:attr:`substruct.run.result.Result.channels`, read back from ``/channels``)."""
     out: dict[str, PartGeometry] = {}
-    for s in case.substructures:
-        vps = getattr(s, "virtual_points", None)
-        if vps is None:
-            continue
-        table = vps.table()
-        sen, imp = table.of_kind("sensor"), table.of_kind("impact")
+    for part, pc in channels.items():
+        sen, imp = pc.table.of_kind("sensor"), pc.table.of_kind("impact")
 
         def rows(chans: list[Any], attr: str) -> np.ndarray:
             return np.asarray([getattr(c, attr) for c in chans], dtype=float).reshape(-1, 3)
 
-        out[s.name] = PartGeometry(
+        out[part] = PartGeometry(
             [c.name for c in sen], rows(sen, "position"), rows(sen, "direction"),
             [c.name for c in imp], rows(imp, "position"), rows(imp, "direction"),
-            [p.name for p in vps.points],
-            np.asarray([p.position for p in vps.points], dtype=float).reshape(-1, 3))
+            list(pc.points), np.asarray(pc.point_xyz, dtype=float).reshape(-1, 3))
     return out
+
+
+def vp_geometry(case: Any) -> dict[str, PartGeometry]:
+    """Part name -> :class:`PartGeometry` for every substructure of ``case`` with
+    ``virtual_points:`` (the channel table read when the case was loaded)."""
+    from substruct.case.channel_geometry import case_channels
+
+    return geometry_of(case_channels(case))
 
 
 def arrow_length(g: PartGeometry) -> float:

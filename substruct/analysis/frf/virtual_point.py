@@ -53,7 +53,6 @@ from typing import Sequence
 
 import numpy as np
 
-from substruct.analysis.frf.vp_geometry import ChannelGeometry
 from substruct.case.channels import ChannelTable
 
 __all__ = ["VirtualPoint", "VptResult", "VP_COMPONENTS", "VP_RANK_RTOL", "idm_rows",
@@ -265,16 +264,12 @@ class VptResult:
         overall_u, overall_f: virtual point -> ``(n_omega,)`` :math:`\\rho_u`, :math:`\\rho_f`.
         specific_u: sensor channel -> ``(n_omega,)`` :math:`\\rho_{u,i}`.
         specific_f: impact channel -> ``(n_omega,)`` :math:`\\rho_{f,j}`.
-        geometry: the part's channels and virtual points
-            (:class:`~substruct.analysis.frf.vp_geometry.ChannelGeometry`; ``None`` when not
-            known).
     """
 
     overall_u: dict[str, np.ndarray]
     overall_f: dict[str, np.ndarray]
     specific_u: dict[str, np.ndarray]
     specific_f: dict[str, np.ndarray]
-    geometry: ChannelGeometry | None = None
 
 
 def _specific(filtered: np.ndarray, measured: np.ndarray) -> np.ndarray:
