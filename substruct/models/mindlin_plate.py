@@ -35,15 +35,25 @@ are right:
              c = e_s^{(2)} - e_r^{(1)} - e_s^{(3)} + e_r^{(3)}
 
   (the tangential strain constant along each side); the three mid-side points (exact for
-  the quadratic integrand).  Alone, MITC3 still locks mildly in thin plates (a simply
-  supported plate at t/a = 1e-3 on 8 x 8 x 2 triangles: 4.9 times Kirchhoff's fundamental
-  eigenvalue, measured), so its shear stiffness is stabilised as Lyly, Stenberg and Vihinen
-  (1993) do, :math:`S_h = S\,t^2 / (t^2 + \alpha h^2)` with ``h`` the longest side and
-  :math:`\alpha` = :data:`STABILISATION` = 0.1: a change of order :math:`(h/t)^2` where
-  the mesh resolves the thickness, the thin limit right (1.09 times on the same mesh).
-  MITC3 rather than DSG3: it is isotropic (independent of the node numbering), which DSG3
-  is not; MITC3+ cures the locking with a cubic bubble on the rotations (an internal
-  coordinate to condense) at a larger cost per element.
+  the quadratic integrand).  MITC3 rather than DSG3: it is isotropic (independent of the
+  node numbering), which DSG3 is not; MITC3+ cures MITC3's residual locking with a cubic
+  bubble on the rotations (an internal coordinate to condense) at a larger cost per element,
+  where the stabilisation below does it at none.
+
+**Shear stabilisation.** Alone, MITC3 still locks in thin plates (a simply supported plate at
+t/a = 1e-3 on 8 x 8 x 2 triangles: 4.9 times Kirchhoff's fundamental eigenvalue, measured),
+and MITC4 on coarse meshes of thick plates stores spurious shear energy at the tying points.
+Both elements therefore use the stabilised shear stiffness of Lyly, Stenberg and Vihinen
+(1993), convergent uniformly in ``t``,
+
+.. math::  S_h = S\, \frac{t^2}{t^2 + \alpha h^2}, \qquad \alpha = 0.1
+           \ (\text{:data:`STABILISATION`}),
+
+with ``h`` the element's longest side: a change of order :math:`(h/t)^2` where the mesh
+resolves the thickness, so the converged answer is Mindlin's (Nastran's CQUAD4 and CTRIA3
+likewise add a residual bending flexibility to their transverse shear).  Measured:
+the thin-plate triangle above 1.09 times Kirchhoff's, and the simply supported plate at
+t/a = 0.1 on 8 x 8 quadrilaterals 2.5 % high (3.4 % without).
 
 Both elements represent a constant curvature with zero shear (``w`` quadratic, :math:`\beta =
 -\nabla w` linear: the tied strains are zero exactly, since a secant of a quadratic is its
@@ -71,7 +81,7 @@ __all__ = ["mindlin_matrices_batch", "mindlin_matrices_local", "KAPPA_SHEAR", "S
 
 #: The transverse shear correction factor of a homogeneous plate.
 KAPPA_SHEAR = 5.0 / 6.0
-#: ``alpha`` of MITC3's shear stabilisation :math:`S\,t^2 / (t^2 + \alpha h^2)`.
+#: ``alpha`` of the MITC elements' shear stabilisation :math:`S\,t^2 / (t^2 + \alpha h^2)`.
 STABILISATION = 0.1
 
 
@@ -125,10 +135,8 @@ def mindlin_matrices_batch(xy: np.ndarray, Db: np.ndarray, shear: float, t: floa
     m, n = xy.shape[:2]
     K = np.zeros((m, 3 * n, 3 * n))
     ok = np.ones(m, dtype=bool)
-    S = np.full(m, float(shear))
-    if n == 3:
-        h2 = (np.linalg.norm(xy - np.roll(xy, 1, axis=1), axis=2) ** 2).max(axis=1)
-        S = S * t**2 / (t**2 + STABILISATION * h2)
+    h2 = (np.linalg.norm(xy - np.roll(xy, 1, axis=1), axis=2) ** 2).max(axis=1)
+    S = shear * t**2 / (t**2 + STABILISATION * h2)
     for p, wq, _, dN, _, _ in tabulated(n, "stiffness"):
         det, inv = _inv2(np.einsum("ak,mkb->mab", dN, xy))
         ok &= det > 0
