@@ -10,7 +10,7 @@ ovalling of the wall).
 Measured against MSC.NASTRAN 70.7's table: the first bending pair 0.03 % low, every elastic
 mode within 1.6 % (the wall's pairs 4-5, 7-8 and 11-12 1.4-1.5 % high).  The shells are
 Reissner-Mindlin plates (MITC4, PSHELL with MID3, ``t/R = 0.2``) as Nastran's; as Kirchhoff
-plates (DKQ, before MID3 was modelled) the first pair was 0.22 % low and the highest pair
+plates (DKQ) the first pair is 0.22 % low and the highest pair
 4.7 % low.  The rest is the elements' interpolations on a faceted wall 0.39 x 0.5, and
 Nastran's coupled shell mass, which has no rotary inertia where ours has ``rho t^3 / 12``.
 """

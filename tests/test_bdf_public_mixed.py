@@ -23,7 +23,7 @@ in that mode, so each element type is measured on its own:
   MITC3 with the shear stiffness TS/T T G3), as Nastran's: within 0.3 % to 3.6 % / -0.03 % to
   0.67 % (accepted 0 to 4.5 % / -0.5 % to 1 %: on one 1 x 1 panel per element the two
   elements' bending interpolations differ; MITC4's bilinear rotations are the stiffer).  As
-  Kirchhoff plates (DKQ/DKT, before MID3 was modelled) they were 0.16 % to 1.07 % / -1.7 % to
+  Kirchhoff plates (DKQ/DKT) they are 0.16 % to 1.07 % / -1.7 % to
   1.5 % off;
 * CPENTA: ours 10 % to 40 % stiffer: Nastran gives the 6-grid CPENTA bubble functions by
   default, ours is fully integrated without them;
