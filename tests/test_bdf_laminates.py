@@ -37,9 +37,10 @@ def assert_same(a, b, tol=1e-13):
     ["PCOMP,7,,,,,,,SYM", ",1,.0015,45.,,1,.0005,-45."],    # the lower half of 4
 ])
 def test_pcomp_of_isotropic_plies_is_the_pshell_of_their_thickness(pcomp, coupled):
-    """Plies of one MAT1 summing to 4 mm: K and M equal the PSHELL's (T = 4 mm, MID1 = MID2,
-    12I/T^3 = 1) to round-off, lumped and coupled, on a warped quadrilateral and a triangle."""
-    ref = matrices([MAT, "PSHELL,7,1,.004,1"] + GRIDS + SHELLS, coupled)
+    """Plies of one MAT1 summing to 4 mm: K and M equal the PSHELL's (T = 4 mm, MID1 = MID2
+    = MID3, 12I/T^3 = 1, TS/T = 5/6: a Reissner-Mindlin plate) to round-off, lumped and
+    coupled, on a warped quadrilateral and a triangle."""
+    ref = matrices([MAT, "PSHELL,7,1,.004,1,,1"] + GRIDS + SHELLS, coupled)
     got = matrices([MAT] + pcomp + GRIDS + SHELLS, coupled)
     assert_same(got[0], ref[0])
     assert_same(got[1], ref[1])
@@ -53,7 +54,7 @@ def test_pcomp_nsm_and_mid3_and_a_sandwich_match_the_lamination_closed_forms():
     card = split_bdf("BEGIN BULK\nPCOMP,7,,.5\n,2,.001,,,1,.02\n,2,.001\nENDDATA", "s").cards[0]
     mats = [Mat1(2, E2, E2 / (2 * (1 + nu2)), r2, 1), Mat1(1, E1, E1 / (2 * (1 + nu1)), r1, 1),
             Mat1(2, E2, E2 / (2 * (1 + nu2)), r2, 1)]
-    T, (Em, num), (Eb, nub), rho, coupling = laminate(read_pcomp(card), mats)
+    T, (Em, num), (Eb, nub), rho, coupling, shear = laminate(read_pcomp(card), mats)
     q1, q2 = E1 / (1 - nu1 ** 2), E2 / (1 - nu2 ** 2)
     a11 = q1 * 2 * c + q2 * 2 * f
     a12 = nu1 * q1 * 2 * c + nu2 * q2 * 2 * f
@@ -66,6 +67,8 @@ def test_pcomp_nsm_and_mid3_and_a_sandwich_match_the_lamination_closed_forms():
     assert nub == pytest.approx(d12 / d11, rel=1e-13)
     assert rho * T == pytest.approx(r1 * 2 * c + r2 * 2 * f, rel=1e-13)
     assert coupling < 1e-15
+    G1, G2 = E1 / (2 * (1 + nu1)), E2 / (2 * (1 + nu2))
+    assert shear == pytest.approx(5 / 6 * (G1 * 2 * c + G2 * 2 * f), rel=1e-13)
     # the same through a model: mass per area of the sandwich plus NSM, lumped on 4 corners
     text = ["MAT1,1,1.+9,,.25,100.", "MAT1,2,7.+10,,.33,2700.", "PCOMP,7,,.5",
             ",2,.001,,,1,.02", ",2,.001", "PSHELL,8,1,.01,1,,1,.9"] + GRIDS[:4] + SHELLS[:1]

@@ -19,16 +19,23 @@ in that mode, so each element type is measured on its own:
   shear factors left at 1 the difference is 3-4 %;
 * CHEXA (bubble functions, Nastran's default): within 0.5 % (measured 0.44 %); Nastran's
   element also evaluates its shear strains at reduced points, which ours does not;
-* CQUAD4 / CTRIA3 of the PSHELL (t/L = 0.25, MID3 given): within 1.2 % / 2 % (measured 1.07 %
-  and 1.75 %): ours are Kirchhoff plates (DKQ/DKT), Nastran's have transverse shear;
+* CQUAD4 / CTRIA3 of the PSHELL (t/L = 0.25, MID3 given): Reissner-Mindlin plates (MITC4 /
+  MITC3 with the shear stiffness TS/T T G3), as Nastran's: within 0.3 % to 3.6 % / -0.03 % to
+  0.67 % (accepted 0 to 4.5 % / -0.5 % to 1 %: on one 1 x 1 panel per element the two
+  elements' bending interpolations differ; MITC4's bilinear rotations are the stiffer).  As
+  Kirchhoff plates (DKQ/DKT) they are 0.16 % to 1.07 % / -1.7 % to
+  1.5 % off;
 * CPENTA: ours 10 % to 40 % stiffer: Nastran gives the 6-grid CPENTA bubble functions by
   default, ours is fully integrated without them;
-* the PCOMP panels (t/L = 1 and 1.5): ours 3 % to 8.4 times stiffer, the transverse shear of
-  panels as thick as they are wide, which a Kirchhoff plate leaves out.
+* the PCOMP panels (t/L = 1 and 1.5): Reissner-Mindlin with the laminate's shear 5/6 sum G t:
+  CQUAD4 -1.5 % to 26 % (accepted -3 % to 30 %; the 26 % is the t/L = 1 panel in mode 3, the
+  t/L = 1.5 panel is within 1.5 %), CTRIA3 -0.2 % to 3.0 % (accepted -1 % to 4 %).  As
+  Kirchhoff plates they were 3 % to 8.4 times stiffer.
 
 Nastran's shapes have unit modal mass in our lumped mass to 6e-8 (within the printed digits).
 
-So the three eigenvalues are 1.9 %, 0.74 % and 4.2 % above Nastran's.
+So the three eigenvalues are 0.59 %, 0.34 % and 1.5 % above Nastran's (1.9 %, 0.74 % and
+4.2 % with Kirchhoff shells).
 """
 
 from __future__ import annotations
@@ -61,16 +68,16 @@ def test_the_f06_excerpt_holds_three_modes_of_every_grid_and_element():
 
 
 def test_eigenvalues_are_above_nastrans_by_the_shells_and_wedges_stiffness():
-    """Our three eigenvalues against MSC Nastran 2005's: 1.9 %, 0.74 %, 4.2 % above (the
-    element families below explain it); ``substruct run`` of the file itself writes the same
-    modes."""
+    """Our three eigenvalues against MSC Nastran 2005's: 0.59 %, 0.34 %, 1.5 % above (the
+    element families below explain it: the stiffer CPENTA and thick PCOMP quadrilateral);
+    accepted 0.2 % to 2 %."""
     case = {"name": "mssb", "substructures": [{"name": "m", "type": "nastran",
                                                "file": str(BDF)}],
             "analysis": {"modes": {"count": 3}}}
     asm = assemble_case(load_case(case)).assembly
     lam = modes(asm.M, None, asm.K, asm.A, 3).omega ** 2
     rel = lam / np.array(EIG) - 1
-    assert np.all(rel > 0.005) and np.all(rel < 0.05), rel
+    assert np.all(rel > 0.002) and np.all(rel < 0.02), rel
     assert rel[1] < rel[0] < rel[2], rel
 
 
@@ -81,7 +88,7 @@ def test_substruct_run_of_the_file_writes_its_eigrl_modes(tmp_path):
     with h5py.File(h5) as f:
         omega = f["/modes/omega"][()]
     assert omega.shape == (3,)
-    assert np.all(np.abs(omega ** 2 / np.array(EIG) - 1) < 0.05)
+    assert np.all(np.abs(omega ** 2 / np.array(EIG) - 1) < 0.02)
 
 
 def _vector(bulk, mode: int) -> np.ndarray:
@@ -123,9 +130,9 @@ ENERGIES = _element_energies()
 
 
 @pytest.mark.parametrize("kind, low, high", [
-    ("CBEAM", -6e-5, 6e-5), ("CHEXA", -5e-3, 5e-3), ("CQUAD4 PSHELL", -1.2e-2, 1.2e-2),
-    ("CTRIA3 PSHELL", -2e-2, 2e-2), ("CPENTA", 0.05, 0.5), ("CQUAD4 PCOMP", 0.02, 10.0),
-    ("CTRIA3 PCOMP", 0.02, 10.0)])
+    ("CBEAM", -6e-5, 6e-5), ("CHEXA", -5e-3, 5e-3), ("CQUAD4 PSHELL", 0.0, 4.5e-2),
+    ("CTRIA3 PSHELL", -5e-3, 1e-2), ("CPENTA", 0.05, 0.5), ("CQUAD4 PCOMP", -0.03, 0.3),
+    ("CTRIA3 PCOMP", -0.01, 0.04)])
 def test_element_strain_energies_differ_from_nastrans_as_their_formulations(kind, low, high):
     rel = [ours / ref - 1 for k, _, ours, ref, _ in ENERGIES if k == kind]
     assert rel and low <= min(rel) and max(rel) <= high, (kind, min(rel), max(rel))

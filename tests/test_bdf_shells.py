@@ -70,6 +70,47 @@ def test_bdf_shells_are_the_frame_shells(kind, api):
     assert abs(sub.M - ref.M).max() <= 1e-12 * abs(ref.M).max()
 
 
+@pytest.mark.parametrize("kind, api", [("CQUAD4", "quad"), ("CTRIA3", "tri")])
+def test_pshell_with_mid3_is_the_mindlin_frame_shell_and_ts_scales_its_shear(kind, api):
+    """MID3 given (TS/T blank: 5/6): the frame API's ``bending="mindlin"`` shells (MITC4 /
+    MITC3, shear 5/6 G T) to round-off; MID3 blank: Kirchhoff's, a different K; TS/T = 0.5
+    is an element whose shear stiffness is 0.5 T G (the element function with that shear)."""
+    from substruct.models.shell import ShellTerms, shell_matrices
+
+    mid3 = plate_bdf(4, kind).replace(f"PSHELL,1,1,{T},1", f"PSHELL,1,1,{T},1,,1")
+    mats = nastran_matrices(parse_bulk(mid3, "p.bdf"))
+    sub = nastran_substructure("p", mats, autospc=False)
+    nodes = {1 + i * 5 + j: (i / 4, j / 4, 0.0) for i in range(5) for j in range(5)}
+    ref = frame("api", nodes, [], supports={k: None for k in range(1, 6)},
+                shells=[Shell(s.nodes, T, MAT, bending="mindlin")
+                        for s in _api_shells(4, api)])
+    assert abs(sub.K - ref.K).max() <= 1e-12 * abs(ref.K).max()
+    assert abs(sub.M - ref.M).max() <= 1e-12 * abs(ref.M).max()
+    kirchhoff = nastran_matrices(parse_bulk(plate_bdf(4, kind), "p.bdf")).K
+    assert abs(kirchhoff - mats.K).max() > 1e-3 * abs(ref.K).max()
+    one = plate_bdf(1, kind).replace(f"PSHELL,1,1,{T},1", f"PSHELL,1,1,{T},1,,1,.5")
+    got = nastran_matrices(parse_bulk(one, "p.bdf")).K.toarray()
+    xyz = np.array([[0.0, 0, 0], [0, 1, 0], [1, 0, 0], [1, 1, 0]])  # grids 1-4
+    elements = [[0, 2, 3, 1]] if kind == "CQUAD4" else [[0, 2, 3], [0, 3, 1]]
+    Ke = np.zeros((24, 24))
+    for el in elements:
+        k, _ = shell_matrices(xyz[el], E, NU, T, RHO, terms=ShellTerms(shear=0.5 * T * MAT.G))
+        dofs = np.concatenate([6 * g + np.arange(6) for g in el])
+        Ke[np.ix_(dofs, dofs)] += k
+    np.testing.assert_allclose(got, Ke, rtol=0, atol=1e-12 * abs(Ke).max())
+
+
+def _api_shells(n: int, kind: str):
+    shells = []
+    for i in range(n):
+        for j in range(n):
+            q = (1 + i * (n + 1) + j, 1 + (i + 1) * (n + 1) + j, 2 + (i + 1) * (n + 1) + j,
+                 2 + i * (n + 1) + j)
+            shells += [Shell(q, T, MAT)] if kind == "quad" else \
+                [Shell((q[0], q[1], q[2]), T, MAT), Shell((q[0], q[2], q[3]), T, MAT)]
+    return shells
+
+
 def test_pshell_bending_ratio_and_blank_mids():
     """12I/T^3 scales the bending stiffness only; MID2 blank removes bending, MID1 blank the
     membrane and drilling stiffness; lumped mass has no rotary inertia."""

@@ -24,6 +24,9 @@ TERMS = {
     "pshell": ShellTerms(bending_material=(1.0e11, 0.25), bend=0.7, rotary=False),
     "no-membrane": ShellTerms(membrane=False),
     "no-bending": ShellTerms(bending=False),
+    "mindlin": ShellTerms(shear=5 / 6 * E / (2 * (1 + NU)) * 0.004),
+    "mindlin-pshell": ShellTerms(bending_material=(1.0e11, 0.25), bend=0.7, rotary=False,
+                                 shear=0.9 * 4e10 * 0.004),
 }
 
 

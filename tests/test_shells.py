@@ -221,17 +221,38 @@ def _deck_case(**shell) -> dict:
         "analysis": {"modes": {"count": 3}}}
 
 
-def test_case_file_shells_are_the_api_shells():
-    """``shells:`` in a ``type: frame`` item builds the same matrices as the Python API."""
+@pytest.mark.parametrize("bending", ["kirchhoff", "mindlin"])
+def test_case_file_shells_are_the_api_shells(bending):
+    """``shells:`` in a ``type: frame`` item builds the same matrices as the Python API, with
+    ``bending: kirchhoff`` (DKQ) or ``mindlin`` (MITC4); the two differ."""
     from substruct.builder.model import assemble_case
     from substruct.case.loader import load_case
 
-    asm = assemble_case(load_case(_deck_case())).assembly
+    asm = assemble_case(load_case(_deck_case(bending=bending))).assembly
     nodes = {1: (0, 0, 0), 2: (1, 0, 0), 3: (1, 1, 0), 4: (0, 1, 0)}
     api = frame("p", nodes, [], supports={1: "123456", 2: "123456"},
-                shells=[Shell((1, 2, 3, 4), 0.01, MAT, divisions=(8, 8))])
+                shells=[Shell((1, 2, 3, 4), 0.01, MAT, divisions=(8, 8), bending=bending)])
     assert abs(asm.K - api.K).max() <= 1e-13 * abs(api.K).max()
     assert abs(asm.M - api.M).max() <= 1e-13 * abs(api.M).max()
+    other = frame("p", nodes, [], supports={1: "123456", 2: "123456"},
+                  shells=[Shell((1, 2, 3, 4), 0.01, MAT, divisions=(8, 8),
+                                bending="mindlin" if bending == "kirchhoff" else "kirchhoff")])
+    assert abs(other.K - api.K).max() > 1e-3 * abs(api.K).max()
+
+
+@pytest.mark.parametrize("n", [3, 4])
+def test_mindlin_shell_element_in_space_has_exactly_six_rigid_body_modes(n):
+    """A tilted MITC4 / MITC3 shell element (thick, t/L = 0.2): six zero eigenvalues (rigid
+    motions, shear strain zero for a rigid rotation), the seventh clear of round-off."""
+    from substruct.models.shell import ShellTerms
+
+    X = np.array([[0.0, 0.0, 0.0], [1.0, 0.2, 0.3], [0.9, 1.1, 0.0], [-0.1, 1.0, -0.2]])
+    X[3] = X[0] + X[2] - X[1]  # flat
+    terms = ShellTerms(shear=5 / 6 * MAT.G * 0.2)
+    Ke, Me = shell_matrices(X[:n], E, NU, 0.2, RHO, terms=terms)
+    ev = np.linalg.eigvalsh(Ke)
+    assert np.abs(ev[:6]).max() < 1e-12 * ev[-1] and ev[6] > 1e-9 * ev[-1]
+    assert np.linalg.eigvalsh(Me)[0] > 0
 
 
 @pytest.mark.parametrize("shell, field, text", [
@@ -239,6 +260,7 @@ def test_case_file_shells_are_the_api_shells():
     ({"nodes": [1, 2, 4], "divisions": [2, 3]}, "shells.0.divisions", "divided equally"),
     ({"material": "x"}, "shells.0.material", "no material"),
     ({"thickness": -1}, "shells.0.thickness", ""),
+    ({"bending": "reissner"}, "shells.0.bending", "reissner"),
 ])
 def test_case_file_bad_shells_name_their_field(shell, field, text):
     from substruct.case.errors import CaseError

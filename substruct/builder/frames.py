@@ -34,7 +34,8 @@ def build_frame(case: Any, i: int, spec: FrameSpec) -> Substructure:
                   name=str(k))
              for k, m in enumerate(spec.members)]
     shells = [Shell(tuple(int(n) for n in sh.nodes), float(sh.thickness),
-                    materials[sh.material], sh.counts(), float(sh.nsm), name=str(k))
+                    materials[sh.material], sh.counts(), float(sh.nsm), name=str(k),
+                    bending=sh.bending)
               for k, sh in enumerate(spec.shells)]
     masses: dict[int, Any] = {}
     for node, value in spec.node_masses.items():

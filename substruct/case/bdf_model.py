@@ -82,14 +82,16 @@ class BulkData:
 class ShellSection:
     """A PSHELL with its materials: thickness ``t``, membrane material ``membrane`` and
     bending material ``bending`` (``None``: none), bending inertia ratio ``bend`` (``12 I /
-    T^3``), non-structural mass per area ``nsm``; the mass density is MID1's (MID2's if MID1
-    is blank)."""
+    T^3``), non-structural mass per area ``nsm``, transverse shear stiffness per width
+    ``shear`` (``TS G3``, MID3 given: a Reissner-Mindlin plate; ``None``: Kirchhoff's); the
+    mass density is MID1's (MID2's if MID1 is blank)."""
 
     t: float
     membrane: Mat1 | None
     bending: Mat1 | None
     bend: float
     nsm: float
+    shear: float | None = None
 
     @property
     def rho(self) -> float:

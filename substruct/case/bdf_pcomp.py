@@ -14,8 +14,10 @@ are those of an isotropic membrane (:math:`\nu_m = A_{12}/A_{11}`,
 :math:`E_b = 12 D_{11} (1-\nu_b^2)/T^3`) of thickness :math:`T = \sum t_k`: the PSHELL's
 MID1 and MID2 with ``12I/T^3 = 1``.  A laminate with membrane-bending coupling
 (:math:`B \ne 0`: an offset ``Z0`` or an unsymmetric stack) is refused, as is PSHELL's MID4.
-The transverse shear of the laminate (the equivalent PSHELL's MID3) is not modelled: the
-elements are Kirchhoff plates (see :mod:`substruct.case.bdf_shells`).  Mass per area
+The laminate is a Reissner-Mindlin plate (MITC4 / MITC3, as a PSHELL with MID3) of
+transverse shear stiffness per width :math:`S = \tfrac56 \sum_k G_k t_k` (isotropic plies:
+the thickness-weighted shear modulus with the homogeneous plate's factor 5/6; for plies of
+one material Nastran's default ``TS/T`` of a PSHELL).  Mass per area
 :math:`\sum_k \rho_k t_k + NSM`.
 
 Fields: ``PID Z0 NSM SB FT TREF GE LAM / MIDi Ti THETAi SOUTi ...``; a blank ``MIDi`` or
@@ -96,10 +98,11 @@ def read_pcomp(c: RawCard) -> Pcomp:
 
 
 def laminate(p: Pcomp, mats: list[Mat1]) -> tuple[float, tuple[float, float],
-                                                   tuple[float, float], float, float]:
+                                                   tuple[float, float], float, float, float]:
     r"""The equivalent PSHELL of ``p`` with its plies' materials ``mats`` (module docstring):
-    ``(T, (E_m, nu_m), (E_b, nu_b), rho, coupling)`` where ``rho`` is the mean density
-    :math:`\sum \rho_k t_k / T` and ``coupling`` is :math:`\max |B_{ij}| / (A_{11} T)`."""
+    ``(T, (E_m, nu_m), (E_b, nu_b), rho, coupling, S)`` where ``rho`` is the mean density
+    :math:`\sum \rho_k t_k / T`, ``coupling`` is :math:`\max |B_{ij}| / (A_{11} T)` and
+    ``S`` the transverse shear stiffness per width :math:`\tfrac56 \sum_k G_k t_k`."""
     t = np.array([ply[1] for ply in p.plies])
     T = float(t.sum())
     z = (-T / 2 if p.z0 is None else p.z0) + np.concatenate([[0.0], np.cumsum(t)])
@@ -115,5 +118,6 @@ def laminate(p: Pcomp, mats: list[Mat1]) -> tuple[float, tuple[float, float],
     nu_m, nu_b = a12 / a11, d12 / d11
     rho = float(np.array([m.rho for m in mats]) @ t) / T
     coupling = max(abs(b11), abs(b12)) / (a11 * T)
+    shear = 5.0 / 6.0 * float(np.array([m.G for m in mats]) @ t)
     return (T, (a11 * (1 - nu_m ** 2) / T, nu_m), (12 * d11 * (1 - nu_b ** 2) / T ** 3, nu_b),
-            rho, coupling)
+            rho, coupling, shear)

@@ -27,8 +27,8 @@ class Plate:
 class Pshell:
     """PSHELL: membrane material ``mid1`` and bending material ``mid2`` (``None`` when blank:
     no membrane, no bending), thickness ``t``, bending inertia ratio ``bend`` (``12 I / T^3``,
-    1.0 by default), non-structural mass per area ``nsm`` and the transverse shear material
-    ``mid3`` (read, not modelled)."""
+    1.0 by default), non-structural mass per area ``nsm``, the transverse shear material
+    ``mid3`` (``None``: blank, a Kirchhoff plate) and ``ts`` (``TS/T``, 5/6 by default)."""
 
     id: int
     mid1: int | None
@@ -38,6 +38,7 @@ class Pshell:
     nsm: float
     line: int
     mid3: int | None = None
+    ts: float = 5.0 / 6.0
 
 
 def _plate(c: RawCard, n: int, theta: int, zoffs: int, tflag: int) -> Plate:
@@ -78,11 +79,11 @@ def read_ctria3(c: RawCard) -> Plate:
 
 def read_pshell(c: RawCard) -> Pshell:
     """PSHELL PID MID1 T MID2 12I/T**3 MID3 TS/T NSM / Z1 Z2 MID4.  ``MID4`` (membrane-bending
-    coupling) is refused.  ``MID3`` and ``TS/T`` (transverse shear flexibility) are read (the
-    material must exist, ``TS/T`` be positive) and not modelled: the elements are Kirchhoff
-    plates, Nastran's element with ``MID3`` blank, stiffer than Nastran's with ``MID3`` by the
-    shear deformation of the thickness (measured on a public model in docs/structures.md).
-    The fibre distances ``Z1``, ``Z2`` (stress recovery) are read and not used."""
+    coupling) is refused.  ``MID3`` given makes the plate Reissner-Mindlin's (MITC4 / MITC3)
+    with the transverse shear stiffness per width ``TS/T * T * G3`` (``G3`` MID3's shear
+    modulus, ``TS/T`` 5/6 by default and positive); ``MID3`` blank, Kirchhoff's (DKQ / DKT),
+    as Nastran's.  The fibre distances ``Z1``, ``Z2`` (stress recovery) are read and not
+    used."""
     c.blank_after(11, "PSHELL has two lines")
     if c.text(10):
         raise c.error("MID4 is not supported (the shells have no membrane-bending coupling)",
@@ -90,7 +91,8 @@ def read_pshell(c: RawCard) -> Pshell:
     mid3 = c.integer(5, "MID3") if c.text(5) else None
     if mid3 is not None and mid3 <= 0:
         raise c.error("material ids are positive", mid3, "MID3")
-    if not c.real(6, "TS/T", 5.0 / 6.0) > 0:
+    ts = c.real(6, "TS/T", 5.0 / 6.0)
+    if not ts > 0:
         raise c.error("must be positive", c.text(6), "TS/T")
     c.real(8, "Z1", 0.0)
     c.real(9, "Z2", 0.0)
@@ -112,4 +114,4 @@ def read_pshell(c: RawCard) -> Pshell:
             raise c.error("must be positive", value, name)
     if nsm < 0:
         raise c.error("must not be negative", nsm, "NSM")
-    return Pshell(c.integer(0, "PID"), mids[0], t, mids[1], bend, nsm, c.line, mid3)
+    return Pshell(c.integer(0, "PID"), mids[0], t, mids[1], bend, nsm, c.line, mid3, ts)

@@ -289,14 +289,14 @@ def _pcomp_section(pid: int, cards: Cards) -> ShellSection:
     pcard, p = cards.pcomp[pid]
     mats = [_shell_material(pcard, mid, f"MID{(i - 8) // 4 + 1}", cards)
             for mid, _, i in p.plies]
-    T, (em, num), (eb, nub), rho, coupling = laminate(p, mats)
+    T, (em, num), (eb, nub), rho, coupling, shear = laminate(p, mats)
     if coupling > COUPLING_TOLERANCE:
         raise pcard.error(f"the laminate couples membrane and bending (|B| = {coupling:.3g} "
                           "A11 T: an offset Z0 or an unsymmetric stack), which is not "
                           "supported", pcard.text(1) or "blank", "Z0")
     membrane = Mat1(pid, em, em / (2 * (1 + num)), rho, pcard.line)
     bending = Mat1(pid, eb, eb / (2 * (1 + nub)), rho, pcard.line)
-    return ShellSection(T, membrane, bending, 1.0, p.nsm)
+    return ShellSection(T, membrane, bending, 1.0, p.nsm, shear)
 
 
 def _shell_section(card: RawCard, pid: int, cards: Cards) -> ShellSection:
@@ -316,7 +316,14 @@ def _shell_section(card: RawCard, pid: int, cards: Cards) -> ShellSection:
                                     -1 < mat.nu < 0.5):
             raise pcard.error("a shell's MAT1 needs E > 0, G > 0 and -1 < NU < 0.5", mid, name)
         found.append(mat)
-    return ShellSection(p.t, found[0], found[1], p.bend, p.nsm)
+    shear = None
+    if p.mid3 is not None:
+        g3 = cards.mats[p.mid3].G
+        if not g3 > 0:
+            raise pcard.error("the transverse shear material (MID3) needs G > 0", p.mid3,
+                              "MID3")
+        shear = p.ts * p.t * g3
+    return ShellSection(p.t, found[0], found[1], p.bend, p.nsm, shear)
 
 
 def _solid_material(card: RawCard, pid: int, cards: Cards, systems: dict) -> Mat1:

@@ -109,13 +109,16 @@ class FrameMember(StrictModel):
 class FrameShell(StrictModel):
     """A flat plate: 3 or 4 corner ``nodes`` in order around it, ``thickness``, ``material``
     (``nu = E / 2G - 1``), ``divisions`` (``[nx, ny]`` along sides 1-2 and 2-3, or one number
-    for both; a triangle's are equal) and a non-structural mass per area ``nsm``."""
+    for both; a triangle's are equal), a non-structural mass per area ``nsm`` and the plate
+    theory of its ``bending``: ``kirchhoff`` (DKQ/DKT, the default) or ``mindlin`` (MITC4/
+    MITC3, transverse shear stiffness 5/6 G t)."""
 
     nodes: Annotated[list[int], Field(min_length=3, max_length=4)]
     thickness: Positive
     material: Name
     divisions: Count | tuple[Count, Count] = 1
     nsm: NonNegative = 0.0
+    bending: Literal["kirchhoff", "mindlin"] = "kirchhoff"
 
     def counts(self) -> tuple[int, int]:
         """``(nx, ny)``."""

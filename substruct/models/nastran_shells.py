@@ -8,7 +8,9 @@ element matrices on its grids, six coordinates each in basic axes.
   per area with the density of MID1 (MID2's if MID1 is blank): lumped (Nastran's default), a
   quarter or a third on the translations of each corner and no rotary inertia; coupled
   (``PARAM,COUPMASS``), the elements' consistent mass with the rotary inertia of the
-  thickness.  The elements are Kirchhoff plates: Nastran's with ``MID3`` blank.
+  thickness.  ``MID3`` blank: Kirchhoff plates (DKQ / DKT), as Nastran's; ``MID3`` given
+  (and every PCOMP): Reissner-Mindlin plates (MITC4 / MITC3) of transverse shear stiffness
+  per width ``TS/T * T * G3`` (:mod:`substruct.models.mindlin_plate`).
 * **CBUSH + PBUSH**: stiffnesses ``K1 - K6`` along the element axes (a coordinate system's,
   or the axis ``GA -> GB`` with the orientation vector), acting at the point ``S`` of the way
   from ``GA`` to ``GB``, joined rigidly to both grids:
@@ -54,7 +56,8 @@ def plate_matrices(bulk: BulkData, index: dict[int, int]
                                   terms=ShellTerms(bending_material=bend_mat, bend=sec.bend,
                                                    membrane=m1 is not None,
                                                    bending=m2 is not None,
-                                                   rotary=bulk.coupled))
+                                                   rotary=bulk.coupled,
+                                                   shear=sec.shear))
         except ValueError as err:
             raise BdfError(bulk.source, str(err), line=plate.line, card=plate.kind,
                            ident=plate.id) from None

@@ -27,8 +27,9 @@ by the 3-point rule (DKT: the curvatures are linear, exact) or 2 x 2 Gauss point
 **No shear locking**: the transverse shear strain is zero by construction (Kirchhoff's
 constraint holds at discrete points), there is no shear energy to lock, so the element stays
 right as ``t -> 0``; the price is that a thick plate's shear deformation is left out (the
-elements converge to Kirchhoff plate theory).  This is why DKT and DKQ are used rather than
-MITC4: the verification against Kirchhoff closed forms and Leissa's tables is direct, DKT
+elements converge to Kirchhoff plate theory).  They are the shells' default bending (and
+Nastran's PSHELL with ``MID3`` blank); a thick plate, or a PSHELL with ``MID3`` and a PCOMP,
+is a Reissner-Mindlin plate of :mod:`substruct.models.mindlin_plate` (MITC4 / MITC3).  DKT
 and DKQ share one construction (and one code path), and they pass the constant-curvature
 patch test on distorted meshes.
 

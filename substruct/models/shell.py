@@ -33,6 +33,11 @@ points or 2 x 2 Gauss points).  A rigid rotation about the normal costs nothing
 whose drilling rotations are free is not singular (no fictitious supports needed) and a beam
 can be joined to a shell node about any axis.
 
+**Bending.** Kirchhoff's plate (DKQ / DKT, :mod:`substruct.models.plate_bending`: no
+transverse shear deformation) by default; Reissner-Mindlin's (MITC4 / MITC3,
+:mod:`substruct.models.mindlin_plate`: transverse shear stiffness :math:`\kappa G t`) when
+:class:`ShellTerms` gives ``shear``.
+
 **Mass.** ``consistent``: :math:`\rho t \int N^T N` on ``u, v`` (linear/bilinear), the
 bending element's mass (:mod:`substruct.models.plate_bending`) and the rotary inertia
 :math:`\rho t^3/12 \int N^T N` on :math:`\theta_z`.  ``lumped``: :math:`\rho t A / n` on each
@@ -50,6 +55,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from substruct.models.mindlin_plate import mindlin_matrices_local
 from substruct.models.plate_bending import (
     bending_matrices_local, corner_shapes, plane_stress, tabulated,
 )
@@ -160,17 +166,20 @@ def _area(xy: np.ndarray) -> float:
 
 @dataclass(frozen=True)
 class ShellTerms:
-    """Which terms a shell element has, as Nastran's PSHELL gives them: ``bending_material``
+    r"""Which terms a shell element has, as Nastran's PSHELL gives them: ``bending_material``
     ``(E, nu)`` of the bending (MID2; the membrane's if ``None``), ``bend`` the ratio
     ``12 I / t^3`` multiplying the bending stiffness, ``membrane`` / ``bending`` whether the
     element has each (MID1 / MID2 given), ``rotary`` whether the mass has the rotary inertia of
-    the thickness.  The default is a plain shell of one material."""
+    the thickness, ``shear`` the transverse shear stiffness per width :math:`\kappa G t` of a
+    Reissner-Mindlin plate (MITC4 / MITC3, :mod:`substruct.models.mindlin_plate`; ``None``:
+    a Kirchhoff plate, DKQ / DKT).  The default is a plain Kirchhoff shell of one material."""
 
     bending_material: tuple[float, float] | None = None
     bend: float = 1.0
     membrane: bool = True
     bending: bool = True
     rotary: bool = True
+    shear: float | None = None
 
 
 def shell_matrices(X: np.ndarray, E: float, nu: float, t: float, rho: float,
@@ -202,8 +211,13 @@ def shell_matrices(X: np.ndarray, E: float, nu: float, t: float, rho: float,
         raise ValueError("the corners are not in order around the element")
     mu, rot = rho * t + nsm, (rho * t**3 / 12 if rotary else 0.0)
     Eb, nub = bending_material if bending_material is not None else (E, nu)
-    Kb, Mb = bending_matrices_local(xy, Eb, nub, t, mu, rot)
-    Kb = Kb * bend if bending else 0.0 * Kb
+    if terms.shear is None:
+        Kb, Mb = bending_matrices_local(xy, Eb, nub, t, mu, rot)
+        Kb = Kb * bend
+    else:
+        Kb, Mb = mindlin_matrices_local(xy, plane_stress(Eb, nub) * (bend * t**3 / 12),
+                                        terms.shear, t, mu, rot)
+    Kb = Kb if bending else 0.0 * Kb
     Km = membrane_matrices(xy, E, nu, t) if membrane else np.zeros((3 * n, 3 * n))
     memb = np.concatenate([[6 * k, 6 * k + 1, 6 * k + 5] for k in range(n)])
     bent = np.concatenate([[6 * k + 2, 6 * k + 3, 6 * k + 4] for k in range(n)])

@@ -8,7 +8,9 @@ with the same quadrature: arrays carry a leading element axis and the products a
 * axes :math:`R_e` (rows :math:`e_x, e_y, e_z`) and plane corners ``xy`` ``(m, n, 2)``;
 * bending (DKT/DKQ): the discrete Kirchhoff maps :math:`T_b, T_w` side by side, then
   :math:`K_b = \sum_q w_q \det J_q\, B_q^T D_b B_q` and
-  :math:`M_b = \sum_q w_q \det J_q (\mu N_w^T N_w + r N_\beta^T N_\beta)`;
+  :math:`M_b = \sum_q w_q \det J_q (\mu N_w^T N_w + r N_\beta^T N_\beta)`; or, with a
+  transverse shear stiffness, MITC4/MITC3 (:mod:`substruct.models.mindlin_plate`, batched
+  there);
 * membrane (CST/QM6, the incompatible modes condensed by a batched solve) and the drilling
   penalty :math:`\gamma t \sum_q w_q \det J_q\, g_q g_q^T`;
 * global axes blockwise: :math:`K^{(ab)} = R^T K_{loc}^{(ab)} R` for each pair of corners.
@@ -22,6 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from substruct.models.mindlin_plate import mindlin_matrices_batch
 from substruct.models.plate_bending import corner_shapes, plane_stress, tabulated
 from substruct.models.shell import (
     DRILL_PENALTY, MAX_WARP, SHELL_MASSES, ShellTerms, shell_matrices,
@@ -228,7 +231,16 @@ def shell_matrices_batch(X: np.ndarray, E: float, nu: float, t: float, rho: floa
         area = _area(xy)
         ok &= area > 0
         consistent = mass == "consistent"
-        Kb, Mb, okb = _bending(xy, plane_stress(Eb, nub) * t**3 / 12, mu, rot, consistent)
+        bend = 1.0
+        if terms.shear is None:
+            Kb, Mb, okb = _bending(xy, plane_stress(Eb, nub) * t**3 / 12, mu, rot, consistent)
+            bend = terms.bend
+        elif terms.shear > 0:
+            Kb, Mb, okb = mindlin_matrices_batch(
+                xy, plane_stress(Eb, nub) * (terms.bend * t**3 / 12), terms.shear, t, mu, rot,
+                consistent)
+        else:
+            okb = np.zeros(m, dtype=bool)
         ok &= okb
         if terms.membrane:
             Km, okm = _membrane(xy, E, nu, t)
@@ -242,7 +254,7 @@ def shell_matrices_batch(X: np.ndarray, E: float, nu: float, t: float, rho: floa
     bent = np.concatenate([[6 * k + 2, 6 * k + 3, 6 * k + 4] for k in range(n)])
     K = np.zeros((m, 2 * s, 2 * s))
     if terms.bending:
-        K[:, bent[:, None], bent[None, :]] = Kb * terms.bend
+        K[:, bent[:, None], bent[None, :]] = Kb * bend
     if terms.membrane:
         K[:, memb[:, None], memb[None, :]] = Km
     M = np.zeros((m, 2 * s, 2 * s))

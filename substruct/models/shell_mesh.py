@@ -9,7 +9,9 @@ given one, one made along a beam by its ``divisions``, or one of an earlier shel
 the frame's node tolerance *is* that node, so shells and beams meeting along a line share
 their nodes when their divisions agree there.  New nodes are numbered after the largest id.
 
-The material's Poisson ratio is :math:`\nu = E / (2G) - 1` (isotropic).
+The material's Poisson ratio is :math:`\nu = E / (2G) - 1` (isotropic).  ``bending``:
+``"kirchhoff"`` (DKQ / DKT, no transverse shear deformation) or ``"mindlin"`` (MITC4 /
+MITC3, transverse shear stiffness :math:`\tfrac56 G t`, :mod:`substruct.models.mindlin_plate`).
 """
 
 from __future__ import annotations
@@ -20,9 +22,14 @@ from typing import Callable
 import numpy as np
 
 from substruct.models.beam import Material
+from substruct.models.mindlin_plate import KAPPA_SHEAR
+from substruct.models.shell import ShellTerms
 from substruct.models.shell_batch import shell_matrices_batch
 
-__all__ = ["Shell", "ShellMesh", "shell_mesh", "shell_divisions"]
+__all__ = ["Shell", "ShellMesh", "shell_mesh", "shell_divisions", "SHELL_BENDING"]
+
+#: The plate theories of a shell's bending.
+SHELL_BENDING = ("kirchhoff", "mindlin")
 
 
 @dataclass(frozen=True)
@@ -37,6 +44,7 @@ class Shell:
             triangle: ``d`` gives ``d^2`` elements; both numbers must then be equal).
         nsm: non-structural mass per area.
         name: for messages.
+        bending: ``"kirchhoff"`` or ``"mindlin"`` (module docstring).
     """
 
     nodes: tuple[int, ...]
@@ -45,6 +53,7 @@ class Shell:
     divisions: tuple[int, int] = (1, 1)
     nsm: float = 0.0
     name: str = ""
+    bending: str = "kirchhoff"
 
 
 @dataclass
@@ -123,8 +132,13 @@ def shell_mesh(shells: list[Shell], points: list[np.ndarray], ids: list[int],
         if min(nx, ny) < 1 or (n == 3 and nx != ny):
             raise ValueError(f"{where}: divisions are positive, and equal for a triangle, "
                              f"got {list(shell.divisions)}")
+        if shell.bending not in SHELL_BENDING:
+            raise ValueError(f"{where}: bending is one of {list(SHELL_BENDING)}, got "
+                             f"{shell.bending!r}")
         mat = shell.material
         nu = mat.E / (2 * mat.G) - 1
+        terms = ShellTerms(shear=KAPPA_SHEAR * mat.G * shell.thickness
+                           if shell.bending == "mindlin" else None)
         X = np.array([points[index[c]] for c in shell.nodes])
         local, elements = _grid(shell, X)
         node_of = np.empty(len(local), dtype=np.int64)
@@ -153,7 +167,7 @@ def shell_mesh(shells: list[Shell], points: list[np.ndarray], ids: list[int],
         Xe = np.asarray(points)[nodes]
         try:
             Ke, Me = shell_matrices_batch(Xe, mat.E, nu, shell.thickness, mat.rho, mass,
-                                          shell.nsm)
+                                          shell.nsm, terms=terms)
         except ValueError as err:
             raise ValueError(f"{where}: {err}") from None
         dofs = (6 * nodes[:, :, None] + np.arange(6)).reshape(len(nodes), -1)
