@@ -222,13 +222,17 @@ def worker(route: str, nw: int, dst: str) -> None:
         H, coupling = route_pyfbs(K, M, C, B, w)
         extra = {"coupling": coupling, "pyfbs": PYFBS}
     extra["route_cpu"] = time.process_time() - c0
+    with open("/proc/self/status") as status:  # this process's own peak (VmHWM, kB)
+        extra["peak"] = next((float(line.split()[1]) * 1024.0 for line in status
+                              if line.startswith("VmHWM")), float("nan"))
     np.savez(dst, H=H[picked(nw)], times=json.dumps(extra))
 
 
 def fresh(python: str, route: str, nw: int, work: Path, env: dict) -> tuple[dict, np.ndarray]:
-    """``worker(route)`` in ``python`` as a new process: its wall time, CPU (user + system of
-    the whole process, ``wait4``) and peak resident set, with the worker's own times; and its
-    answer at :func:`picked`."""
+    """``worker(route)`` in ``python`` as a new process: its wall time and CPU (user + system
+    of the whole process, ``wait4``), with the worker's own times and peak resident set
+    (``VmHWM``: ``wait4``'s figure holds this process's peak, the child having started in its
+    memory); and its answer at :func:`picked`."""
     dst = work / f"{route}.npz"
     cmd = [python, __file__, "--worker", route, "--frequencies", str(nw), str(dst)]
     with tempfile.TemporaryFile() as err:
@@ -242,8 +246,7 @@ def fresh(python: str, route: str, nw: int, work: Path, env: dict) -> tuple[dict
     with np.load(dst) as z:
         inside, H = json.loads(str(z["times"])), z["H"]
     dst.unlink()
-    return {"wall": wall, "cpu": usage.ru_utime + usage.ru_stime,
-            "peak": usage.ru_maxrss * 1024.0, **inside}, H
+    return {"wall": wall, "cpu": usage.ru_utime + usage.ru_stime, **inside}, H
 
 
 def difference(H, H_ref, scale: float) -> float:
@@ -277,7 +280,8 @@ def main() -> None:
     print(f"# {platform.processor() or platform.machine()}, Python {platform.python_version()},"
           f" NumPy {np.__version__}, SciPy {scipy.__version__}, "
           f"pyFBS {pyfbs_version or 'not importable'}, OMP_NUM_THREADS="
-          f"{os.environ.get('OMP_NUM_THREADS', 'unset')}, load average "
+          f"{os.environ.get('OMP_NUM_THREADS', 'unset')}, NUMPY_MADVISE_HUGEPAGE="
+          f"{os.environ.get('NUMPY_MADVISE_HUGEPAGE', 'unset')}, load average "
           f"{' '.join(f'{x:.1f}' for x in os.getloadavg())}")
     print(f"# two tied chains, {K.shape[0]} coordinates, {nw} frequencies x "
           f"{K.shape[0]} x {K.shape[0]} receptances")
@@ -322,6 +326,7 @@ def main() -> None:
                             d))
             rows.insert(2, ("p  its coupling step alone", float("nan"), got["coupling"], 1, d))
             rows.insert(3, ("p  the whole process", got["wall"], got["cpu"], 1, d))
+            notes += f"\n# (p) the whole process's peak RSS {got['peak'] / 1e9:.2f} GB"
     if not opts.no_command:
         with tempfile.TemporaryDirectory() as tmp:
             runs = [route_command(K, M, C, B, w, Path(tmp)) for _ in range(opts.repeat)]
