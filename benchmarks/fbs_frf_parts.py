@@ -40,6 +40,7 @@ import argparse
 import json
 import os
 import platform
+import resource
 import statistics
 import sys
 import tempfile
@@ -105,19 +106,22 @@ def couple_library(Ya: np.ndarray, Yb: np.ndarray, w: np.ndarray, m: int):
 
 def alternated(runs: dict, repeat: int) -> dict:
     """``repeat`` calls of each of ``runs`` (name: callable), alternated: the order of the
-    names, then reversed, and so on.  Per name: the median CPU and wall seconds, every CPU
-    time, and the last answer."""
-    got: dict = {name: {"cpu": [], "wall": [], "out": None} for name in runs}
+    names, then reversed, and so on.  Per name: the median wall and CPU seconds, every CPU
+    time, the last answer, and every call's system time (the kernel's share of the CPU: most
+    of it is the first touch of the new answer's pages)."""
+    got: dict = {name: {"cpu": [], "wall": [], "sys": [], "out": None} for name in runs}
     names = list(runs)
     for r in range(repeat):
         for name in names if r % 2 == 0 else names[::-1]:
             got[name]["out"] = None  # the previous answer freed before the next call
             t0, c0 = time.perf_counter(), time.process_time()
+            s0 = resource.getrusage(resource.RUSAGE_SELF).ru_stime
             got[name]["out"] = runs[name]()
             got[name]["cpu"].append(time.process_time() - c0)
+            got[name]["sys"].append(resource.getrusage(resource.RUSAGE_SELF).ru_stime - s0)
             got[name]["wall"].append(time.perf_counter() - t0)
     return {name: (statistics.median(g["wall"]), statistics.median(g["cpu"]), g["cpu"],
-                   g["out"]) for name, g in got.items()}
+                   g["out"], g["sys"]) for name, g in got.items()}
 
 
 def worker_library(files: list[str], m: int, dst: str) -> None:
@@ -178,10 +182,12 @@ def main() -> None:
     rows.append(("s substruct couple_selected (lm-fbs, checks), warm", got["s"][1],
                  got["s"][0], str(args.repeat), diff(Hs)))
     each = ", ".join(f"{a:.2f}/{b:.2f}" for a, b in zip(got["l"][2], got["s"][2]))
+    system = ", ".join(f"{a:.2f}/{b:.2f}" for a, b in zip(got["l"][4], got["s"][4]))
     ratios = [a / b for a, b in zip(got["l"][2], got["s"][2])]
     note = (f"# (s) generalized-inverse check (32 frequencies) {agreement:.1e}\n"
             f"# alternated calls, CPU s of (l)/(s) a pair: {each}; (l)/(s) "
-            f"{min(ratios):.2f}x to {max(ratios):.2f}x")
+            f"{min(ratios):.2f}x to {max(ratios):.2f}x\n# of which system time (page faults), "
+            f"(l)/(s) a pair: {system}")
     del Hs, got
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
