@@ -18,8 +18,8 @@ Routes, in one process unless said:
     ``substruct run`` computes (LM-FBS by a linear solve a frequency for the outputs x inputs
     asked, the interface compatibility at every frequency, checked by the generalized-inverse
     form at 32 spread frequencies), warm: the median of ``--repeat`` calls, alternated with
-    those of (l) (l s, s l, l s, ...), so that neither route always finds the memory the other
-    just freed;
+    those of (l) (l s, s l, l s, ...) after one untimed call of each, so that neither route
+    always finds the memory the other just freed;
 (f) the same as a fresh process: imports, reading the two ``.npz`` files, the coupling;
 (r) ``substruct run parts.yaml --quiet --no-pictures``: a case of two ``type: frf`` parts
     (the ``.npz`` files), the connections, ``analysis.frf`` on the files' grid, a fresh
@@ -106,11 +106,14 @@ def couple_library(Ya: np.ndarray, Yb: np.ndarray, w: np.ndarray, m: int):
 
 def alternated(runs: dict, repeat: int) -> dict:
     """``repeat`` calls of each of ``runs`` (name: callable), alternated: the order of the
-    names, then reversed, and so on.  Per name: the median wall and CPU seconds, every CPU
+    names, then reversed, and so on, after one untimed call of each (so that the first timed
+    call of the second name does not alone find the first's answer still held).  Per name: the median wall and CPU seconds, every CPU
     time, the last answer, and every call's system time (the kernel's share of the CPU: most
     of it is the first touch of the new answer's pages)."""
     got: dict = {name: {"cpu": [], "wall": [], "sys": [], "out": None} for name in runs}
     names = list(runs)
+    for name in names:  # one call of each first, untimed: each then holds one answer, and
+        got[name]["out"] = runs[name]()  # a timed call frees it before making the next
     for r in range(repeat):
         for name in names if r % 2 == 0 else names[::-1]:
             got[name]["out"] = None  # the previous answer freed before the next call
