@@ -10,7 +10,8 @@ measured receptances are given: synthesised by modal sums (``--modes`` modes a p
 20 and 2,000 Hz, random real shapes, 1 to 3 % modal damping, plus a small random symmetric
 residual flexibility so that every channel is independent, fixed seed) at ``--frequencies``
 frequencies from 10 to 1,000 Hz, written as the ``.npz`` files of a case (``H``, ``labels``,
-``omega``), and held in memory as read from them (a frequency's matrix contiguous).  Outputs and inputs: every channel of both parts.
+``omega``), and held in memory as read from them (a frequency's matrix contiguous).
+Outputs and inputs: every channel of both parts.
 
 Routes, in one process unless said:
 
@@ -107,9 +108,10 @@ def couple_library(Ya: np.ndarray, Yb: np.ndarray, w: np.ndarray, m: int):
 def alternated(runs: dict, repeat: int) -> dict:
     """``repeat`` calls of each of ``runs`` (name: callable), alternated: the order of the
     names, then reversed, and so on, after one untimed call of each (so that the first timed
-    call of the second name does not alone find the first's answer still held).  Per name: the median wall and CPU seconds, every CPU
-    time, the last answer, and every call's system time (the kernel's share of the CPU: most
-    of it is the first touch of the new answer's pages)."""
+    call of the second name does not alone find the first's answer still held).  Per name:
+    the median wall and CPU seconds, every CPU time, the last answer, and every call's system
+    time (the kernel's share of the CPU: most of it is the first touch of the new answer's
+    pages)."""
     got: dict = {name: {"cpu": [], "wall": [], "sys": [], "out": None} for name in runs}
     names = list(runs)
     for name in names:  # one call of each first, untimed: each then holds one answer, and
