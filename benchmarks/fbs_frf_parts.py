@@ -10,14 +10,17 @@ measured receptances are given: synthesised by modal sums (``--modes`` modes a p
 20 and 2,000 Hz, random real shapes, 1 to 3 % modal damping, plus a small random symmetric
 residual flexibility so that every channel is independent, fixed seed) at ``--frequencies``
 frequencies from 10 to 1,000 Hz, written as the ``.npz`` files of a case (``H``, ``labels``,
-``omega``).  Outputs and inputs: every channel of both parts.
+``omega``), and held in memory as read from them (a frequency's matrix contiguous).
+Outputs and inputs: every channel of both parts.
 
 Routes, in one process unless said:
 
 (s) substruct, library: ``substruct.analysis.frf.coupling_selected.couple_selected``, what
     ``substruct run`` computes (LM-FBS by a linear solve a frequency for the outputs x inputs
     asked, the interface compatibility at every frequency, checked by the generalized-inverse
-    form at 32 spread frequencies), warm (median of ``--repeat``);
+    form at 32 spread frequencies), warm: the median of ``--repeat`` calls, alternated with
+    those of (l) (l s, s l, l s, ...) after one untimed call of each, so that neither route
+    always finds the memory the other just freed;
 (f) the same as a fresh process: imports, reading the two ``.npz`` files, the coupling;
 (r) ``substruct run parts.yaml --quiet --no-pictures``: a case of two ``type: frf`` parts
     (the ``.npz`` files), the connections, ``analysis.frf`` on the files' grid, a fresh
@@ -26,7 +29,7 @@ Routes, in one process unless said:
     (``--pyfbs``; not a dependency), a subprocess on the data saved to a temporary ``.npz``:
     timed inside the process after a warm-up, and as the whole process; without it the row
     says "pyFBS not importable";
-(l) lean NumPy LM-FBS (``fbs_common.lean_lmfbs``), warm.
+(l) lean NumPy LM-FBS (``fbs_common.lean_lmfbs``), warm, alternated with (s).
 
 CPU seconds (user + system; of the child for a fresh process); wall clock too.  Differences:
 ``max |H - H_l| / max |H_l|`` against (l).
@@ -38,6 +41,8 @@ import argparse
 import json
 import os
 import platform
+import resource
+import statistics
 import sys
 import tempfile
 import time
@@ -48,7 +53,7 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
-from fbs_common import child, lean_lmfbs, run_pyfbs, timed  # noqa: E402
+from fbs_common import child, lean_lmfbs, run_pyfbs  # noqa: E402
 
 F_LO, F_HI = 10.0, 1000.0
 
@@ -67,7 +72,10 @@ def synthesise(n: int, modes: int, w: np.ndarray, seed: int) -> np.ndarray:
     G = rng.normal(size=(n, n))
     R = 0.02 * (G @ G.T) / (n * wr[-1] ** 2)
     den = wr**2 - w[:, None] ** 2 + 2j * zeta * wr * w[:, None]  # (k, modes)
-    return np.einsum("ir,kr,jr->kij", phi, 1.0 / den, phi, optimize=True) + R[None]
+    Y = np.einsum("ir,kr,jr->kij", phi, 1.0 / den, phi, optimize=True) + R[None]
+    # laid out as the parts' files give it (a frequency's matrix contiguous), not in the
+    # frequency-fastest order the einsum leaves
+    return np.ascontiguousarray(Y)
 
 
 def case_text(files: tuple[str, str], w: np.ndarray, n: int, m: int) -> str:
@@ -95,6 +103,30 @@ def couple_library(Ya: np.ndarray, Yb: np.ndarray, w: np.ndarray, m: int):
     every = [f"{p}@{x}" for p in "AB" for x in lab]
     got = couple_selected(parts, [(f"A@{x}", f"B@{x}") for x in lab[:m]], every, every)
     return got.omega, got.H, got.agreement
+
+
+def alternated(runs: dict, repeat: int) -> dict:
+    """``repeat`` calls of each of ``runs`` (name: callable), alternated: the order of the
+    names, then reversed, and so on, after one untimed call of each (so that the first timed
+    call of the second name does not alone find the first's answer still held).  Per name:
+    the median wall and CPU seconds, every CPU time, the last answer, and every call's system
+    time (the kernel's share of the CPU: most of it is the first touch of the new answer's
+    pages)."""
+    got: dict = {name: {"cpu": [], "wall": [], "sys": [], "out": None} for name in runs}
+    names = list(runs)
+    for name in names:  # one call of each first, untimed: each then holds one answer, and
+        got[name]["out"] = runs[name]()  # a timed call frees it before making the next
+    for r in range(repeat):
+        for name in names if r % 2 == 0 else names[::-1]:
+            got[name]["out"] = None  # the previous answer freed before the next call
+            t0, c0 = time.perf_counter(), time.process_time()
+            s0 = resource.getrusage(resource.RUSAGE_SELF).ru_stime
+            got[name]["out"] = runs[name]()
+            got[name]["cpu"].append(time.process_time() - c0)
+            got[name]["sys"].append(resource.getrusage(resource.RUSAGE_SELF).ru_stime - s0)
+            got[name]["wall"].append(time.perf_counter() - t0)
+    return {name: (statistics.median(g["wall"]), statistics.median(g["cpu"]), g["cpu"],
+                   g["out"], g["sys"]) for name, g in got.items()}
 
 
 def worker_library(files: list[str], m: int, dst: str) -> None:
@@ -140,20 +172,28 @@ def main() -> None:
           f"joined, {len(w)} frequencies {F_LO:g}-{F_HI:g} Hz, all {2 * n} x {2 * n} coupled "
           f"receptances")
     rows: list[tuple[str, float, float, str, float]] = []
-    t, cpu, n_l, Hl = timed(lambda: lean_lmfbs([Ya, Yb], B, every, every), args.repeat)
+    couple_library(Ya[:2], Yb[:2], w[:2], m)  # warm: the imports and first calls
+    lean_lmfbs([Ya[:2], Yb[:2]], B, every, every)
+    got = alternated({"l": lambda: lean_lmfbs([Ya, Yb], B, every, every),
+                      "s": lambda: couple_library(Ya, Yb, w, m)}, args.repeat)
+    Hl = got["l"][3]
     scale = float(np.abs(Hl).max())
 
     def diff(H: np.ndarray) -> float:
         return float(max(np.abs(H[k] - Hl[k]).max() for k in range(len(w)))) / scale
 
-    rows.append(("l lean NumPy LM-FBS, warm", cpu, t, str(n_l), 0.0))
-    couple_library(Ya[:2], Yb[:2], w[:2], m)  # warm: the imports and first calls
-    t, cpu, n_s, (_, Hs, agreement) = timed(lambda: couple_library(Ya, Yb, w, m),
-                                               args.repeat)
-    rows.append(("s substruct couple_selected (lm-fbs, checks), warm", cpu, t,
-                 str(n_s), diff(Hs)))
-    note = f"# (s) generalized-inverse check (32 frequencies) {agreement:.1e}"
-    del Hs
+    rows.append(("l lean NumPy LM-FBS, warm", got["l"][1], got["l"][0], str(args.repeat), 0.0))
+    _, Hs, agreement = got["s"][3]
+    rows.append(("s substruct couple_selected (lm-fbs, checks), warm", got["s"][1],
+                 got["s"][0], str(args.repeat), diff(Hs)))
+    each = ", ".join(f"{a:.2f}/{b:.2f}" for a, b in zip(got["l"][2], got["s"][2]))
+    system = ", ".join(f"{a:.2f}/{b:.2f}" for a, b in zip(got["l"][4], got["s"][4]))
+    ratios = [a / b for a, b in zip(got["l"][2], got["s"][2])]
+    note = (f"# (s) generalized-inverse check (32 frequencies) {agreement:.1e}\n"
+            f"# alternated calls, CPU s of (l)/(s) a pair: {each}; (l)/(s) "
+            f"{min(ratios):.2f}x to {max(ratios):.2f}x\n# of which system time (page faults), "
+            f"(l)/(s) a pair: {system}")
+    del Hs, got
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
         env = dict(os.environ, PYTHONPATH=str(ROOT))

@@ -1,7 +1,7 @@
 """FRF sweep benchmark: every receptance of two coupled chains, by substruct and by LM-FBS.
 
     OMP_NUM_THREADS=1 python benchmarks/frf_sweep.py [--frequencies 1000] [--repeat 3] [--quick]
-        [--no-command]
+        [--no-command] [--no-splu] [--pyfbs PYTHON]
 
 The model: two fixed-free chains of 200 masses (``m = 1``, ``k = 1e4``, Rayleigh damping
 ``C = 1e-4 K + 0.5 M``), tied tip to tip (one constraint row): 400 coordinates.  All
@@ -28,16 +28,23 @@ coupled resonances), by
     Matrix Market files, the tie, ``frf`` with the 400 inputs and outputs) in a subprocess,
     ``--no-pictures``: start-up, case checks, the sweep, the HDF5 file of 2.6 GB;
 (w) the floor: writing the 400 x 400 complex outputs of every frequency into a new array (the
-    page faults of 2.6 GB of output at 1,000 frequencies, paid by every route).
+    page faults of 2.6 GB of output at 1,000 frequencies, paid by every route);
+(f) (a) as a fresh process: start-up, the imports (Numba's included), building the chains, the
+    sweep (loading the compiled substitutions from Numba's cache), the answer held in memory;
+    and (p) as a fresh process when ``--pyfbs PYTHON`` names the Python of an environment with
+    pyFBS (not a dependency): (p) then runs in that process (``pyfbs`` imported there), timed
+    inside it and as the whole process, instead of in this one.  A fresh process hands back
+    its times and its answer at three frequencies (first, middle, last), compared with (l).
 
-Time: median of ``--repeat`` runs (one run for a route that takes over 60 s), wall clock and
-CPU time (of the process, or of the child for (r)).  The answers are compared with (l):
-``max |H - H_l| / max |H_l|``.
+Time: median of ``--repeat`` runs of (a), (w) and (r), one run of the slow routes (l), (p),
+(b); wall clock and CPU time (of the process, or of the child for (r) and (f)).  The answers
+are compared with (l): ``max |H - H_l| / max |H_l|``.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import platform
 import resource
@@ -192,9 +199,53 @@ def timed(route, args, repeat: int):
         out = route(*args)
         times.append(time.perf_counter() - t0)
         cpu.append(time.process_time() - c0)
-        if times[0] > 60.0:
-            break
+
     return statistics.median(times), statistics.median(cpu), len(times), out
+
+
+def picked(nw: int) -> np.ndarray:
+    """The frequencies a fresh process hands back: first, middle, last."""
+    return np.unique([0, nw // 2, nw - 1])
+
+
+def worker(route: str, nw: int, dst: str) -> None:
+    """A fresh process's route: (f) ``substruct`` or (p) ``pyfbs``; writes ``dst`` (``.npz``:
+    the answer at :func:`picked`, the times inside the process)."""
+    K, M, C, B = chains()
+    w = np.linspace(1.0, 150.0, nw)
+    c0 = time.process_time()
+    if route == "substruct":
+        H, res = route_substruct(K, M, C, B, w)
+        extra = {"checks": {k: float(v) for k, v in res.agreement.items()}}
+    else:
+        H, coupling = route_pyfbs(K, M, C, B, w)
+        extra = {"coupling": coupling, "pyfbs": PYFBS}
+    extra["route_cpu"] = time.process_time() - c0
+    with open("/proc/self/status") as status:  # this process's own peak (VmHWM, kB)
+        extra["peak"] = next((float(line.split()[1]) * 1024.0 for line in status
+                              if line.startswith("VmHWM")), float("nan"))
+    np.savez(dst, H=H[picked(nw)], times=json.dumps(extra))
+
+
+def fresh(python: str, route: str, nw: int, work: Path, env: dict) -> tuple[dict, np.ndarray]:
+    """``worker(route)`` in ``python`` as a new process: its wall time and CPU (user + system
+    of the whole process, ``wait4``), with the worker's own times and peak resident set
+    (``VmHWM``: ``wait4``'s figure holds this process's peak, the child having started in its
+    memory); and its answer at :func:`picked`."""
+    dst = work / f"{route}.npz"
+    cmd = [python, __file__, "--worker", route, "--frequencies", str(nw), str(dst)]
+    with tempfile.TemporaryFile() as err:
+        t0 = time.perf_counter()
+        proc = subprocess.Popen(cmd, env=env, stdout=subprocess.DEVNULL, stderr=err)
+        _, status, usage = os.wait4(proc.pid, 0)
+        wall = time.perf_counter() - t0
+        if os.waitstatus_to_exitcode(status) != 0:
+            err.seek(0)
+            raise RuntimeError(f"{' '.join(cmd)} failed: {err.read().decode()[-2000:]}")
+    with np.load(dst) as z:
+        inside, H = json.loads(str(z["times"])), z["H"]
+    dst.unlink()
+    return {"wall": wall, "cpu": usage.ru_utime + usage.ru_stime, **inside}, H
 
 
 def difference(H, H_ref, scale: float) -> float:
@@ -207,36 +258,75 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--quick", action="store_true", help="200 frequencies")
     parser.add_argument("--no-command", action="store_true", help="leave out (r)")
+    parser.add_argument("--no-splu", action="store_true", help="leave out (b)")
+    parser.add_argument("--pyfbs", help="the Python of an environment with pyFBS: (p) there")
+    parser.add_argument("--worker", choices=["substruct", "pyfbs"], help=argparse.SUPPRESS)
+    parser.add_argument("dst", nargs="?", help=argparse.SUPPRESS)
     opts = parser.parse_args()
     nw = 200 if opts.quick else opts.frequencies
+    if opts.worker:
+        worker(opts.worker, nw, opts.dst)
+        return
     K, M, C, B = chains()
     w = np.linspace(1.0, 150.0, nw)
     args = (K, M, C, B, w)
+    pyfbs_version = PYFBS
+    if opts.pyfbs:
+        probe = subprocess.run([opts.pyfbs, "-c", "from importlib.metadata import version; "
+                                "import pyfbs; print(version('pyFBS'))"],
+                               capture_output=True, text=True, env=dict(os.environ, PYTHONPATH=""))
+        pyfbs_version = probe.stdout.strip() if probe.returncode == 0 else ""
     print(f"# {platform.processor() or platform.machine()}, Python {platform.python_version()},"
           f" NumPy {np.__version__}, SciPy {scipy.__version__}, "
-          f"pyFBS {PYFBS or 'not importable'}")
+          f"pyFBS {pyfbs_version or 'not importable'}, OMP_NUM_THREADS="
+          f"{os.environ.get('OMP_NUM_THREADS', 'unset')}, NUMPY_MADVISE_HUGEPAGE="
+          f"{os.environ.get('NUMPY_MADVISE_HUGEPAGE', 'unset')}, load average "
+          f"{' '.join(f'{x:.1f}' for x in os.getloadavg())}")
     print(f"# two tied chains, {K.shape[0]} coordinates, {nw} frequencies x "
           f"{K.shape[0]} x {K.shape[0]} receptances")
-    t_l, cpu_l, runs_l, (H_l, _) = timed(route_lean_lmfbs, args, opts.repeat)
+    t_l, cpu_l, runs_l, (H_l, _) = timed(route_lean_lmfbs, args, 1)
     scale = max(float(np.abs(Hk).max()) for Hk in H_l)
+    pick = picked(nw)
     rows = [("l LM-FBS lean (NumPy)", t_l, cpu_l, runs_l, 0.0)]
-    label_p = f"p pyFBS {PYFBS} LM-FBS" if PYFBS else "p pyFBS-style LM-FBS (no pyFBS)"
-    t, cpu, runs, (H, coupling) = timed(route_pyfbs, args, 1)
-    rows.append((label_p, t, cpu, runs, difference(H, H_l, scale)))
-    rows.append(("p  its coupling step alone", float("nan"), coupling, runs,
-                 rows[-1][4]))
-    del H
+    label_p = (f"p pyFBS {pyfbs_version} LM-FBS" if pyfbs_version
+               else "p pyFBS-style LM-FBS (no pyFBS)")
+    if not opts.pyfbs:
+        t, cpu, runs, (H, coupling) = timed(route_pyfbs, args, 1)
+        rows.append((label_p, t, cpu, runs, difference(H, H_l, scale)))
+        rows.append(("p  its coupling step alone", float("nan"), coupling, runs,
+                     rows[-1][4]))
+        del H
     notes = ""
-    for name, route in (("a substruct receptance_sweep", route_substruct),
-                        ("b splu per frequency", route_direct_lu),
-                        ("w floor: write the outputs", route_floor)):
-        t, cpu, runs, (H, res) = timed(route, args, opts.repeat)
+    routes = [("a substruct receptance_sweep", route_substruct),
+              ("b splu per frequency", route_direct_lu),
+              ("w floor: write the outputs", route_floor)]
+    for name, route in routes:
+        if route is route_direct_lu and opts.no_splu:
+            continue
+        once = route is route_direct_lu
+        t, cpu, runs, (H, res) = timed(route, args, 1 if once else opts.repeat)
         diff = difference(H, H_l, scale) if route is not route_floor else float("nan")
         rows.append((name, t, cpu, runs, diff))
         if res is not None:
             notes = f"# (a) method {res.method}, checks {res.agreement}"
         del H
+    H_pick = H_l[pick].copy()
     del H_l
+    env = dict(os.environ, PYTHONPATH=str(Path(__file__).resolve().parent.parent))
+    with tempfile.TemporaryDirectory() as tmp:
+        got, H = fresh(sys.executable, "substruct", nw, Path(tmp), env)
+        rows.append(("f (a) as a fresh process", got["wall"], got["cpu"], 1,
+                     difference(H, H_pick, scale)))
+        notes += (f"\n# (f) the sweep inside the process {got['route_cpu']:.2f} s CPU, peak RSS "
+                  f"{got['peak'] / 1e9:.2f} GB")
+        if opts.pyfbs:
+            got, H = fresh(opts.pyfbs, "pyfbs", nw, Path(tmp), dict(os.environ, PYTHONPATH=""))
+            d = difference(H, H_pick, scale)
+            rows.insert(1, (label_p + ", in its process", float("nan"), got["route_cpu"], 1,
+                            d))
+            rows.insert(2, ("p  its coupling step alone", float("nan"), got["coupling"], 1, d))
+            rows.insert(3, ("p  the whole process", got["wall"], got["cpu"], 1, d))
+            notes += f"\n# (p) the whole process's peak RSS {got['peak'] / 1e9:.2f} GB"
     if not opts.no_command:
         with tempfile.TemporaryDirectory() as tmp:
             runs = [route_command(K, M, C, B, w, Path(tmp)) for _ in range(opts.repeat)]
@@ -245,17 +335,25 @@ def main() -> None:
         notes += (f"\n# (r) peak RSS {max(r[2] for r in runs) / 1e9:.2f} GB, result file "
                   f"{runs[0][3] / 1e9:.2f} GB")
     cpu_p, cpu_pc = rows[1][2], rows[2][2]
-    print(f"{'route':34s} {'wall (s)':>9s} {'CPU (s)':>9s} {'runs':>5s} "
+    print(f"{'route':40s} {'wall (s)':>9s} {'CPU (s)':>9s} {'runs':>5s} "
           f"{'|H - H_l|/|H_l|':>16s} {'p/route CPU':>12s} {'p-coupling/route':>17s}")
     for name, t, cpu, runs, diff in rows:
-        print(f"{name:34s} {t:9.2f} {cpu:9.2f} {runs:5d} {diff:16.1e} {cpu_p / cpu:12.1f} "
+        print(f"{name:40s} {t:9.2f} {cpu:9.2f} {runs:5d} {diff:16.1e} {cpu_p / cpu:12.1f} "
               f"{cpu_pc / cpu:17.1f}")
     print(notes)
     a = next(r for r in rows if r[0].startswith("a "))
-    print(f"# CPU ratios: pyFBS route / substruct = {cpu_p / a[2]:.1f}x, pyFBS coupling step "
-          f"alone / substruct = {cpu_pc / a[2]:.1f}x, lean LM-FBS / substruct = "
-          f"{cpu_l / a[2]:.1f}x ({'pyFBS' if PYFBS else 'pyFBS-style, pyFBS not importable'})")
-    os.environ.get("OMP_NUM_THREADS") or print("# note: OMP_NUM_THREADS unset")
+    f = next(r for r in rows if r[0].startswith("f "))
+    p_whole = next((r for r in rows if r[0].startswith("p  the whole")), None)
+    which = "pyFBS" if pyfbs_version else "pyFBS-style, pyFBS not importable"
+    print(f"# CPU ratios ({which}): pyFBS route / substruct = {cpu_p / a[2]:.1f}x warm, "
+          f"{cpu_p / f[2]:.1f}x against (f) the fresh process"
+          + (f", {p_whole[2] / f[2]:.1f}x fresh process against fresh process"
+             if p_whole else "")
+          + f"; pyFBS coupling step alone / substruct = {cpu_pc / a[2]:.1f}x warm, "
+          f"{cpu_pc / f[2]:.1f}x fresh; lean LM-FBS / substruct = {cpu_l / a[2]:.1f}x warm")
+    held = cpu_p / f[2] >= 20 and cpu_p / a[2] >= 20
+    print(f"# target (a), >= 20x the pyFBS route, fresh process included: "
+          f"{'holds' if held else 'does not hold'}")
 
 
 if __name__ == "__main__":

@@ -88,6 +88,53 @@ def test_a_selection_equals_the_generalized_inverse_form(parts):
     assert 0 < got.agreement <= 100 * kappa * EPS * np.abs(Yg).max() / np.abs(got.H).max()
 
 
+def _lean(parts, pairs, outs, ins):
+    """The lean LM-FBS written out a frequency at a time on the stacked receptances,
+    ``Y_oi - (Y_oI B_I^T) solve(B_I Y_II B_I^T, B_I Y_Ii)``, and ``kappa(B Y B^T)``."""
+    labels = _labels(parts)
+    Y, _ = stack(parts)
+    B = boolean_rows(labels, pairs)
+    nz = np.flatnonzero(np.any(B != 0, axis=0))
+    Bn = B[:, nz]
+    where = {lab: k for k, lab in enumerate(labels)}
+    o, i = [where[x] for x in outs], [where[x] for x in ins]
+    H = np.array([y[o][:, i] - (y[o][:, nz] @ Bn.T)
+                  @ np.linalg.solve(Bn @ y[nz][:, nz] @ Bn.T, Bn @ y[nz][:, i]) for y in Y])
+    return H, max(np.linalg.cond(Bn @ y[nz][:, nz] @ Bn.T) for y in Y)
+
+
+def test_completed_a_few_frequencies_at_a_time_in_any_layout(parts, monkeypatch):
+    """The outputs x inputs completed two frequencies at a time inside blocks of seven (a
+    sink), from parts whose arrays are frequency-fastest in memory: the numbers of the
+    whole-block evaluation bit for bit (the same operations on the same numbers), equal to the
+    lean formula and to the generalized-inverse form to the rounding of eq (15)."""
+    import substruct.analysis.frf.coupling_selected as cs
+
+    labels = _labels(parts)
+    outs, ins = labels[1::2], labels[::3]
+    whole = couple_selected(parts, PAIRS, outs, ins)
+    strided = [FrfPart(p.name, p.omega, p.labels,
+                       np.moveaxis(np.ascontiguousarray(np.moveaxis(p.Y, 0, -1)), -1, 0))
+               for p in parts]
+    assert not strided[0].Y.flags.c_contiguous and strided[0].Y.strides[0] == 16
+    monkeypatch.setattr(cs, "CACHE_BYTES", 2 * 16 * len(outs) * len(ins))
+    sink = _Blocks(7)
+    got = couple_selected(strided, PAIRS, outs, ins, sink=sink)
+    assert np.array_equal(sink.H, whole.H)
+    assert (got.agreement, got.residual) == (whole.agreement, whole.residual)
+    H, kappa = _lean(parts, PAIRS, outs, ins)
+    assert kappa < 1e4
+    scale = np.abs(H).max()
+    # the lean formula: the same products, a frequency at a time (its own rounding bound)
+    assert np.abs(sink.H - H).max() <= 100 * kappa * EPS * scale
+    Y, _ = stack(parts)
+    Yg = generalized_inverse_fbs(Y, boolean_rows(labels, PAIRS))
+    where = {lab: k for k, lab in enumerate(labels)}
+    want = Yg[:, [where[x] for x in outs]][:, :, [where[x] for x in ins]]
+    assert np.abs(sink.H - want).max() <= 100 * kappa * EPS * np.abs(Yg).max()
+    assert got.residual <= 100 * kappa * EPS * len(labels)
+
+
 def test_the_checked_frequencies():
     assert list(check_frequencies(5)) == [0, 1, 2, 3, 4]
     assert list(check_frequencies(CHECK_FREQUENCIES)) == list(range(CHECK_FREQUENCIES))

@@ -9,9 +9,15 @@ coordinates), the coupled receptance of eq (15) with ``A = B`` at outputs ``o`` 
 
 :func:`couple_selected` forms exactly these products, a block of frequencies at a time, taking
 the entries of ``Y`` from the parts' own arrays (the stacked ``Y`` is never formed: its
-off-diagonal blocks are zero, so ``Y[o, i]`` is added part by part).  For every output and input
-it does the same operations as :func:`substruct.analysis.frf.coupling.couple` on the whole stack
-(the same products of the same numbers), hence the same numbers.
+off-diagonal blocks are zero, so ``Y[o, i]`` is added part by part).  The cheap side is formed
+first: ``G = Y[o, I] B_I^T`` (``o x n_c``, ``n_c`` the interface rows) and ``X`` from one LU
+of the ``n_c x n_c`` interface receptance a frequency (``n_c`` right-hand sides ``B_I Y[I,
+i]``); the ``o x i`` answer is then completed a few frequencies at a time
+(:data:`CACHE_BYTES`): the rank-``n_c`` product written into the answer, the parts' entries
+added and its largest value taken while those frequencies sit in the processor's cache, so
+that the answer goes to memory once and no temporary of its size is made.  For every output
+and input it does the same operations as :func:`substruct.analysis.frf.coupling.couple` on the
+whole stack (the same products of the same numbers), hence the same numbers.
 
 Checks, as the production sweep of finite-element models does
 (:mod:`substruct.analysis.frf.production`):
@@ -54,6 +60,10 @@ Index = slice | np.ndarray
 Piece = tuple[FrfPart, Index, Index, Index, Index]
 #: How many frequencies of the grid the generalized-inverse form checks.
 CHECK_FREQUENCIES = 32
+#: About this many bytes of coupled receptances are completed at a time (within a block of
+#: frequencies), so that the product, the parts' entries added to it and the largest value
+#: are taken while they sit in the processor's cache.
+CACHE_BYTES = 512 << 10
 
 
 def check_frequencies(count: int) -> np.ndarray:
@@ -122,10 +132,12 @@ class _Stack:
             else:
                 out[:, _arr(r)[:, None], _arr(c)[None, :]] += src
 
-    def take(self, sl: slice, k: int, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
-        """``Y[sl][:, rows][:, :, cols]``, a new array."""
-        out = np.zeros((k, len(rows), len(cols)), dtype=complex)
-        self.add(out, sl, self.pieces(rows, cols))
+    def take(self, sl: slice, k: int, shape: tuple[int, int], pieces: list[Piece]
+             ) -> np.ndarray:
+        """``Y[sl][:, rows][:, :, cols]``, a new ``(k, *shape)`` array, given the
+        :meth:`pieces` of ``rows`` and ``cols``."""
+        out = np.zeros((k, *shape), dtype=complex)
+        self.add(out, sl, pieces)
         return out
 
 
@@ -172,7 +184,9 @@ def couple_selected(parts: Sequence[FrfPart], pairs: Sequence[tuple[str, str]],
     Bn = B[:, nz]
     k = len(w)
     Y = _Stack(same)
-    diag, checked = Y.pieces(o, i), check_frequencies(k)
+    # where each part's entries sit, found once: Y[o, i], Y[I, I], Y[I, i], Y[o, I]
+    oi, II, Ii, oI = Y.pieces(o, i), Y.pieces(nz, nz), Y.pieces(nz, i), Y.pieces(o, nz)
+    checked = check_frequencies(k)
     step = max(1, BLOCK_BYTES // max(1, 16 * (len(o) + len(nz)) * (len(i) + len(nz))))
     H: np.ndarray | None = None
     if sink is None:
@@ -180,30 +194,38 @@ def couple_selected(parts: Sequence[FrfPart], pairs: Sequence[tuple[str, str]],
     else:
         step = max(1, int(sink.open((k, len(o), len(i)), np.dtype(complex))))
         buf = np.empty((min(step, k), len(o), len(i)), dtype=complex)
+    # the outputs x inputs a few frequencies at a time, in cache while they are formed,
+    # completed and measured: the answer is written to memory once
+    inner = max(1, CACHE_BYTES // max(1, 16 * len(o) * len(i)))
+    mag = np.empty((min(inner, k), len(o), len(i)))
     worst = scale_checked = residual = scale = 0.0
     for s in range(0, k, step):
         sl = slice(s, min(k, s + step))
         kb = sl.stop - sl.start
-        YII, YIi = Y.take(sl, kb, nz, nz), Y.take(sl, kb, nz, i)
-        G = Y.take(sl, kb, o, nz) @ Bn.T  # Y[o, I] B_I^T
+        YII, YIi = Y.take(sl, kb, (len(nz), len(nz)), II), Y.take(sl, kb, (len(nz), len(i)), Ii)
+        G = Y.take(sl, kb, (len(o), len(nz)), oI) @ Bn.T  # Y[o, I] B_I^T, o x n_c
         BYBt, BYi = (Bn @ YII) @ Bn.T, Bn @ YIi
-        try:
+        try:  # one LU of B Y B^T a frequency, n_c x n_c
             X = np.linalg.solve(BYBt, BYi)
         except np.linalg.LinAlgError:
             raise AnalysisInputError("the interface receptance B Y B^T is singular (redundant "
                                      "interface rows?)") from None
         out = H[sl] if H is not None else buf[:kb]
-        # Y[o, i] - G X as (-G) X + Y[o, i], the parts' blocks of Y only: the same numbers
-        # (negating a factor negates each product and each rounded sum exactly), one pass less
-        np.matmul(-G, X, out=out)
-        Y.add(out, sl, diag)
+        negG = -G
+        for a in range(0, kb, inner):
+            b = min(kb, a + inner)
+            # Y[o, i] - G X as (-G) X + Y[o, i], the parts' blocks of Y only: the same
+            # numbers (negating a factor negates each product and each rounded sum exactly)
+            np.matmul(negG[a:b], X[a:b], out=out[a:b])
+            Y.add(out[a:b], slice(s + a, s + b), oi)
+            np.abs(out[a:b], out=mag[:b - a])
+            scale = max(scale, float(mag[:b - a].max(initial=0.0)))
         YcI = YIi - (YII @ Bn.T) @ X  # the interface rows of Y_c, for the compatibility
         residual = max(residual, float(np.abs(Bn @ YcI).max(initial=0.0)))
-        scale = max(scale, float(np.abs(out).max(initial=0.0)),
-                    float(np.abs(YcI).max(initial=0.0)))
+        scale = max(scale, float(np.abs(YcI).max(initial=0.0)))
         sel = checked[(checked >= sl.start) & (checked < sl.stop)] - sl.start
         if len(sel):  # the generalized-inverse form at the checked frequencies
-            Yoi = np.concatenate([Y.take(slice(sl.start + j, sl.start + j + 1), 1, o, i)
+            Yoi = np.concatenate([Y.take(slice(s + j, s + j + 1), 1, (len(o), len(i)), oi)
                                   for j in sel])
             Hg = Yoi - G[sel] @ (np.linalg.pinv(BYBt[sel], rcond=GENERALIZED_RTOL) @ BYi[sel])
             worst = max(worst, float(np.abs(Hg - out[sel]).max(initial=0.0)))
