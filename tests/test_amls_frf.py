@@ -30,13 +30,10 @@ from substruct.analysis.formulations.coupling import receptance
 from substruct.analysis.frf.modal import ModalOptions, modal_basis
 from substruct.analysis.modes.amls import AmlsOptions
 from substruct.analysis.system import SweepOptions
-from substruct.assembly.interfaces import tie_nodes
-from substruct.assembly.stack import assemble
 from substruct.case.loader import parse_case
 from substruct.linalg.system import ConstrainedSystem
-from substruct.models.solid import BoxGrid, solid_box
 from substruct.run.runner import run_case
-from two_boxes import two_boxes_case
+from two_boxes import tied_boxes, two_boxes_case
 
 E, NU, RHO = 2.1e11, 0.3, 7850.0
 ALPHA, BETA = 2.0, 2e-6
@@ -46,18 +43,7 @@ ROOT = Path(__file__).resolve().parent.parent
 
 @pytest.fixture(scope="module")
 def tied():
-    clamp = [{"box": [[0, 0, 0], [0, 1, 1]]}]
-    left = solid_box("left", BoxGrid((2.0, 1.0, 1.0), (6, 3, 3)), E, NU, RHO, fixed=clamp)
-    right = solid_box("right", BoxGrid((2.0, 1.0, 1.0), (6, 3, 3), origin=(2.0, 0, 0)), E, NU,
-                      RHO)
-    asm = assemble([left, right], tie_nodes(left, right, {"box": [[2, 0, 0], [2, 1, 1]]}))
-    K, M, A = sp.csr_array(asm.K), sp.csr_array(asm.M), sp.csr_array(asm.A)
-    n = K.shape[0]
-    rng = np.random.default_rng(1)
-    inputs = np.zeros((n, 2))
-    inputs[rng.choice(n, 2, replace=False), [0, 1]] = 1.0
-    outputs = np.zeros((3, n))
-    outputs[[0, 1, 2], rng.choice(n, 3, replace=False)] = 1.0
+    K, M, A, inputs, outputs = tied_boxes(E, NU, RHO)
     return K, M, A, inputs, outputs
 
 

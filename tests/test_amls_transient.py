@@ -37,12 +37,9 @@ from substruct.analysis.transient import (
     TransientOutputs,
     transient,
 )
-from substruct.assembly.interfaces import tie_nodes
-from substruct.assembly.stack import assemble
 from substruct.case.loader import parse_case
-from substruct.models.solid import BoxGrid, solid_box
 from substruct.run.runner import run_case
-from two_boxes import two_boxes_case
+from two_boxes import tied_boxes, two_boxes_case
 
 E, NU, RHO = 2.1e11, 0.3, 7850.0
 ALPHA, BETA = 20.0, 2e-6
@@ -53,18 +50,7 @@ ROOT = Path(__file__).resolve().parent.parent
 
 @pytest.fixture(scope="module")
 def tied():
-    clamp = [{"box": [[0, 0, 0], [0, 1, 1]]}]
-    left = solid_box("left", BoxGrid((2.0, 1.0, 1.0), (6, 3, 3)), E, NU, RHO, fixed=clamp)
-    right = solid_box("right", BoxGrid((2.0, 1.0, 1.0), (6, 3, 3), origin=(2.0, 0, 0)), E, NU,
-                      RHO)
-    asm = assemble([left, right], tie_nodes(left, right, {"box": [[2, 0, 0], [2, 1, 1]]}))
-    K, M, A = sp.csr_array(asm.K), sp.csr_array(asm.M), sp.csr_array(asm.A)
-    n = K.shape[0]
-    rng = np.random.default_rng(1)
-    B = np.zeros((n, 2))
-    B[rng.choice(n, 2, replace=False), [0, 1]] = 1.0
-    O = np.zeros((3, n))
-    O[[0, 1, 2], rng.choice(n, 3, replace=False)] = 1.0
+    K, M, A, B, O = tied_boxes(E, NU, RHO)
     t = DT * np.arange(STEPS + 1)
     pulse = np.where(t < PULSE, (1 - np.cos(2 * np.pi * t / PULSE)) / 2, 0.0)
     f = pulse[:, None] * np.array([1.0, -0.5])[None, :]

@@ -23,3 +23,30 @@ def two_boxes_case(name: str, analysis: str, rayleigh: str | None = None) -> str
             "  - {name: a, between: [left, right], nodes: {box: [[2, 0, 0], [2, 0.5, 0.5]]}}\n"
             f"analysis:\n{analysis}"
             "output: {pictures: false}\n")
+
+
+def tied_boxes(E: float = 2.1e11, nu: float = 0.3, rho: float = 7850.0):
+    """The same two boxes built in Python, ``2 x 1 x 1`` each on ``6 x 3 x 3`` Q1 elements
+    (the left one clamped at ``x = 0``, tied node to node at ``x = 2``), with two unit inputs
+    and three unit outputs on coordinates drawn by a seeded generator: ``(K, M, A, B, O)``,
+    ``B`` of ``n x 2`` and ``O`` of ``3 x n``."""
+    import numpy as np
+    import scipy.sparse as sp
+
+    from substruct.assembly.interfaces import tie_nodes
+    from substruct.assembly.stack import assemble
+    from substruct.models.solid import BoxGrid, solid_box
+
+    clamp = [{"box": [[0, 0, 0], [0, 1, 1]]}]
+    left = solid_box("left", BoxGrid((2.0, 1.0, 1.0), (6, 3, 3)), E, nu, rho, fixed=clamp)
+    right = solid_box("right", BoxGrid((2.0, 1.0, 1.0), (6, 3, 3), origin=(2.0, 0, 0)), E, nu,
+                      rho)
+    asm = assemble([left, right], tie_nodes(left, right, {"box": [[2, 0, 0], [2, 1, 1]]}))
+    K, M, A = sp.csr_array(asm.K), sp.csr_array(asm.M), sp.csr_array(asm.A)
+    n = K.shape[0]
+    rng = np.random.default_rng(1)
+    B = np.zeros((n, 2))
+    B[rng.choice(n, 2, replace=False), [0, 1]] = 1.0
+    O = np.zeros((3, n))
+    O[[0, 1, 2], rng.choice(n, 3, replace=False)] = 1.0
+    return K, M, A, B, O

@@ -47,10 +47,28 @@ from substruct.analysis.transient.base import influence
 from substruct.vocabulary import GENERALIZED_INVERSE
 from substruct.analysis.system import SweepOptions
 
-__all__ = ["RELATIVE", "base_inputs", "base_drive_sweep"]
+__all__ = ["RELATIVE", "base_frequencies", "base_inputs", "base_drive_sweep"]
 
 #: Key of the relative-coordinates check in :attr:`Receptance.agreement`.
 RELATIVE = "relative-coordinates"
+
+
+def base_frequencies(omegas: Sequence[float] | np.ndarray, per: str) -> np.ndarray:
+    """The frequencies of a base-driven sweep as an array, checked for the base input ``per``
+    (``"displacement"`` or ``"acceleration"``: the response per unit base acceleration is
+    unbounded at ``omega = 0``).
+
+    Raises:
+        AnalysisInputError: ``per == "acceleration"`` with a frequency ``<= 0``.
+        ValueError: an unknown ``per`` (a programming error).
+    """
+    if per not in ("displacement", "acceleration"):
+        raise ValueError(f"unknown base input {per!r}")
+    w = np.atleast_1d(np.asarray(omegas, dtype=float))
+    if per == "acceleration" and np.any(w <= 0):
+        raise AnalysisInputError("a base acceleration needs frequencies > 0 (the response per "
+                                 "unit acceleration is unbounded at omega = 0)")
+    return w
 
 
 def base_inputs(A: sp.sparray | np.ndarray, E: np.ndarray) -> tuple[sp.csc_array, sp.csr_array]:
@@ -99,12 +117,7 @@ def base_drive_sweep(K: sp.sparray | np.ndarray, M: sp.sparray | np.ndarray,
     opts = options if options is not None else SweepOptions()
     method, checks, tolerance = opts.method, opts.checks, opts.tolerance
     input_names, output_names = opts.input_names, opts.output_names
-    if per not in ("displacement", "acceleration"):
-        raise ValueError(f"unknown base input {per!r}")
-    w = np.atleast_1d(np.asarray(omegas, dtype=float))
-    if per == "acceleration" and np.any(w <= 0):
-        raise AnalysisInputError("a base acceleration needs frequencies > 0 (the response per "
-                                 "unit acceleration is unbounded at omega = 0)")
+    w = base_frequencies(omegas, per)
     As = sp.csr_array(A, dtype=float)
     Ks = sp.csr_array(K, dtype=float)
     E = np.asarray(E, dtype=float).reshape(As.shape[0], -1)

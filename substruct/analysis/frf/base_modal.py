@@ -21,7 +21,7 @@ from typing import Sequence
 import numpy as np
 import scipy.sparse as sp
 
-from substruct.analysis.errors import AnalysisInputError
+from substruct.analysis.frf.base_drive import base_frequencies
 from substruct.analysis.frf.modal import modal_receptance_sweep
 from substruct.analysis.results import Receptance
 from substruct.analysis.system import SweepOptions
@@ -53,12 +53,7 @@ def modal_base_drive_sweep(K: Matrix, M: Matrix, C: Matrix | None, A: Matrix,
         ValueError: an unknown ``per`` (a programming error).
     """
     opts = options if options is not None else SweepOptions(method="modal")
-    if per not in ("displacement", "acceleration"):
-        raise ValueError(f"unknown base input {per!r}")
-    w = np.atleast_1d(np.asarray(omegas, dtype=float))
-    if per == "acceleration" and np.any(w <= 0):
-        raise AnalysisInputError("a base acceleration needs frequencies > 0 (the response per "
-                                 "unit acceleration is unbounded at omega = 0)")
+    w = base_frequencies(omegas, per)
     Ks, Ms, As = (sp.csr_array(X, dtype=float) for X in (K, M, A))
     n = Ks.shape[0]
     Cs = sp.csr_array(C if C is not None else (n, n), dtype=float)
