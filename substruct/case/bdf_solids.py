@@ -5,12 +5,12 @@ indices as in :mod:`substruct.case.bdf_cards`).  Every field is read or refused.
 The elements are the linear isoparametric solids (trilinear hexahedron, linear wedge, linear
 tetrahedron).  PSOLID's integration fields are read as MSC Nastran's QRG defines them for
 elements without mid-side grids: ``IN`` blank/``0``/``BUBBLE`` with ``ISOP`` blank/``REDUCED``
-(the default) gives the 8-grid CHEXA its bubble functions (incompatible modes,
-:mod:`substruct.models.nastran_bubble`); ``IN`` ``2``/``TWO`` with ``ISOP`` ``1``/``FULL`` is the
-standard 2 x 2 x 2 isoparametric integration.  The wedge is fully integrated (3 x 2) with
-either; the linear tetrahedron is exact with either.  Other combinations (reduced shear only,
-``IN = 3``), mid-side grids (CHEXA with 20, CPENTA with 15, CTETRA with 10) and fluid elements
-(``FCTN`` other than ``SMECH``) are refused.
+(the default) gives the 8-grid CHEXA and the 6-grid CPENTA their bubble functions
+(incompatible modes, :mod:`substruct.models.nastran_bubble`); ``IN`` ``2``/``TWO`` with ``ISOP``
+``1``/``FULL`` is the standard isoparametric integration (2 x 2 x 2 on the hexahedron, 3 x 2
+on the wedge).  The linear tetrahedron is exact with either.  Other combinations (reduced
+shear only, ``IN = 3``), mid-side grids (CHEXA with 20, CPENTA with 15, CTETRA with 10)
+and fluid elements (``FCTN`` other than ``SMECH``) are refused.
 """
 
 from __future__ import annotations
@@ -30,8 +30,8 @@ SOLID_CORNERS: dict[str, tuple[int, int, str]] = {
 
 @dataclass(frozen=True)
 class SolidCell:
-    """CHEXA / CPENTA / CTETRA: its corner grids in Nastran's order; ``bubble``: a CHEXA whose
-    PSOLID asks for bubble functions (set when the property is cross-referenced)."""
+    """CHEXA / CPENTA / CTETRA: its corner grids in Nastran's order; ``bubble``: a CHEXA or
+    CPENTA whose PSOLID asks for bubble functions (set when the property is cross-referenced)."""
 
     kind: str
     id: int
@@ -44,8 +44,9 @@ class SolidCell:
 @dataclass(frozen=True)
 class Psolid:
     """PSOLID: material ``mid``, the material coordinate system ``cordm`` (no effect with
-    an isotropic MAT1; checked to exist) and ``bubble``: the hexahedra's bubble functions
-    (IN blank/BUBBLE, ISOP blank/REDUCED) rather than full integration (IN 2, ISOP FULL)."""
+    an isotropic MAT1; checked to exist) and ``bubble``: the hexahedra's and wedges' bubble
+    functions (IN blank/BUBBLE, ISOP blank/REDUCED) rather than full integration (IN 2, ISOP
+    FULL)."""
 
     id: int
     mid: int
@@ -83,8 +84,8 @@ def read_psolid(c: RawCard) -> Psolid:
     * ``CORDM`` (blank: 0): the material axes, no effect with an isotropic MAT1;
     * ``IN`` and ``ISOP`` together (QRG PSOLID, remarks 6 and 10): ``IN`` blank, ``0`` or
       ``BUBBLE`` with ``ISOP`` blank or ``REDUCED``: the default, bubble functions in the
-      8-grid CHEXA; ``IN`` ``2``/``TWO`` with ``ISOP`` ``1``/``FULL``: standard 2 x 2 x 2
-      integration.  ``IN = 3``/``THREE``, ``IN = 2`` with reduced shear (``ISOP`` blank or
+      8-grid CHEXA and the 6-grid CPENTA; ``IN`` ``2``/``TWO`` with ``ISOP`` ``1``/``FULL``:
+      standard integration.  ``IN = 3``/``THREE``, ``IN = 2`` with reduced shear (``ISOP`` blank or
       ``REDUCED``) and the combinations outside Nastran's table are refused;
     * ``STRESS`` (where stresses are output): read and not used;
     * ``FCTN``: blank or ``SMECH``; fluids (``PFLUID``, ``FFLUID``) are refused.

@@ -179,7 +179,7 @@ def cross_reference(cards: Cards) -> BulkData:
             for k, g in enumerate(cell.nodes):
                 grid(card, g, f"G{k + 1}")
             mat = _solid_material(card, cell.pid, cards, systems)
-            bubble = cell.kind == "CHEXA" and cards.psolid[cell.pid][1].bubble
+            bubble = cell.kind in ("CHEXA", "CPENTA") and cards.psolid[cell.pid][1].bubble
             out.solids.append((replace(cell, bubble=bubble), mat))
     for card, b in by.get("CBUSH", []):
         grid(card, b.ga, "GA")

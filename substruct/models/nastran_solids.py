@@ -14,9 +14,10 @@ hexahedron and the wedge (Nastran's ``IN = 2``, ``ISOP = FULL``): scikit-fem's o
 the hexahedron, and on the wedge the 3 x 2 rule of :func:`wedge_quadrature` (scikit-fem
 12.0.2's wedge rules have weights summing to 1/4, not to the reference wedge's volume 1/2, so
 they halve every matrix).  Elements of one kind and
-one material make one mesh.  The 8-grid CHEXA whose PSOLID asks for bubble functions (IN and
-ISOP blank, Nastran's default) takes its stiffness from
-:func:`substruct.models.nastran_bubble.bubble_hex_stiffness` instead, its mass as above.
+one material make one mesh.  The 8-grid CHEXA and the 6-grid CPENTA whose PSOLID asks for
+bubble functions (IN and ISOP blank, Nastran's default) take their stiffness from
+:func:`substruct.models.nastran_bubble.bubble_hex_stiffness` and
+:func:`~substruct.models.nastran_bubble.bubble_wedge_stiffness` instead, their mass as above.
 
 Mass, as in Nastran: lumped by default, the element's mass :math:`\rho V_e` in equal shares on
 the translations of its corners; coupled (``PARAM,COUPMASS`` positive), the consistent
@@ -40,7 +41,8 @@ from skfem.models.elasticity import linear_elasticity
 from substruct.case.bdf_fields import BdfError
 from substruct.case.bdf_model import BulkData
 from substruct.case.bdf_solids import SOLID_CORNERS
-from substruct.models.nastran_bubble import bubble_hex_stiffness, isotropic_D
+from substruct.models.nastran_bubble import bubble_hex_stiffness, bubble_wedge_stiffness, \
+    isotropic_D
 
 __all__ = ["solid_blocks", "wedge_quadrature"]
 
@@ -74,8 +76,8 @@ def solid_blocks(bulk: BulkData, index: dict[int, int]
             else Basis(mesh, ElementVector(ElementWedge1()), quadrature=wedge_quadrature())
         nu = mat.nu
         lam = mat.E * nu / ((1 + nu) * (1 - 2 * nu))
-        if bubble:  # the 8-grid CHEXA with bubble functions, IN blank or BUBBLE
-            K = _bubble_stiffness(xyz[local], local, len(used), mat.E, nu)
+        if bubble:  # CHEXA or CPENTA with bubble functions, IN blank or BUBBLE
+            K = _bubble_stiffness(kind, xyz[local], local, len(used), mat.E, nu)
         else:
             K = asm(linear_elasticity(lam, mat.E / (2 * (1 + nu))), basis)
         if bulk.coupled:
@@ -113,17 +115,20 @@ def wedge_quadrature() -> tuple[np.ndarray, np.ndarray]:
     return X, np.full(6, 1 / 12)
 
 
-def _bubble_stiffness(X: np.ndarray, local: np.ndarray, nv: int, E: float, nu: float
-                      ) -> sp.coo_array:
-    """The condensed hexahedra of :func:`bubble_hex_stiffness` assembled on the coordinates
-    ``3 * vertex + component`` of ``nv`` vertices."""
+def _bubble_stiffness(kind: str, X: np.ndarray, local: np.ndarray, nv: int, E: float,
+                      nu: float) -> sp.coo_array:
+    """The condensed hexahedra of :func:`bubble_hex_stiffness` or wedges of
+    :func:`bubble_wedge_stiffness` assembled on the coordinates ``3 * vertex + component`` of
+    ``nv`` vertices."""
     D = isotropic_D(E, nu)
-    # in blocks of elements: the strain matrices take 8 x 6 x 33 numbers an element
-    Ke = np.concatenate([bubble_hex_stiffness(X[k:k + 4096], D)
-                         for k in range(0, len(X), 4096)]) if len(X) else np.zeros((0, 24, 24))
-    dofs = (3 * local[:, :, None] + np.arange(3)).reshape(len(local), 24)
-    rows = np.repeat(dofs, 24, axis=1).ravel()
-    cols = np.tile(dofs, (1, 24)).ravel()
+    element = bubble_hex_stiffness if kind == "hexahedron" else bubble_wedge_stiffness
+    n = 3 * local.shape[1]
+    # in blocks of elements: the strain matrices take 8 x 6 x 33 numbers a hexahedron
+    Ke = np.concatenate([element(X[k:k + 4096], D)
+                         for k in range(0, len(X), 4096)]) if len(X) else np.zeros((0, n, n))
+    dofs = (3 * local[:, :, None] + np.arange(3)).reshape(len(local), n)
+    rows = np.repeat(dofs, n, axis=1).ravel()
+    cols = np.tile(dofs, (1, n)).ravel()
     return sp.coo_array((Ke.ravel(), (rows, cols)), shape=(3 * nv, 3 * nv))
 
 
