@@ -45,7 +45,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["bubble_hex_stiffness", "bubble_wedge_stiffness", "isotropic_D"]
+__all__ = ["bubble_hex_stiffness", "bubble_wedge_stiffness", "isotropic_D", "strain_matrix"]
 
 # reference corners in Nastran's (and meshio's) order: G1-G4 at zeta = -1, G5-G8 at zeta = 1
 _CORNERS = np.array([[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1],
@@ -71,7 +71,7 @@ def isotropic_D(E: float, nu: float) -> np.ndarray:
     return D
 
 
-def _strain_matrix(G: np.ndarray) -> np.ndarray:
+def strain_matrix(G: np.ndarray) -> np.ndarray:
     """``B (..., 6, 3 n)`` from gradients ``G (..., n, 3)`` of ``n`` scalar functions, the
     coordinates ordered function by function (``3 j + c``)."""
     shape = G.shape[:-2]
@@ -107,7 +107,7 @@ def _condensed(X: np.ndarray, D: np.ndarray, dN: np.ndarray, dN0: np.ndarray,
     dPc = dP - np.einsum("p,pkd->kd", weights, dP) / weights.sum()
     gb = np.einsum("pkd,edc->epkc", dPc, np.linalg.inv(J0)) * \
         (det0[:, None] / det)[..., None, None]
-    Bc, Bb = _strain_matrix(gc), _strain_matrix(gb)
+    Bc, Bb = strain_matrix(gc), strain_matrix(gb)
     w = weights * np.abs(det)
     DBc = np.einsum("ij,epjk->epik", D, Bc)
     DBb = np.einsum("ij,epjk->epik", D, Bb)

@@ -19,6 +19,10 @@ bubble functions (IN and ISOP blank, Nastran's default) take their stiffness fro
 :func:`substruct.models.nastran_bubble.bubble_hex_stiffness` and
 :func:`~substruct.models.nastran_bubble.bubble_wedge_stiffness` instead, their mass as above.
 
+The 10-grid CTETRA (all six mid-side grids) takes its stiffness and consistent mass from
+:func:`substruct.models.nastran_tet10.tet10_matrices` and needs ``PARAM,COUPMASS``: Nastran's
+lumped mass of quadratic solids is not published in detail and equal shares would be wrong.
+
 Mass, as in Nastran: lumped by default, the element's mass :math:`\rho V_e` in equal shares on
 the translations of its corners; coupled (``PARAM,COUPMASS`` positive), the consistent
 :math:`M_e`.  The solids stiffen no rotation of a grid: with AUTOSPC those are removed unless
@@ -43,6 +47,7 @@ from substruct.case.bdf_model import BulkData
 from substruct.case.bdf_solids import SOLID_CORNERS
 from substruct.models.nastran_bubble import bubble_hex_stiffness, bubble_wedge_stiffness, \
     isotropic_D
+from substruct.models.nastran_tet10 import tet10_matrices
 
 __all__ = ["solid_blocks", "wedge_quadrature"]
 
@@ -59,10 +64,14 @@ def solid_blocks(bulk: BulkData, index: dict[int, int]
         BdfError: an element of zero volume, naming its card.
     """
     N = 6 * len(index)
-    groups: dict[tuple[str, int, bool], list] = {}
+    groups: dict[tuple[str, int, bool, int], list] = {}
     for cell, mat in bulk.solids:
-        groups.setdefault((cell.kind, mat.id, cell.bubble), []).append((cell, mat))
-    for (card, _, bubble), items in groups.items():
+        groups.setdefault((cell.kind, mat.id, cell.bubble, len(cell.nodes)), []).append(
+            (cell, mat))
+    for (card, _, bubble, nv), items in groups.items():
+        if nv == 10:  # the quadratic CTETRA
+            yield _tet10_block(bulk, items, index)
+            continue
         kind = SOLID_CORNERS[card][2]
         mat = items[0][1]
         conn = np.array([[index[g] for g in cell.nodes] for cell, _ in items], dtype=np.int64)
@@ -130,6 +139,47 @@ def _bubble_stiffness(kind: str, X: np.ndarray, local: np.ndarray, nv: int, E: f
     rows = np.repeat(dofs, n, axis=1).ravel()
     cols = np.tile(dofs, (1, n)).ravel()
     return sp.coo_array((Ke.ravel(), (rows, cols)), shape=(3 * nv, 3 * nv))
+
+
+def _tet10_block(bulk: BulkData, items: list, index: dict[int, int]
+                 ) -> tuple[str, np.ndarray, sp.coo_array, sp.coo_array]:
+    """The 10-grid CTETRA of one material (:func:`tet10_matrices`), coupled mass only."""
+    cell0, mat = items[0]
+    if not bulk.coupled:
+        raise BdfError(bulk.source, "the 10-grid CTETRA needs coupled mass (PARAM,COUPMASS,1): "
+                       "Nastran's lumped mass of quadratic solids is not reproduced",
+                       "no COUPMASS", line=cell0.line, card=cell0.kind, ident=cell0.id)
+    N = 6 * len(index)
+    conn = np.array([[index[g] for g in cell.nodes] for cell, _ in items], dtype=np.int64)
+    X = np.array([[bulk.grids[g] for g in cell.nodes] for cell, _ in items], dtype=float)
+    _check_volumes(bulk, items, X[:, :4])
+    D = isotropic_D(mat.E, mat.nu)
+    Ks, Ms = [], []
+    for k in range(0, len(X), 4096):
+        try:
+            Ke, Me = tet10_matrices(X[k:k + 4096], D, mat.rho)
+        except ValueError as err:
+            bad = next(j for j in range(k, min(k + 4096, len(X)))
+                       if _fails(X[j:j + 1], D, mat.rho))
+            cell = items[bad][0]
+            raise BdfError(bulk.source, str(err), list(cell.nodes), line=cell.line,
+                           card=cell.kind, ident=cell.id) from None
+        Ks.append(Ke)
+        Ms.append(Me)
+    dofs = (6 * conn[:, :, None] + np.arange(3)).reshape(len(conn), 30)
+    rows = np.repeat(dofs, 30, axis=1).ravel()
+    cols = np.tile(dofs, (1, 30)).ravel()
+    K = sp.coo_array((np.concatenate(Ks).ravel(), (rows, cols)), shape=(N, N))
+    M = sp.coo_array((np.concatenate(Ms).ravel(), (rows, cols)), shape=(N, N))
+    return "tetra10", conn, K, M
+
+
+def _fails(X: np.ndarray, D: np.ndarray, rho: float) -> bool:
+    try:
+        tet10_matrices(X, D, rho)
+    except ValueError:
+        return True
+    return False
 
 
 def _moved(A: sp.sparray | sp.spmatrix, target: np.ndarray, N: int) -> sp.coo_array:
