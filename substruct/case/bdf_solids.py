@@ -66,13 +66,13 @@ def read_solid(c: RawCard) -> SolidCell:
     given = [k for k in range(2 + n, 2 + most) if c.text(k)]
     if c.name == "CTETRA" and len(given) == most - n:
         n = most
+    elif given and c.name == "CTETRA":
+        k = min(set(range(2 + n, 2 + most)) - set(given))
+        raise c.error("CTETRA needs all six mid-side grids G5-G10 or none (the 10- or the "
+                      "4-grid element)", "blank", f"G{k - 1}")
     elif given:
-        k = given[0] if c.name != "CTETRA" else \
-            min(set(range(2 + n, 2 + most)) - set(given))
-        what = "with mid-side grids is not supported (the" if c.name != "CTETRA" else \
-            "needs all six mid-side grids G5-G10 or none (the 10- or the"
-        raise c.error(f"{c.name} {what} {n}-grid element only)", c.text(k) or "blank",
-                      f"G{k - 1}")
+        raise c.error(f"{c.name} with mid-side grids is not supported (the {n}-grid element "
+                      "only)", c.text(given[0]), f"G{given[0] - 1}")
     c.blank_after(2 + most, f"{c.name} has at most {most} grids")
     eid = c.integer(0, "EID")
     nodes = tuple(c.integer(2 + k, f"G{k + 1}") for k in range(n))

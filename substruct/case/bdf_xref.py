@@ -247,6 +247,12 @@ def cross_reference(cards: Cards) -> BulkData:
     if not out.wtmass > 0:
         raise params["WTMASS"][0].error("must be positive", out.wtmass, "V1")
     out.coupled = param(params, "COUPMASS", "int", -1) > 0
+    quadratic = [cell for cell, _ in out.solids if len(cell.nodes) == 10]
+    if quadratic and not out.coupled:
+        raise BdfError(source, "the 10-grid CTETRA needs coupled mass (PARAM,COUPMASS,1): "
+                       "Nastran's lumped mass of quadratic solids is not reproduced",
+                       "no COUPMASS", line=quadratic[0].line, card="CTETRA",
+                       ident=quadratic[0].id)
     out.autospc = param(params, "AUTOSPC", "yes", True)
     return out
 
