@@ -6,8 +6,8 @@ The elements are the linear isoparametric solids (trilinear hexahedron, linear w
 tetrahedron) and the 10-grid quadratic tetrahedron (:mod:`substruct.models.nastran_tet10`,
 whose stiffness on straight edges no integration choice changes; curved, it takes the 4-point
 rule whatever IN says).  PSOLID's integration fields are read as MSC Nastran's QRG defines
-them for elements without mid-side grids: ``IN`` blank/``0``/``BUBBLE`` with ``ISOP`` blank/``REDUCED``
-(the default) gives the 8-grid CHEXA and the 6-grid CPENTA their bubble functions
+them for elements without mid-side grids: ``IN`` blank/``0``/``BUBBLE`` with ``ISOP``
+blank/``REDUCED`` (the default) gives the 8-grid CHEXA and the 6-grid CPENTA their bubble functions
 (incompatible modes, :mod:`substruct.models.nastran_bubble`); ``IN`` ``2``/``TWO`` with ``ISOP``
 ``1``/``FULL`` is the standard isoparametric integration (2 x 2 x 2 on the hexahedron, 3 x 2
 on the wedge).  The linear tetrahedron is exact with either.  Other combinations (reduced
