@@ -25,8 +25,10 @@ in that mode, so each element type is measured on its own:
   elements' bending interpolations differ; MITC4's bilinear rotations are the stiffer).  As
   Kirchhoff plates (DKQ/DKT) they are 0.16 % to 1.07 % / -1.7 % to
   1.5 % off;
-* CPENTA: ours 10 % to 40 % stiffer: Nastran gives the 6-grid CPENTA bubble functions by
-  default, ours is fully integrated without them;
+* CPENTA (bubble functions, Nastran's default): within -11 % / +3 % (measured -10.4 % to
+  +2.3 %; fully integrated without bubbles it was 10 % to 40 % stiffer, with the axial bubble
+  1 - zeta^2 alone -0.9 % to +17.4 %): Nastran does not publish its wedge's bubbles, ours are
+  1 - zeta^2 and the triangle's three edge functions (tests/test_bdf_wedge_bubble.py);
 * the PCOMP panels (t/L = 1 and 1.5): Reissner-Mindlin with the laminate's shear 5/6 sum G t:
   CQUAD4 -1.5 % to 26 % (accepted -3 % to 30 %; the 26 % is the t/L = 1 panel in mode 3, the
   t/L = 1.5 panel is within 1.5 %), CTRIA3 -0.2 % to 3.0 % (accepted -1 % to 4 %).  As
@@ -34,8 +36,8 @@ in that mode, so each element type is measured on its own:
 
 Nastran's shapes have unit modal mass in our lumped mass to 6e-8 (within the printed digits).
 
-So the three eigenvalues are 0.59 %, 0.34 % and 1.5 % above Nastran's (1.9 %, 0.74 % and
-4.2 % with Kirchhoff shells).
+So the three eigenvalues are 0.49 %, 0.17 % and 1.26 % above Nastran's (1.9 %, 0.74 % and
+4.2 % with Kirchhoff shells and wedges without bubble functions).
 """
 
 from __future__ import annotations
@@ -68,16 +70,16 @@ def test_the_f06_excerpt_holds_three_modes_of_every_grid_and_element():
 
 
 def test_eigenvalues_are_above_nastrans_by_the_shells_and_wedges_stiffness():
-    """Our three eigenvalues against MSC Nastran 2005's: 0.59 %, 0.34 %, 1.5 % above (the
-    element families below explain it: the stiffer CPENTA and thick PCOMP quadrilateral);
-    accepted 0.2 % to 2 %."""
+    """Our three eigenvalues against MSC Nastran 2005's: 0.49 %, 0.17 %, 1.26 % above (the
+    element families below explain it: the stiffer thick PCOMP quadrilateral and CQUAD4);
+    accepted 0.1 % to 2 %."""
     case = {"name": "mssb", "substructures": [{"name": "m", "type": "nastran",
                                                "file": str(BDF)}],
             "analysis": {"modes": {"count": 3}}}
     asm = assemble_case(load_case(case)).assembly
     lam = modes(asm.M, None, asm.K, asm.A, 3).omega ** 2
     rel = lam / np.array(EIG) - 1
-    assert np.all(rel > 0.002) and np.all(rel < 0.02), rel
+    assert np.all(rel > 0.001) and np.all(rel < 0.02), rel
     assert rel[1] < rel[0] < rel[2], rel
 
 
@@ -131,7 +133,7 @@ ENERGIES = _element_energies()
 
 @pytest.mark.parametrize("kind, low, high", [
     ("CBEAM", -6e-5, 6e-5), ("CHEXA", -5e-3, 5e-3), ("CQUAD4 PSHELL", 0.0, 4.5e-2),
-    ("CTRIA3 PSHELL", -5e-3, 1e-2), ("CPENTA", 0.05, 0.5), ("CQUAD4 PCOMP", -0.03, 0.3),
+    ("CTRIA3 PSHELL", -5e-3, 1e-2), ("CPENTA", -0.11, 0.03), ("CQUAD4 PCOMP", -0.03, 0.3),
     ("CTRIA3 PCOMP", -0.01, 0.04)])
 def test_element_strain_energies_differ_from_nastrans_as_their_formulations(kind, low, high):
     rel = [ours / ref - 1 for k, _, ours, ref, _ in ENERGIES if k == kind]

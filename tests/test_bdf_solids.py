@@ -3,7 +3,8 @@
 * a CHEXA block with COUPMASS and full integration (IN 2, ISOP FULL) gives the ``K`` and ``M``
   of substruct's own ``solid_box`` (the same trilinear hexahedra) to round-off; CTETRA the ``K`` and ``M`` of ``solid_from_mesh`` on
   the same tetrahedra;
-* CPENTA on a distorted mesh passes the patch test (a linear displacement field leaves no
+* CPENTA on a distorted mesh, with bubble functions and fully integrated, passes the patch
+  test (a linear displacement field leaves no
   force at the inner grids and stores the closed-form energy of its constant strain), has
   exactly six rigid-body modes, and its mass is ``rho V``;
 * lumped mass (no COUPMASS) is diagonal, ``rho V_e / n`` on each corner's translations;
@@ -120,10 +121,12 @@ def wedge_mesh() -> tuple[np.ndarray, np.ndarray]:
     return pts, np.array(conn)
 
 
-def test_cpenta_patch_test_rigid_modes_and_mass():
+@pytest.mark.parametrize("psolid", ["PSOLID,1,1", "PSOLID,1,1,,2,,FULL"])
+def test_cpenta_patch_test_rigid_modes_and_mass(psolid):
+    """With bubble functions (the default) and fully integrated (IN 2, ISOP FULL)."""
     pts, conn = wedge_mesh()
-    text = "\n".join(HEAD + ["PARAM,COUPMASS,1"] + grids(pts) + cells("CPENTA", conn) +
-                     ["ENDDATA"])
+    text = "\n".join(HEAD[:2] + [psolid, "PARAM,COUPMASS,1"] + grids(pts) +
+                     cells("CPENTA", conn) + ["ENDDATA"])
     mats = nastran_matrices(parse_bulk(text, "w.bdf"))
     trans = np.flatnonzero(np.arange(mats.K.shape[0]) % 6 < 3)
     K = mats.K.toarray()[np.ix_(trans, trans)]

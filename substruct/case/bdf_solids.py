@@ -3,14 +3,16 @@ PSOLID property, read from the fields of a :class:`~substruct.case.bdf_fields.Ra
 indices as in :mod:`substruct.case.bdf_cards`).  Every field is read or refused.
 
 The elements are the linear isoparametric solids (trilinear hexahedron, linear wedge, linear
-tetrahedron).  PSOLID's integration fields are read as MSC Nastran's QRG defines them for
-elements without mid-side grids: ``IN`` blank/``0``/``BUBBLE`` with ``ISOP`` blank/``REDUCED``
-(the default) gives the 8-grid CHEXA its bubble functions (incompatible modes,
-:mod:`substruct.models.nastran_bubble`); ``IN`` ``2``/``TWO`` with ``ISOP`` ``1``/``FULL`` is the
-standard 2 x 2 x 2 isoparametric integration.  The wedge is fully integrated (3 x 2) with
-either; the linear tetrahedron is exact with either.  Other combinations (reduced shear only,
-``IN = 3``), mid-side grids (CHEXA with 20, CPENTA with 15, CTETRA with 10) and fluid elements
-(``FCTN`` other than ``SMECH``) are refused.
+tetrahedron) and the 10-grid quadratic tetrahedron (:mod:`substruct.models.nastran_tet10`,
+whose stiffness on straight edges no integration choice changes; curved, it takes the 4-point
+rule whatever IN says).  PSOLID's integration fields are read as MSC Nastran's QRG defines
+them for elements without mid-side grids: ``IN`` blank/``0``/``BUBBLE`` with ``ISOP``
+blank/``REDUCED`` (the default) gives the 8-grid CHEXA and the 6-grid CPENTA their bubble functions
+(incompatible modes, :mod:`substruct.models.nastran_bubble`); ``IN`` ``2``/``TWO`` with ``ISOP``
+``1``/``FULL`` is the standard isoparametric integration (2 x 2 x 2 on the hexahedron, 3 x 2
+on the wedge).  The linear tetrahedron is exact with either.  Other combinations (reduced
+shear only, ``IN = 3``), mid-side grids of CHEXA (20) and CPENTA (15), a CTETRA with only
+some of its six, and fluid elements (``FCTN`` other than ``SMECH``) are refused.
 """
 
 from __future__ import annotations
@@ -30,8 +32,8 @@ SOLID_CORNERS: dict[str, tuple[int, int, str]] = {
 
 @dataclass(frozen=True)
 class SolidCell:
-    """CHEXA / CPENTA / CTETRA: its corner grids in Nastran's order; ``bubble``: a CHEXA whose
-    PSOLID asks for bubble functions (set when the property is cross-referenced)."""
+    """CHEXA / CPENTA / CTETRA: its corner grids in Nastran's order; ``bubble``: a CHEXA or
+    CPENTA whose PSOLID asks for bubble functions (set when the property is cross-referenced)."""
 
     kind: str
     id: int
@@ -44,8 +46,9 @@ class SolidCell:
 @dataclass(frozen=True)
 class Psolid:
     """PSOLID: material ``mid``, the material coordinate system ``cordm`` (no effect with
-    an isotropic MAT1; checked to exist) and ``bubble``: the hexahedra's bubble functions
-    (IN blank/BUBBLE, ISOP blank/REDUCED) rather than full integration (IN 2, ISOP FULL)."""
+    an isotropic MAT1; checked to exist) and ``bubble``: the hexahedra's and wedges' bubble
+    functions (IN blank/BUBBLE, ISOP blank/REDUCED) rather than full integration (IN 2, ISOP
+    FULL)."""
 
     id: int
     mid: int
@@ -56,17 +59,25 @@ class Psolid:
 
 def read_solid(c: RawCard) -> SolidCell:
     """CHEXA EID PID G1 ... G8 (G9 - G20 blank), CPENTA EID PID G1 ... G6 (G7 - G15 blank),
-    CTETRA EID PID G1 ... G4 (G5 - G10 blank)."""
+    CTETRA EID PID G1 ... G4 and either all six mid-side grids G5 - G10 (the 10-grid
+    quadratic tetrahedron) or none; a CTETRA with some of them (Nastran allows it) is
+    refused."""
     n, most, _ = SOLID_CORNERS[c.name]
-    for k in range(2 + n, 2 + most):
-        if c.text(k):
-            raise c.error(f"{c.name} with mid-side grids is not supported (the {n}-grid "
-                          f"element only)", c.text(k), f"G{k - 1}")
+    given = [k for k in range(2 + n, 2 + most) if c.text(k)]
+    if c.name == "CTETRA" and len(given) == most - n:
+        n = most
+    elif given and c.name == "CTETRA":
+        k = min(set(range(2 + n, 2 + most)) - set(given))
+        raise c.error("CTETRA needs all six mid-side grids G5-G10 or none (the 10- or the "
+                      "4-grid element)", "blank", f"G{k - 1}")
+    elif given:
+        raise c.error(f"{c.name} with mid-side grids is not supported (the {n}-grid element "
+                      "only)", c.text(given[0]), f"G{given[0] - 1}")
     c.blank_after(2 + most, f"{c.name} has at most {most} grids")
     eid = c.integer(0, "EID")
     nodes = tuple(c.integer(2 + k, f"G{k + 1}") for k in range(n))
     if len(set(nodes)) != n:
-        raise c.error("the corners are different grids", list(nodes), "G1")
+        raise c.error("the grids must be different", list(nodes), "G1")
     return SolidCell(c.name, eid, c.integer(1, "PID"), nodes, c.line)
 
 
@@ -83,8 +94,8 @@ def read_psolid(c: RawCard) -> Psolid:
     * ``CORDM`` (blank: 0): the material axes, no effect with an isotropic MAT1;
     * ``IN`` and ``ISOP`` together (QRG PSOLID, remarks 6 and 10): ``IN`` blank, ``0`` or
       ``BUBBLE`` with ``ISOP`` blank or ``REDUCED``: the default, bubble functions in the
-      8-grid CHEXA; ``IN`` ``2``/``TWO`` with ``ISOP`` ``1``/``FULL``: standard 2 x 2 x 2
-      integration.  ``IN = 3``/``THREE``, ``IN = 2`` with reduced shear (``ISOP`` blank or
+      8-grid CHEXA and the 6-grid CPENTA; ``IN`` ``2``/``TWO`` with ``ISOP`` ``1``/``FULL``:
+      standard integration.  ``IN = 3``/``THREE``, ``IN = 2`` with reduced shear (``ISOP`` blank or
       ``REDUCED``) and the combinations outside Nastran's table are refused;
     * ``STRESS`` (where stresses are output): read and not used;
     * ``FCTN``: blank or ``SMECH``; fluids (``PFLUID``, ``FFLUID``) are refused.

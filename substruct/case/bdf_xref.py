@@ -179,7 +179,7 @@ def cross_reference(cards: Cards) -> BulkData:
             for k, g in enumerate(cell.nodes):
                 grid(card, g, f"G{k + 1}")
             mat = _solid_material(card, cell.pid, cards, systems)
-            bubble = cell.kind == "CHEXA" and cards.psolid[cell.pid][1].bubble
+            bubble = cell.kind in ("CHEXA", "CPENTA") and cards.psolid[cell.pid][1].bubble
             out.solids.append((replace(cell, bubble=bubble), mat))
     for card, b in by.get("CBUSH", []):
         grid(card, b.ga, "GA")
@@ -247,6 +247,12 @@ def cross_reference(cards: Cards) -> BulkData:
     if not out.wtmass > 0:
         raise params["WTMASS"][0].error("must be positive", out.wtmass, "V1")
     out.coupled = param(params, "COUPMASS", "int", -1) > 0
+    quadratic = [cell for cell, _ in out.solids if len(cell.nodes) == 10]
+    if quadratic and not out.coupled:
+        raise BdfError(source, "the 10-grid CTETRA needs coupled mass (PARAM,COUPMASS,1): "
+                       "Nastran's lumped mass of quadratic solids is not reproduced",
+                       "no COUPMASS", line=quadratic[0].line, card="CTETRA",
+                       ident=quadratic[0].id)
     out.autospc = param(params, "AUTOSPC", "yes", True)
     return out
 

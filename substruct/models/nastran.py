@@ -11,7 +11,8 @@ offsets of its ends (:math:`u_{end} = u_{grid} + \theta \times w`).
 * **CROD**: axial ``EA/L`` and torsion ``GJ/L``.  Mass :math:`\mu L` with
   :math:`\mu = \rho A + nsm`: lumped, :math:`\mu L/2` on the translations of each end; coupled
   (``PARAM,COUPMASS,1``), :math:`\mu L/6\,[2, 1; 1, 2]` on each translation.
-* **CBAR / CBEAM**: the beam of :mod:`substruct.models.beam` with ``I1`` bending in the plane
+* **CBAR / CBEAM** (:mod:`substruct.models.nastran_bars`, all elements at once): the beam of
+  :mod:`substruct.models.beam` with ``I1`` bending in the plane
   of the orientation vector (local ``x-y``) and ``I2`` in the other; CBAR is Euler-Bernoulli
   (PBAR's ``K1``, ``K2`` blank), CBEAM has PBEAM's shear factors ``K1`` (plane 1, with
   ``I1``) and ``K2`` (plane 2), 1 when blank (:math:`\phi_i = 12 E I_i / (K_i G A L^2)`; a
@@ -45,10 +46,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from substruct.case.bdf import BulkData, BdfSection
-from substruct.case.bdf_cards import Bar
 from substruct.case.bdf_fields import BdfError
-from substruct.models.beam import bending_matrices, release, rotation
 from substruct.models.frame import frame_component
+from substruct.models.nastran_bars import bar_blocks, bar_matrices
 from substruct.models.nastran_shells import bush_matrices, plate_matrices
 from substruct.models.selection import node_tolerance
 from substruct.substructure import Geometry, PointError, Substructure, as_csr
@@ -72,46 +72,6 @@ def conm2_matrix(m: float, r: np.ndarray, J: np.ndarray) -> np.ndarray:
     D[3:, 3:] = J
     out = E.T @ D @ E
     return (out + out.T) / 2
-
-
-def bar_matrices(xa: np.ndarray, xb: np.ndarray, v: np.ndarray, s: BdfSection, coupled: bool,
-                 shear: bool, released: list[int], wa: np.ndarray, wb: np.ndarray
-                 ) -> tuple[np.ndarray, np.ndarray]:
-    """Stiffness and mass (12 x 12, basic) of a CBAR/CBEAM between grids at ``xa``, ``xb`` with
-    end offsets ``wa``, ``wb`` (module docstring)."""
-    a, b = xa + wa, xb + wb
-    R = rotation(a.tolist(), b.tolist(), v.tolist())
-    L = float(np.linalg.norm(b - a))
-    E, G = s.mat.E, s.mat.G
-    mu = s.mat.rho * s.A + s.nsm
-    K, M = np.zeros((12, 12)), np.zeros((12, 12))
-    bar = np.array([[1.0, -1.0], [-1.0, 1.0]])
-    pair = np.array([[2.0, 1.0], [1.0, 2.0]]) / 6.0
-    for dof, stiff in ((0, E * s.A), (3, G * s.J)):
-        K[np.ix_([dof, dof + 6], [dof, dof + 6])] = stiff / L * bar
-    if coupled:
-        M[np.ix_([0, 6], [0, 6])] = mu * L * pair
-        M[np.ix_([3, 9], [3, 9])] = s.mat.rho * (s.I1 + s.I2) * L * pair
-    for vv, t, I, sign, k in ((1, 5, s.I1, 1.0, s.kshear[0]),
-                              (2, 4, s.I2, -1.0, s.kshear[1])):
-        kga = k * G * s.A if shear and k > 0 else None
-        Kb, Mb = bending_matrices(L, E * I, kga if kga else None, mu, 0.0)
-        D = np.diag([1.0, sign, 1.0, sign])
-        idx = np.ix_([vv, t, vv + 6, t + 6], [vv, t, vv + 6, t + 6])
-        K[idx] = D @ Kb @ D
-        if coupled:
-            M[idx] = D @ Mb @ D
-    if not coupled:
-        M[[0, 1, 2, 6, 7, 8], [0, 1, 2, 6, 7, 8]] = mu * L / 2
-        if s.beam:  # CBEAM's lumped mass holds the torsional inertia, CBAR's does not
-            M[[3, 9], [3, 9]] = s.mat.rho * (s.I1 + s.I2) * L / 2
-    K, M = release(K, M, released)
-    T = np.kron(np.eye(4), R)
-    Eo = np.eye(12)
-    Eo[:3, 3:6] = -_skew(wa)
-    Eo[6:9, 9:12] = -_skew(wb)
-    TE = T @ Eo
-    return TE.T @ K @ TE, TE.T @ M @ TE
 
 
 def _rod(xa: np.ndarray, xb: np.ndarray, s: BdfSection, coupled: bool
@@ -187,9 +147,15 @@ def nastran_matrices(bulk: BulkData) -> NastranMatrices:
             raise BdfError(bulk.source, str(err), line=rod.line, card="CROD",
                            ident=rod.id) from None
         pairs.append((index[a], index[b]))
-    for bar, s in bulk.bars:
-        add(dofs2(*bar.nodes), *_bar(bulk, bar, s))
-        pairs.append((index[bar.nodes[0]], index[bar.nodes[1]]))
+    if bulk.bars:  # all at once: 12 coordinates of each element
+        Kbars, Mbars = bar_blocks(bulk)
+        ends = np.array([[index[g] for g in bar.nodes] for bar, _ in bulk.bars])
+        bar_dofs = (6 * ends[:, :, None] + np.arange(6)).reshape(len(ends), 12)
+        rows.append(np.repeat(bar_dofs, 12, axis=1).ravel())
+        cols.append(np.tile(bar_dofs, (1, 12)).ravel())
+        kv.append(Kbars.ravel())
+        mv.append(Mbars.ravel())
+        pairs += [(int(a), int(b)) for a, b in ends]
     faces: dict[str, list[tuple[int, ...]]] = {}
     for kind, nodes, Ke, Me in plate_matrices(bulk, index):
         add((6 * np.asarray(nodes)[:, None] + np.arange(6)).ravel(), Ke, Me)
@@ -234,18 +200,6 @@ def nastran_matrices(bulk: BulkData) -> NastranMatrices:
     unstiffened = np.diff(sp.csc_array(K).indptr) == 0
     return NastranMatrices(sp.csr_array(K), sp.csr_array(M), ids, xyz, held, unstiffened,
                            pairs, bulk, faces)
-
-
-def _bar(bulk: BulkData, bar: Bar, s: BdfSection) -> tuple[np.ndarray, np.ndarray]:
-    xa, xb = bulk.grids[bar.nodes[0]], bulk.grids[bar.nodes[1]]
-    v = np.asarray(bar.v) if bar.g0 is None else bulk.grids[bar.g0] - xa
-    released = [int(c) - 1 for c in bar.pa] + [6 + int(c) - 1 for c in bar.pb]
-    try:
-        return bar_matrices(xa, xb, v, s, bulk.coupled, s.shear, released,
-                            np.asarray(bar.wa), np.asarray(bar.wb))
-    except ValueError as err:
-        raise BdfError(bulk.source, str(err), line=bar.line, card=bar.kind,
-                       ident=bar.id) from None
 
 
 def _rotations(col: np.ndarray, n_grids: int, n: int) -> sp.csr_array:

@@ -14,9 +14,14 @@ hexahedron and the wedge (Nastran's ``IN = 2``, ``ISOP = FULL``): scikit-fem's o
 the hexahedron, and on the wedge the 3 x 2 rule of :func:`wedge_quadrature` (scikit-fem
 12.0.2's wedge rules have weights summing to 1/4, not to the reference wedge's volume 1/2, so
 they halve every matrix).  Elements of one kind and
-one material make one mesh.  The 8-grid CHEXA whose PSOLID asks for bubble functions (IN and
-ISOP blank, Nastran's default) takes its stiffness from
-:func:`substruct.models.nastran_bubble.bubble_hex_stiffness` instead, its mass as above.
+one material make one mesh.  The 8-grid CHEXA and the 6-grid CPENTA whose PSOLID asks for
+bubble functions (IN and ISOP blank, Nastran's default) take their stiffness from
+:func:`substruct.models.nastran_bubble.bubble_hex_stiffness` and
+:func:`~substruct.models.nastran_bubble.bubble_wedge_stiffness` instead, their mass as above.
+
+The 10-grid CTETRA (all six mid-side grids) takes its stiffness and consistent mass from
+:func:`substruct.models.nastran_tet10.tet10_matrices` and needs ``PARAM,COUPMASS``: Nastran's
+lumped mass of quadratic solids is not published in detail and equal shares would be wrong.
 
 Mass, as in Nastran: lumped by default, the element's mass :math:`\rho V_e` in equal shares on
 the translations of its corners; coupled (``PARAM,COUPMASS`` positive), the consistent
@@ -40,7 +45,9 @@ from skfem.models.elasticity import linear_elasticity
 from substruct.case.bdf_fields import BdfError
 from substruct.case.bdf_model import BulkData
 from substruct.case.bdf_solids import SOLID_CORNERS
-from substruct.models.nastran_bubble import bubble_hex_stiffness, isotropic_D
+from substruct.models.nastran_bubble import bubble_hex_stiffness, bubble_wedge_stiffness, \
+    isotropic_D
+from substruct.models.nastran_tet10 import tet10_matrices
 
 __all__ = ["solid_blocks", "wedge_quadrature"]
 
@@ -57,10 +64,14 @@ def solid_blocks(bulk: BulkData, index: dict[int, int]
         BdfError: an element of zero volume, naming its card.
     """
     N = 6 * len(index)
-    groups: dict[tuple[str, int, bool], list] = {}
+    groups: dict[tuple[str, int, bool, int], list] = {}
     for cell, mat in bulk.solids:
-        groups.setdefault((cell.kind, mat.id, cell.bubble), []).append((cell, mat))
-    for (card, _, bubble), items in groups.items():
+        groups.setdefault((cell.kind, mat.id, cell.bubble, len(cell.nodes)), []).append(
+            (cell, mat))
+    for (card, _, bubble, nv), items in groups.items():
+        if nv == 10:  # the quadratic CTETRA
+            yield _tet10_block(bulk, items, index)
+            continue
         kind = SOLID_CORNERS[card][2]
         mat = items[0][1]
         conn = np.array([[index[g] for g in cell.nodes] for cell, _ in items], dtype=np.int64)
@@ -74,8 +85,8 @@ def solid_blocks(bulk: BulkData, index: dict[int, int]
             else Basis(mesh, ElementVector(ElementWedge1()), quadrature=wedge_quadrature())
         nu = mat.nu
         lam = mat.E * nu / ((1 + nu) * (1 - 2 * nu))
-        if bubble:  # the 8-grid CHEXA with bubble functions, IN blank or BUBBLE
-            K = _bubble_stiffness(xyz[local], local, len(used), mat.E, nu)
+        if bubble:  # CHEXA or CPENTA with bubble functions, IN blank or BUBBLE
+            K = _bubble_stiffness(kind, xyz[local], local, len(used), mat.E, nu)
         else:
             K = asm(linear_elasticity(lam, mat.E / (2 * (1 + nu))), basis)
         if bulk.coupled:
@@ -113,18 +124,62 @@ def wedge_quadrature() -> tuple[np.ndarray, np.ndarray]:
     return X, np.full(6, 1 / 12)
 
 
-def _bubble_stiffness(X: np.ndarray, local: np.ndarray, nv: int, E: float, nu: float
-                      ) -> sp.coo_array:
-    """The condensed hexahedra of :func:`bubble_hex_stiffness` assembled on the coordinates
-    ``3 * vertex + component`` of ``nv`` vertices."""
+def _bubble_stiffness(kind: str, X: np.ndarray, local: np.ndarray, nv: int, E: float,
+                      nu: float) -> sp.coo_array:
+    """The condensed hexahedra of :func:`bubble_hex_stiffness` or wedges of
+    :func:`bubble_wedge_stiffness` assembled on the coordinates ``3 * vertex + component`` of
+    ``nv`` vertices."""
     D = isotropic_D(E, nu)
-    # in blocks of elements: the strain matrices take 8 x 6 x 33 numbers an element
-    Ke = np.concatenate([bubble_hex_stiffness(X[k:k + 4096], D)
-                         for k in range(0, len(X), 4096)]) if len(X) else np.zeros((0, 24, 24))
-    dofs = (3 * local[:, :, None] + np.arange(3)).reshape(len(local), 24)
-    rows = np.repeat(dofs, 24, axis=1).ravel()
-    cols = np.tile(dofs, (1, 24)).ravel()
+    element = bubble_hex_stiffness if kind == "hexahedron" else bubble_wedge_stiffness
+    n = 3 * local.shape[1]
+    # in blocks of elements: the strain matrices take 8 x 6 x 33 numbers a hexahedron
+    Ke = np.concatenate([element(X[k:k + 4096], D)
+                         for k in range(0, len(X), 4096)]) if len(X) else np.zeros((0, n, n))
+    dofs = (3 * local[:, :, None] + np.arange(3)).reshape(len(local), n)
+    rows = np.repeat(dofs, n, axis=1).ravel()
+    cols = np.tile(dofs, (1, n)).ravel()
     return sp.coo_array((Ke.ravel(), (rows, cols)), shape=(3 * nv, 3 * nv))
+
+
+def _tet10_block(bulk: BulkData, items: list, index: dict[int, int]
+                 ) -> tuple[str, np.ndarray, sp.coo_array, sp.coo_array]:
+    """The 10-grid CTETRA of one material (:func:`tet10_matrices`), coupled mass only."""
+    cell0, mat = items[0]
+    if not bulk.coupled:
+        raise BdfError(bulk.source, "the 10-grid CTETRA needs coupled mass (PARAM,COUPMASS,1): "
+                       "Nastran's lumped mass of quadratic solids is not reproduced",
+                       "no COUPMASS", line=cell0.line, card=cell0.kind, ident=cell0.id)
+    N = 6 * len(index)
+    conn = np.array([[index[g] for g in cell.nodes] for cell, _ in items], dtype=np.int64)
+    X = np.array([[bulk.grids[g] for g in cell.nodes] for cell, _ in items], dtype=float)
+    _check_volumes(bulk, items, X[:, :4])
+    D = isotropic_D(mat.E, mat.nu)
+    Ks, Ms = [], []
+    for k in range(0, len(X), 4096):
+        try:
+            Ke, Me = tet10_matrices(X[k:k + 4096], D, mat.rho)
+        except ValueError as err:
+            bad = next(j for j in range(k, min(k + 4096, len(X)))
+                       if _fails(X[j:j + 1], D, mat.rho))
+            cell = items[bad][0]
+            raise BdfError(bulk.source, str(err), list(cell.nodes), line=cell.line,
+                           card=cell.kind, ident=cell.id) from None
+        Ks.append(Ke)
+        Ms.append(Me)
+    dofs = (6 * conn[:, :, None] + np.arange(3)).reshape(len(conn), 30)
+    rows = np.repeat(dofs, 30, axis=1).ravel()
+    cols = np.tile(dofs, (1, 30)).ravel()
+    K = sp.coo_array((np.concatenate(Ks).ravel(), (rows, cols)), shape=(N, N))
+    M = sp.coo_array((np.concatenate(Ms).ravel(), (rows, cols)), shape=(N, N))
+    return "tetra10", conn, K, M
+
+
+def _fails(X: np.ndarray, D: np.ndarray, rho: float) -> bool:
+    try:
+        tet10_matrices(X, D, rho)
+    except ValueError:
+        return True
+    return False
 
 
 def _moved(A: sp.sparray | sp.spmatrix, target: np.ndarray, N: int) -> sp.coo_array:
