@@ -3,8 +3,9 @@ uff_geometry): points defined in global cartesian coordinates, written as (r, th
 (r, theta, phi) in a turned and shifted system (2420 and 18), read back at their cartesian
 definitions; the direction codes 1-3 of a 58 at those nodes along the unit vectors e_r,
 e_theta, e_z (e_phi) worked out from the cartesian position alone (no angle formula); the
-same file written by pyuff; lengths of a file in millimetres scaled, angles not; the
-refusals (a node on the axis of a displacement system it is not defined in)."""
+same file written by pyuff; lengths of a file in millimetres scaled, angles not; a system of
+dataset 18 whose three points are given in a cylindrical reference system; the refusal of a
+node on the axis of a displacement system it is not defined in."""
 
 from __future__ import annotations
 
@@ -196,3 +197,31 @@ def test_a_node_on_the_axis_of_its_displacement_system_refused(tmp_path):
     text = str(err.value)
     assert text.startswith("axis.uff: node 40: it lies on the axis of its cylindrical "
                            "displacement coordinate system 4") and "\n" not in text, text
+
+
+@pytest.mark.parametrize("scale", [1.0, 1000.0])
+def test_three_points_given_in_a_cylindrical_reference(tmp_path, scale):
+    # system 4: cylindrical, the global axes; system 7 by dataset 18 with the reference 4:
+    # origin (r, theta, z) = (1, 90, 0) -> (0, 1, 0); +x point (1, 0, 0) -> (1, 0, 0);
+    # +xz point (1, 90, 1) -> (0, 1, 1): e_x = (1, -1, 0)/sqrt 2, e_z = +Z, e_y = (1, 1, 0)/sqrt 2
+    cyl = ["    -1", "  2420", f"{1:10d}", "part", f"{4:10d}{1:10d}{8:10d}", "cyl",
+           _d25(1, 0, 0), _d25(0, 1, 0), _d25(0, 0, 1), _d25(0, 0, 0), "    -1"]
+    pts = [(scale, 90.0, 0.0), (scale, 0.0, 0.0), (scale, 90.0, scale)]
+    s18 = ["    -1", "    18", f"{7:10d}{0:10d}{4:10d}{8:10d}{1:10d}", "by points",
+           "".join(f"{v:13.5E}" for v in (*pts[0], *pts[1])),
+           "".join(f"{v:13.5E}" for v in pts[2]), "    -1"]
+    units = ["    -1", "   164", f"{5:10d}{'mm (milli newton)':<20}{2:10d}",
+             _d25(1000.0, 1000.0, 1.0), _d25(273.15), "    -1"] if scale != 1.0 else []
+    nodes = _nodes2411([(1, 7, 7, (2 * scale, 3 * scale, 4 * scale)),
+                        (2, 0, 0, (0.0, 0.0, 0.0))])
+    path = tmp_path / "ref.uff"
+    path.write_text("".join("\n".join(b) + "\n" for b in (units, cyl, s18) if b) + nodes
+                    + "".join(ascii58(X, Y, rsp=(1, k), ref=(2, 1)) for k in (1, 2, 3)))
+    table = read_channels(path)
+    h = np.sqrt(0.5)
+    want = np.array([5 * h, 1 + h, 4.0])
+    axes = np.array([[h, -h, 0], [h, h, 0], [0, 0, 1]])
+    for k in range(3):
+        c = table.get(f"1.{'xyz'[k]}")
+        assert np.abs(c.position - want).max() <= 1e-14 * np.abs(want).max()
+        assert np.abs(c.direction - axes[k]).max() <= 1e-14

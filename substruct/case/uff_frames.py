@@ -40,8 +40,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["UffFrame", "SYSTEM_TYPES", "AXIS_RTOL", "local_to_cartesian", "angles_of", "frame_axes",
-           "length_components"]
+__all__ = ["UffFrame", "SYSTEM_TYPES", "AXIS_RTOL", "local_to_cartesian", "angles_of",
+           "frame_axes", "length_components"]
 
 #: A point whose distance from a system's axis is at most this times its distance from the
 #: origin is on the axis (its angle is not defined).
