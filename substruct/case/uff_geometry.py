@@ -14,7 +14,8 @@ an origin :math:`o`: a point at local :math:`x_l` is at :math:`x = o + A^T x_l`.
 
 A node's coordinates are in its definition system, its direction codes in its displacement
 system: the response of record 6 field 7 (or the reference, field 10) of a 58 at code
-:math:`\pm k` (1..3) reads along :math:`\pm A_{disp}[k]`.  The receptances read from a UFF
+:math:`\pm k` (1..3) reads along :math:`\pm A_{disp}[k]` (a cartesian displacement system;
+below for the others).  The receptances read from a UFF
 file are signed to the positive axis (:mod:`substruct.case.frf_files`), so the channel
 ``<node>.<x|y|z>`` (the label ``<node>:<x|y|z>`` of the receptances read from the file, as a
 name of the case) has the direction :math:`+A_{disp}[k]` at the node's global position; a
