@@ -71,17 +71,19 @@ def test_positions_and_directions_in_the_nodes_coordinate_systems(tmp_path):
     # node 1: local (1, 0, 0) in system 5 (30 degrees about z, origin (1, 2, 3)); its y axis
     np.testing.assert_allclose(table.get("1.y").position, [1 + C, 2 + S, 3], atol=1e-12)
     np.testing.assert_allclose(table.get("1.y").direction, [-S, C, 0], atol=1e-12)
-    # node 2: global position, directions in system 7 (x = +Y, y = +X, z = -Z; from dataset
-    # 18's three points); the 58 code -3 is signed away: the channel is along +z of system 7
+    # node 2: global position, directions in system 7 (origin (0, 0, 1), +x point (0, 1, 1),
+    # +xz-plane point (1, 1, 1): x = +Y, z = +X, y = z cross x = +Z; from dataset 18's three
+    # points); the 58 code -3 is signed away: the channel is along +z of system 7
     np.testing.assert_allclose(table.get("2.z").position, [0.5, 0.5, 0.5], atol=1e-12)
-    np.testing.assert_allclose(table.get("2.z").direction, [0, 0, -1], atol=1e-12)
+    np.testing.assert_allclose(table.get("2.z").direction, [1, 0, 0], atol=1e-12)
     # node 3 (dataset 15): local (1, 2, 3) in system 7 -> (0,0,1) + 1 ex + 2 ey + 3 ez
-    np.testing.assert_allclose(table.get("3.x").position, [2, 1, -2], atol=1e-5)
+    np.testing.assert_allclose(table.get("3.x").position, [3, 1, 3], atol=1e-5)
     np.testing.assert_allclose(table.get("3.x").direction, [1, 0, 0], atol=1e-12)
 
 
 @pytest.mark.parametrize("edit, message", [
-    (dict(cs5=_cs2420(kind=1)), "coordinate system 5 is cylindrical; only cartesian"),
+    (dict(cs5=_cs2420(kind=3)), "record 3 field 2, coordinate system 5 of type 3: not 0 "
+     "(cartesian), 1 (cylindrical) or 2 (spherical)"),
     (dict(cs5=_cs2420(axes=((1, 0, 0), (1, 0, 0), (0, 0, 1)))),
      "are not a right-handed orthonormal triad"),
     (dict(cs7=_cs18(q=(0, 2, 1))), "are on one line: no coordinate system"),
@@ -89,7 +91,8 @@ def test_positions_and_directions_in_the_nodes_coordinate_systems(tmp_path):
     (dict(cs7=_cs18(ref=9)), "reference coordinate system 9 is not defined before it"),
     (dict(cs7=_cs2420(label=5)), "coordinate system 5 is defined twice"),
     (dict(n15=_nodes15([(3, 4, 0, (1.0, 2.0, 3.0))])),
-     "node 3: its definition coordinate system 4 is not defined in the file"),
+     "node 3: record 1 field 2, definition coordinate system 4: not defined in the "
+     "file (datasets 18/2420)"),
     (dict(n15=_nodes15([(4, 0, 0, (1.0, 2.0, 3.0))])),
      "record 6 fields 6 and 7 (response): node 3 has no coordinates"),
     (dict(f2=ascii58(X, Y, rsp=(3, 5), ref=(2, -3))),

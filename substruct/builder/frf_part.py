@@ -25,6 +25,9 @@ class FrfPart:
         Y: complex ``(n_omega, n, n)`` receptances, ``Y[k, i, j] = u_i / F_j``.
         interpolate: ``"none"`` or ``"linear"``: how it is put on another grid.
         decouple: a part removed from the assembly (``Y`` is then its receptance negated).
+        inputs: the labels of ``Y``'s columns when they are not ``labels`` (a measured part
+            of sensors x impacts, reduced to virtual points before any coupling); ``Y`` is
+            then ``(n_omega, len(labels), len(inputs))``.
     """
 
     name: str
@@ -33,14 +36,21 @@ class FrfPart:
     Y: np.ndarray
     interpolate: str = "none"
     decouple: bool = False
+    inputs: list[str] | None = None
 
     def __post_init__(self) -> None:
         k, n = len(self.omega), len(self.labels)
-        if self.Y.shape != (k, n, n):
+        m = n if self.inputs is None else len(self.inputs)
+        if self.Y.shape != (k, n, m):
             raise ValueError(f"{self.name}: receptances of shape {self.Y.shape}, expected "
-                             f"({k}, {n}, {n}) for {k} frequencies and {n} labels")
-        if len(set(self.labels)) != n:
+                             f"({k}, {n}, {m}) for {k} frequencies and {n} x {m} labels")
+        if len(set(self.labels)) != n or (self.inputs is not None and
+                                          len(set(self.inputs)) != m):
             raise ValueError(f"{self.name}: labels repeated")
+
+    def columns(self) -> list[str]:
+        """The labels of ``Y``'s columns (``inputs``, or ``labels`` when square)."""
+        return self.labels if self.inputs is None else self.inputs
 
     def index(self, label: str) -> int:
         """The coordinate of ``label``.

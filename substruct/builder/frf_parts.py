@@ -144,13 +144,13 @@ def split_frf_case(case: Case) -> FrfSplit:
     grid = np.asarray(spec.omegas(), dtype=float)
     for k, s in enumerate(case.substructures):  # before any computation: grids agree
         if isinstance(s, FrfSpec):
-            problem = grid_problem(s.name, s.data()[0], grid, s.interpolate)
+            problem = grid_problem(s.name, s.measured()[0], grid, s.interpolate)
             if problem is not None:
                 raise case.error(("substructures", k, "interpolate"), problem, s.interpolate)
     for s in frf_specs.values():
-        omega, labels, H = s.data()
-        parts.append(FrfPart(s.name, omega, labels, -H if s.decouple else H, s.interpolate,
-                             s.decouple))
+        omega, outs, ins, H = s.measured()
+        parts.append(FrfPart(s.name, omega, outs, -H if s.decouple else H, s.interpolate,
+                             s.decouple, None if ins is outs else ins))
     return FrfSplit(model_case, model_points, parts, pairs)
 
 

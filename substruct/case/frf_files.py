@@ -24,7 +24,10 @@ r"""Reading receptances from files: NPZ and Universal File Format dataset 58.
   hold exactly (:func:`grid_problem` compares to :data:`GRID_DIGITS_RTOL`).
 
 Both give ``(omega, labels, H)``; any problem is a ``ValueError`` of one line naming the file,
-and for UFF the dataset, record and value.
+and for UFF the dataset, record and value.  A measured part reduced to virtual points needs
+only its sensors x impacts: :func:`read_measured_file` gives ``(omega, outputs, inputs, H)``
+of an ``.npz`` with ``outputs`` and ``inputs`` (``H`` of shape ``(n_omega, n_out, n_in)``)
+or of a UFF file's responses x references (every pair given), with the same checks.
 """
 
 from __future__ import annotations
@@ -39,7 +42,8 @@ from substruct.case.npz_files import npz_members, read_npz
 from substruct.case.uff_records import Uff58, read_uff_records
 from substruct.case.uff_units import unit_exponents
 
-__all__ = ["DIRECTIONS", "MAX_FRF_FILE", "GRID_DIGITS_RTOL", "read_frf_file", "uff_label",
+__all__ = ["DIRECTIONS", "MAX_FRF_FILE", "GRID_DIGITS_RTOL", "read_frf_file",
+           "read_measured_file", "uff_label",
            "label_node_dir", "grid_problem", "FUNCTION_TYPES", "ORDINATES"]
 
 #: UFF direction codes 1..6.
@@ -83,23 +87,32 @@ def _check_file(path: Path) -> None:
                          f"{MAX_FRF_FILE} accepted")
 
 
-def _read_npz(path: Path) -> tuple[np.ndarray, list[str], np.ndarray]:
+def _read_npz(path: Path, rectangular: bool = False
+              ) -> tuple[np.ndarray, list[str], list[str], np.ndarray]:
+    """``(omega, outputs, inputs, H)`` of an archive with ``labels`` (square; outputs and
+    inputs the same list) or, when ``rectangular``, with ``outputs`` and ``inputs``."""
     names = npz_members(path)
-    if "H" not in names or "labels" not in names or not names.keys() & {"omega", "freq_hz"}:
-        raise ValueError(f"{path.name} needs arrays H, labels and omega (or freq_hz); "
+    keys = ["labels"]
+    if rectangular and "labels" not in names and {"outputs", "inputs"} <= names.keys():
+        keys = ["outputs", "inputs"]
+    if "H" not in names or not set(keys) <= names.keys() or \
+            not names.keys() & {"omega", "freq_hz"}:
+        want = "labels (or outputs and inputs)" if rectangular else "labels"
+        raise ValueError(f"{path.name} needs arrays H, {want} and omega (or freq_hz); "
                          f"it has {', '.join(sorted(names)) or 'none'}")
     grid = "omega" if "omega" in names else "freq_hz"
-    for key, kinds in (("H", "biufc"), (grid, "biuf"), ("labels", "U")):
+    for key, kinds in (("H", "biufc"), (grid, "biuf"), *((k, "U") for k in keys)):
         if names[key].dtype.kind not in kinds:
             raise ValueError(f"{path.name}: {key} holds {names[key].dtype} entries, not "
-                             f"{'strings' if key == 'labels' else 'numbers'}")
-    z = read_npz(path, ["H", "labels", grid], {"H": np.complex128, grid: np.float64})
-    labels = [str(s) for s in z["labels"].ravel()]
-    if z[grid].ndim != 1 or z["labels"].ndim != 1:
-        raise ValueError(f"{path.name}: {grid} and labels must be 1-D arrays, they have the "
-                         f"shapes {list(z[grid].shape)} and {list(z['labels'].shape)}")
+                             f"{'strings' if key in keys else 'numbers'}")
+    z = read_npz(path, ["H", *keys, grid], {"H": np.complex128, grid: np.float64})
+    for key in (grid, *keys):
+        if z[key].ndim != 1:
+            raise ValueError(f"{path.name}: {key} must be a 1-D array, it has the shape "
+                             f"{list(z[key].shape)}")
+    lists = [[str(s) for s in z[k].ravel()] for k in keys]
     omega = z[grid] if grid == "omega" else 2 * np.pi * z[grid]
-    return omega, labels, z["H"]
+    return omega, lists[0], lists[-1], z["H"]
 
 
 #: UFF 58 function types (record 6 field 1), for the messages.
@@ -152,7 +165,10 @@ def _as_receptance(f: Uff58) -> np.ndarray:
     return f.y / (1j * 2 * np.pi * f.x) ** power
 
 
-def _read_uff58(path: Path) -> tuple[np.ndarray, list[str], np.ndarray]:
+def _read_uff58(path: Path, rectangular: bool = False
+                ) -> tuple[np.ndarray, list[str], list[str], np.ndarray]:
+    """``(omega, outputs, inputs, H)``: every label on both sides (the square matrix) or,
+    when ``rectangular``, the responses (in the order met) x the references."""
     read = read_uff_records(path)
     frfs = read.functions
     if not frfs:
@@ -160,6 +176,8 @@ def _read_uff58(path: Path) -> tuple[np.ndarray, list[str], np.ndarray]:
     x = frfs[0].x
     entries: dict[tuple[str, str], tuple[np.ndarray, str]] = {}
     order: list[str] = []
+    rows: list[str] = []
+    cols: list[str] = []
     for f in frfs:
         for node, which in ((f.rsp_node, "6 (response node)"), (f.ref_node,
                                                                  "9 (reference node)")):
@@ -186,18 +204,21 @@ def _read_uff58(path: Path) -> tuple[np.ndarray, list[str], np.ndarray]:
                                  "with other values")
             continue  # an identical copy
         entries[(rsp, ref)] = (data, f.where.split(": ", 1)[1])
-        for lab in (rsp, ref):
-            if lab not in order:
-                order.append(lab)
-    n = len(order)
-    H = np.empty((x.size, n, n), dtype=complex)
-    for i, rsp in enumerate(order):
-        for j, ref in enumerate(order):
+        for lab, into in ((rsp, order), (ref, order), (rsp, rows), (ref, cols)):
+            if lab not in into:
+                into.append(lab)
+    if not rectangular:
+        rows, cols = order, order
+    need = "the virtual points need every sensor x impact" if rectangular else \
+        "coupling needs the whole square matrix"
+    H = np.empty((x.size, len(rows), len(cols)), dtype=complex)
+    for i, rsp in enumerate(rows):
+        for j, ref in enumerate(cols):
             if (rsp, ref) not in entries:
                 raise ValueError(f"{path.name} lacks the function of response {rsp} to "
-                                 f"reference {ref}: coupling needs the whole square matrix")
+                                 f"reference {ref}: {need}")
             H[:, i, j] = entries[(rsp, ref)][0]
-    return 2 * np.pi * x, order, H
+    return 2 * np.pi * x, rows, cols, H
 
 
 def grid_problem(name: str, omega: np.ndarray, grid: np.ndarray, interpolate: str
@@ -219,29 +240,53 @@ def grid_problem(name: str, omega: np.ndarray, grid: np.ndarray, interpolate: st
 
 
 def read_frf_file(path: str | os.PathLike) -> tuple[np.ndarray, list[str], np.ndarray]:
-    """``(omega, labels, H)`` from an ``.npz`` or a UFF (``.uff``, ``.unv``) file.
+    """``(omega, labels, H)`` from an ``.npz`` or a UFF (``.uff``, ``.unv``) file: a square
+    receptance.
 
     Raises:
         ValueError: a missing or unreadable file, shapes that do not agree, a grid that is not
             ascending and positive, values that are not finite.
     """
-    p = Path(path)
+    omega, labels, _, H = _read(Path(path), False)
+    return omega, labels, H
+
+
+def read_measured_file(path: str | os.PathLike
+                       ) -> tuple[np.ndarray, list[str], list[str], np.ndarray]:
+    r"""``(omega, outputs, inputs, H)``, ``H[k, i, j] = u_{out_i} / F_{in_j}``: the
+    receptances of a measured part that need not be square (sensors x impacts): an ``.npz``
+    with ``labels`` (square) or ``outputs`` and ``inputs`` (``H`` of shape ``(n_omega,
+    n_out, n_in)``), or a UFF file, its responses x its references (every pair given).
+
+    Raises:
+        ValueError: as :func:`read_frf_file`; a response x reference pair missing.
+    """
+    return _read(Path(path), True)
+
+
+def _read(p: Path, rectangular: bool
+          ) -> tuple[np.ndarray, list[str], list[str], np.ndarray]:
     _check_file(p)
     suffix = p.suffix.lower()
     if suffix == ".npz":
-        omega, labels, H = _read_npz(p)
+        omega, outs, ins, H = _read_npz(p, rectangular)
     elif suffix in (".uff", ".unv"):
-        omega, labels, H = _read_uff58(p)
+        omega, outs, ins, H = _read_uff58(p, rectangular)
     else:
         raise ValueError(f"{p.name}: an FRF file is .npz, .uff or .unv")
-    n = len(labels)
-    if H.shape != (omega.size, n, n):
-        raise ValueError(f"{p.name}: H has shape {list(H.shape)}, expected "
-                         f"[{omega.size}, {n}, {n}] for {omega.size} frequencies and {n} labels")
-    if len(set(labels)) != n:
-        raise ValueError(f"{p.name}: labels repeated")
+    if H.shape != (omega.size, len(outs), len(ins)):
+        if outs is ins:
+            raise ValueError(f"{p.name}: H has shape {list(H.shape)}, expected "
+                             f"[{omega.size}, {len(outs)}, {len(outs)}] for {omega.size} "
+                             f"frequencies and {len(outs)} labels")
+        raise ValueError(f"{p.name}: H has shape {list(H.shape)}, expected [{omega.size}, "
+                         f"{len(outs)}, {len(ins)}] for {omega.size} frequencies, "
+                         f"{len(outs)} outputs and {len(ins)} inputs")
+    for names in (outs, ins):
+        if len(set(names)) != len(names):
+            raise ValueError(f"{p.name}: labels repeated")
     if not (np.all(np.isfinite(omega)) and np.all(np.isfinite(H))):
         raise ValueError(f"{p.name}: frequencies and receptances must be finite")
     if omega.size == 0 or np.any(omega <= 0) or np.any(np.diff(omega) <= 0):
         raise ValueError(f"{p.name}: the frequencies must be positive and ascending")
-    return omega, labels, H
+    return omega, outs, ins, H

@@ -27,7 +27,9 @@ reads; they are kept but not used.
 
 A file's records are turned into SI as they are read (:func:`to_si`, called by
 :func:`substruct.case.uff_records.read_uff_records`): node coordinates, the origins of 2420
-(record 8) and the three points of 18 divided by :math:`f_L`, each 58 function's ordinate
+(record 8) and the three points of 18 divided by :math:`f_L` (in a cylindrical or spherical
+system only the coordinates that are lengths, :math:`r, z` or :math:`r`; the angles are
+degrees, :func:`substruct.case.uff_frames.length_components`), each 58 function's ordinate
 multiplied by :func:`function_to_si` of its data types and directions.  In a file whose
 factors are not 1, a 58 of a data type outside the table (8, 11, 12, 13, 18) is refused: its
 units are not known.
@@ -38,6 +40,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
+
+from substruct.case.uff_frames import length_components
 
 if TYPE_CHECKING:  # the records import this module: their types for the checker only
     from substruct.case.uff_records import Uff58, UffNode, UffSystem
@@ -240,9 +244,20 @@ def to_si(units: UffUnits | None, functions: list[Uff58], nodes: dict[int, UffNo
                              f"({units.where.split(': ', 1)[-1]}) to SI") from None
         funcs.append(replace(f, y=f.y * k))
     s = length_to_si(units)
-    table = {k: replace(n, xyz=(n.xyz[0] * s, n.xyz[1] * s, n.xyz[2] * s))
-             for k, n in nodes.items()}
-    scaled = [replace(c, matrix=tuple(tuple(v * s for v in row) if c.dataset == 18 or r == 3
-                                      else row for r, row in enumerate(c.matrix)))
-              for c in systems]
+    kinds: dict[int, int] = {}
+    for c in systems:
+        kinds.setdefault(c.label, c.kind)
+
+    def scaled_point(row: tuple[float, ...], cs: int) -> tuple[float, ...]:
+        keep = length_components(kinds.get(cs, 0))
+        return tuple(v * s if i in keep else v for i, v in enumerate(row))
+
+    table = {}
+    for k, n in nodes.items():
+        x = scaled_point(n.xyz, n.def_cs)
+        table[k] = replace(n, xyz=(x[0], x[1], x[2]))
+    scaled = [replace(c, matrix=tuple(
+        scaled_point(row, c.ref) if c.dataset == 18 else
+        tuple(v * s for v in row) if r == 3 else row for r, row in enumerate(c.matrix)))
+        for c in systems]
     return funcs, table, scaled

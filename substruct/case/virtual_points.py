@@ -24,7 +24,10 @@ The part's coordinates are then ``vp:<point>:<ux|uy|uz|rx|ry|rz>`` (``vp:<point>
 extra modes) and ``ch:<channel>`` for the channels given to no virtual point (they pass
 through: a sensor as an output, an impact as an input).  The receptance of the part is
 :math:`Y_{qm} = T_u Y T_f^T` with :math:`Y` the file's rows at the sensors and columns at the
-impacts (other entries are not read).
+impacts (other entries are not read), so the file may hold those only
+(:func:`substruct.case.frf_files.read_measured_file`: an ``.npz`` with ``outputs`` and
+``inputs``, or a Universal File's responses x references, whose labels ``<node>:<dir>`` are
+read as the channel names ``<node>.<dir>`` that a channel table from the same file gives).
 """
 
 from __future__ import annotations

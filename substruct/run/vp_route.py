@@ -90,8 +90,9 @@ def measured_part(case: Case, k: int, vps: VirtualPointsSpec, part: FrfPart) -> 
     table = vps.table()
     sensors = [c.name for c in table.of_kind("sensor")]
     impacts = [c.name for c in table.of_kind("impact")]
-    where = {lab: i for i, lab in enumerate(part.labels)}
-    Y = part.Y[:, [where[s] for s in sensors]][:, :, [where[h] for h in impacts]]
+    rows = {lab: i for i, lab in enumerate(part.labels)}
+    cols = {lab: i for i, lab in enumerate(part.columns())}
+    Y = part.Y[:, [rows[s] for s in sensors]][:, :, [cols[h] for h in impacts]]
     points = []
     for p in vps.points:
         ex, wt = p.extra_modes, p.weights

@@ -85,8 +85,7 @@ def common_grid(parts: Sequence[FrfPart], interpolate: str | None = None
         for j in range(flat.shape[1]):
             Yi[:, j] = np.interp(w, p.omega, flat[:, j].real) + \
                 1j * np.interp(w, p.omega, flat[:, j].imag)
-        out.append(FrfPart(p.name, w.copy(), list(p.labels),
-                           Yi.reshape(len(w), *p.Y.shape[1:]), p.interpolate))
+        out.append(replace(p, omega=w.copy(), Y=Yi.reshape(len(w), *p.Y.shape[1:])))
     return w, out
 
 
