@@ -35,7 +35,9 @@ with full Gauss integration (Nastran's ``IN = 3``, ``ISOP = FULL``): 3 x 3 x 3 p
 hexahedron; on the wedge the 7-point triangle rule of degree 5 times 3 Gauss points along
 :math:`\zeta` (degree 5).  On a parallelepiped or a straight prism (constant Jacobian) the
 integrands of :math:`K` and :math:`M` are at most of degree 4 in each variable, so both rules
-are exact there.  Coordinates ``3 * grid + component``, grids in the card's order.
+are exact there.  An element whose Jacobian vanishes or changes sign at a point of the rule or
+at one of its grids is refused (a mid-side grid at or past the quarter point of its edge makes
+it vanish at the corner).  Coordinates ``3 * grid + component``, grids in the card's order.
 """
 
 from __future__ import annotations
@@ -61,6 +63,10 @@ _HEX_CORNERS = np.array([[-1, -1, -1], [1, -1, -1], [1, 1, -1], [-1, 1, -1],
                          [-1, -1, 1], [1, -1, 1], [1, 1, 1], [-1, 1, 1]], dtype=float)
 _HEX_NODES = np.vstack([_HEX_CORNERS] + [(_HEX_CORNERS[a] + _HEX_CORNERS[b]) / 2
                                           for a, b in HEX20_EDGES])
+_PENTA_CORNERS = np.array([[0, 0, -1], [1, 0, -1], [0, 1, -1], [0, 0, 1], [1, 0, 1], [0, 1, 1]],
+                          dtype=float)
+_PENTA_NODES = np.vstack([_PENTA_CORNERS] + [(_PENTA_CORNERS[a] + _PENTA_CORNERS[b]) / 2
+                                              for a, b in PENTA15_EDGES])
 
 
 def _hex_shape(pts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -146,14 +152,16 @@ def wedge_rule() -> tuple[np.ndarray, np.ndarray]:
 
 def quadratic_solid_matrices(X: np.ndarray, D: np.ndarray, rho: float,
                              shape: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
-                             rule: Callable[[], tuple[np.ndarray, np.ndarray]]
-                             ) -> tuple[np.ndarray, np.ndarray]:
+                             rule: Callable[[], tuple[np.ndarray, np.ndarray]],
+                             nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Stiffness and consistent mass ``(ne, 3n, 3n)`` of elements with grids ``X (ne, n, 3)``
-    for the shape functions ``shape`` and the rule ``rule`` (module docstring).
+    for the shape functions ``shape``, the rule ``rule`` and the grids' reference coordinates
+    ``nodes (n, 3)`` (module docstring).
 
     Raises:
         ValueError: an element whose Jacobian vanishes or changes sign at a point of the rule
-            (a mid-side grid moved too far, an inverted element).
+            or at a grid (a mid-side grid moved to or past the quarter point of its edge
+            turns the Jacobian at the corner; an inverted element).
     """
     X = np.asarray(X, dtype=float)
     ne, n = X.shape[:2]
@@ -161,9 +169,11 @@ def quadratic_solid_matrices(X: np.ndarray, D: np.ndarray, rho: float,
     N, dN = shape(pts)
     J = np.einsum("pid,eic->epcd", dN, X)  # dx_c / dxi_d
     det = np.linalg.det(J)
+    det_all = np.concatenate([det, np.linalg.det(np.einsum("pid,eic->epcd", shape(nodes)[1],
+                                                           X))], axis=1)
     scale = np.abs(det).max(initial=0.0)
-    if not np.all(np.isfinite(det)) or np.any(np.abs(det) <= 1e-12 * scale) or \
-            np.any(np.sign(det) != np.sign(det[:, :1])):
+    if not np.all(np.isfinite(det_all)) or np.any(np.abs(det_all) <= 1e-12 * scale) or \
+            np.any(np.sign(det_all) != np.sign(det_all[:, :1])):
         raise ValueError("the Jacobian vanishes or changes sign inside the element")
     wd = w[None, :] * np.abs(det)
     B = strain_matrix(np.einsum("pid,epdc->epic", dN, np.linalg.inv(J)))
@@ -178,11 +188,11 @@ def quadratic_solid_matrices(X: np.ndarray, D: np.ndarray, rho: float,
 def hex20_matrices(X: np.ndarray, D: np.ndarray, rho: float) -> tuple[np.ndarray, np.ndarray]:
     """``K, M (ne, 60, 60)`` of 20-grid CHEXA with grids ``X (ne, 20, 3)`` in Nastran's order
     (module docstring), 3 x 3 x 3 Gauss points."""
-    return quadratic_solid_matrices(X, D, rho, _hex_shape, hex_rule)
+    return quadratic_solid_matrices(X, D, rho, _hex_shape, hex_rule, _HEX_NODES)
 
 
 def penta15_matrices(X: np.ndarray, D: np.ndarray, rho: float
                      ) -> tuple[np.ndarray, np.ndarray]:
     """``K, M (ne, 45, 45)`` of 15-grid CPENTA with grids ``X (ne, 15, 3)`` in Nastran's order
     (module docstring), 7 x 3 points."""
-    return quadratic_solid_matrices(X, D, rho, _penta_shape, wedge_rule)
+    return quadratic_solid_matrices(X, D, rho, _penta_shape, wedge_rule, _PENTA_NODES)
