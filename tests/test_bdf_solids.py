@@ -11,8 +11,8 @@
 * a mixed file (a CHEXA block, a CBAR beam joined to its face by an RBE3) run with
   ``substruct run X.bdf`` has the modes of the same joint assembled from a frame beam and an
   interpolation link, and as a case whose RBE3 takes the face of the Nastran block by a box;
-* mid-side grids, IN = 3, reduced shear without bubbles, fluids, a missing PSOLID: one
-  line, exit 2.
+* some mid-side grids, IN = 3 without mid-side grids, reduced shear without bubbles, fluids,
+  a missing PSOLID: one line, exit 2.
 """
 
 from __future__ import annotations
@@ -237,7 +237,9 @@ def test_mixed_solid_and_beam_file_runs_and_is_the_linked_assembly(tmp_path):
 @pytest.mark.parametrize("change, message", [
     (None, None),
     (("PSOLID,1,1", "PSOLID,1,1,,2"), "PSOLID 1: ISOP: 2 x 2 x 2 reduced shear integration"),
-    (("PSOLID,1,1", "PSOLID,1,1,,THREE,,FULL"), "PSOLID 1: IN: only bubble functions"),
+    (("PSOLID,1,1", "PSOLID,1,1,,THREE,,FULL"), "PSOLID 1: IN: 3 x 3 x 3 Gauss points (IN 3) "
+     "are for the CHEXA with mid-side grids"),
+    (("PSOLID,1,1", "PSOLID,1,1,,FOUR,,FULL"), "PSOLID 1: IN: only bubble functions"),
     (("PSOLID,1,1", "PSOLID,1,1,,BUBBLE,,FULL"), "PSOLID 1: ISOP: bubble functions"),
     (("PSOLID,1,1", "PSOLID,1,1,,,,SHEAR"), "PSOLID 1: ISOP: must be blank, REDUCED"),
     (("PSOLID,1,1", "PSOLID,1,1,,,,,PFLUID"), "PSOLID 1: FCTN: only structural solids"),
@@ -249,11 +251,11 @@ def test_bad_solid_cards_are_one_line_and_exit_2(tmp_path, capsys, change, messa
     text = "SOL 103\nCEND\n" + text.replace("ENDDATA", "EIGRL,1,,,3\nENDDATA")
     if change is not None:
         text = text.replace(*change)
-    if message is None:  # a 20-grid CHEXA: G9 given
+    if message is None:  # a CHEXA with G9 only of its twelve mid-side grids
         lines = text.splitlines()
         k = next(i for i, ln in enumerate(lines) if ln.startswith("CHEXA"))
         lines[k + 1] += ",1"
-        text, message = "\n".join(lines), "CHEXA 1: G9: CHEXA with mid-side grids is not"
+        text, message = "\n".join(lines), "CHEXA 1: G10: CHEXA needs all twelve mid-side grids"
     path = tmp_path / "bad.bdf"
     path.write_text(text)
     out = tmp_path / "out"

@@ -1,18 +1,22 @@
-"""The solid cards of a Nastran file: CHEXA (8 grids), CPENTA (6) and CTETRA (4) and their
-PSOLID property, read from the fields of a :class:`~substruct.case.bdf_fields.RawCard` (field
-indices as in :mod:`substruct.case.bdf_cards`).  Every field is read or refused.
+"""The solid cards of a Nastran file: CHEXA (8 or 20 grids), CPENTA (6 or 15), CTETRA (4 or
+10), and their PSOLID property, read from the fields of a
+:class:`~substruct.case.bdf_fields.RawCard` (field indices as in
+:mod:`substruct.case.bdf_cards`).  Every field is read or refused.
 
 The elements are the linear isoparametric solids (trilinear hexahedron, linear wedge, linear
-tetrahedron) and the 10-grid quadratic tetrahedron (:mod:`substruct.models.nastran_tet10`,
+tetrahedron), the 10-grid quadratic tetrahedron (:mod:`substruct.models.nastran_tet10`,
 whose stiffness on straight edges no integration choice changes; curved, it takes the 4-point
-rule whatever IN says).  PSOLID's integration fields are read as MSC Nastran's QRG defines
+rule whatever IN says) and the 20-grid CHEXA and 15-grid CPENTA
+(:mod:`substruct.models.nastran_quad_solids`, full 3 x 3 x 3 integration, PSOLID IN 3 and
+ISOP FULL).  PSOLID's integration fields are read as MSC Nastran's QRG defines
 them for elements without mid-side grids: ``IN`` blank/``0``/``BUBBLE`` with ``ISOP``
 blank/``REDUCED`` (the default) gives the 8-grid CHEXA and the 6-grid CPENTA their bubble functions
 (incompatible modes, :mod:`substruct.models.nastran_bubble`); ``IN`` ``2``/``TWO`` with ``ISOP``
 ``1``/``FULL`` is the standard isoparametric integration (2 x 2 x 2 on the hexahedron, 3 x 2
 on the wedge).  The linear tetrahedron is exact with either.  Other combinations (reduced
-shear only, ``IN = 3``), mid-side grids of CHEXA (20) and CPENTA (15), a CTETRA with only
-some of its six, and fluid elements (``FCTN`` other than ``SMECH``) are refused.
+shear only; ``IN = 3`` without mid-side grids; the quadratic CHEXA and CPENTA without
+``IN = 3, ISOP = FULL``), an element with only some of its mid-side grids, and fluid elements
+(``FCTN`` other than ``SMECH``) are refused.
 """
 
 from __future__ import annotations
@@ -21,13 +25,17 @@ from dataclasses import dataclass
 
 from substruct.case.bdf_fields import RawCard, nastran_int
 
-__all__ = ["SolidCell", "Psolid", "read_solid", "read_psolid", "SOLID_CORNERS"]
+__all__ = ["SolidCell", "Psolid", "read_solid", "read_psolid", "SOLID_CORNERS",
+           "quadratic_integration_error"]
 
 #: Corner grids of each solid card, the most grids it can have, and meshio's name of the cell
 #: (whose corner order is Nastran's: G1-G4 one face of the hexahedron, G5-G8 the other; G1-G3
 #: one triangle of the wedge, G4-G6 the other).
 SOLID_CORNERS: dict[str, tuple[int, int, str]] = {
     "CHEXA": (8, 20, "hexahedron"), "CPENTA": (6, 15, "wedge"), "CTETRA": (4, 10, "tetra")}
+
+
+_WORDS = {6: "six", 9: "nine", 12: "twelve"}
 
 
 @dataclass(frozen=True)
@@ -47,32 +55,34 @@ class SolidCell:
 class Psolid:
     """PSOLID: material ``mid``, the material coordinate system ``cordm`` (no effect with
     an isotropic MAT1; checked to exist) and ``bubble``: the hexahedra's and wedges' bubble
-    functions (IN blank/BUBBLE, ISOP blank/REDUCED) rather than full integration (IN 2, ISOP
-    FULL)."""
+    functions (IN blank/BUBBLE, ISOP blank/REDUCED) rather than 2 x 2 x 2 Gauss points (IN 2);
+    ``three``: IN 3/THREE (3 x 3 x 3); ``full``: ISOP 1/FULL (every strain term at every
+    point).  Which combinations an element takes is checked when the elements are
+    cross-referenced (:func:`quadratic_integration_error`)."""
 
     id: int
     mid: int
     cordm: int
     line: int
     bubble: bool = True
+    three: bool = False
+    full: bool = False
 
 
 def read_solid(c: RawCard) -> SolidCell:
-    """CHEXA EID PID G1 ... G8 (G9 - G20 blank), CPENTA EID PID G1 ... G6 (G7 - G15 blank),
-    CTETRA EID PID G1 ... G4 and either all six mid-side grids G5 - G10 (the 10-grid
-    quadratic tetrahedron) or none; a CTETRA with some of them (Nastran allows it) is
-    refused."""
+    """CHEXA EID PID G1 ... G8 [G9 ... G20], CPENTA EID PID G1 ... G6 [G7 ... G15], CTETRA EID
+    PID G1 ... G4 [G5 ... G10]: the corners and either all mid-side grids (the 20-grid CHEXA,
+    15-grid CPENTA, 10-grid CTETRA) or none (a mid-side grid 0 is blank, as in Nastran).  An
+    element with only some of them (Nastran allows it) is refused, naming the first blank."""
     n, most, _ = SOLID_CORNERS[c.name]
-    given = [k for k in range(2 + n, 2 + most) if c.text(k)]
-    if c.name == "CTETRA" and len(given) == most - n:
+    given = [k for k in range(2 + n, 2 + most) if c.text(k) not in ("", "0")]
+    if len(given) == most - n:
         n = most
-    elif given and c.name == "CTETRA":
-        k = min(set(range(2 + n, 2 + most)) - set(given))
-        raise c.error("CTETRA needs all six mid-side grids G5-G10 or none (the 10- or the "
-                      "4-grid element)", "blank", f"G{k - 1}")
     elif given:
-        raise c.error(f"{c.name} with mid-side grids is not supported (the {n}-grid element "
-                      "only)", c.text(given[0]), f"G{given[0] - 1}")
+        k = min(set(range(2 + n, 2 + most)) - set(given))
+        raise c.error(f"{c.name} needs all {_WORDS[most - n]} mid-side grids G{n + 1}-G{most} "
+                      f"or none (the {most}- or the {n}-grid element)", c.text(k) or "blank",
+                      f"G{k - 1}")
     c.blank_after(2 + most, f"{c.name} has at most {most} grids")
     eid = c.integer(0, "EID")
     nodes = tuple(c.integer(2 + k, f"G{k + 1}") for k in range(n))
@@ -95,8 +105,10 @@ def read_psolid(c: RawCard) -> Psolid:
     * ``IN`` and ``ISOP`` together (QRG PSOLID, remarks 6 and 10): ``IN`` blank, ``0`` or
       ``BUBBLE`` with ``ISOP`` blank or ``REDUCED``: the default, bubble functions in the
       8-grid CHEXA and the 6-grid CPENTA; ``IN`` ``2``/``TWO`` with ``ISOP`` ``1``/``FULL``:
-      standard integration.  ``IN = 3``/``THREE``, ``IN = 2`` with reduced shear (``ISOP`` blank or
-      ``REDUCED``) and the combinations outside Nastran's table are refused;
+      standard integration; ``IN`` ``3``/``THREE`` with ``ISOP`` ``1``/``FULL``: the standard
+      integration of the elements with mid-side grids (the only one the 20-grid CHEXA and
+      15-grid CPENTA take, :func:`quadratic_integration_error`).  ``IN = 2`` with reduced shear
+      (``ISOP`` blank or ``REDUCED``) and the combinations outside Nastran's table are refused;
     * ``STRESS`` (where stresses are output): read and not used;
     * ``FCTN``: blank or ``SMECH``; fluids (``PFLUID``, ``FFLUID``) are refused.
     """
@@ -105,21 +117,48 @@ def read_psolid(c: RawCard) -> Psolid:
     if mid <= 0:
         raise c.error("must be a positive material id", mid, "MID")
     cordm = c.integer(2, "CORDM", 0)
-    network = _choice(c, 3, "IN", ("", "0", "BUBBLE", "2", "TWO"), "only bubble functions "
-                      "(IN blank, 0 or BUBBLE) or 2 x 2 x 2 Gauss points (2 or TWO) are supported")
+    network = _choice(c, 3, "IN", ("", "0", "BUBBLE", "2", "TWO", "3", "THREE"), "only bubble "
+                      "functions (IN blank, 0 or BUBBLE), 2 x 2 x 2 (2 or TWO) or 3 x 3 x 3 Gauss "
+                      "points (3 or THREE) are supported")
     _choice(c, 4, "STRESS", ("", "0", "1", "GRID", "GAUSS"), "must be blank, 0, 1, GRID or "
             "GAUSS")
     scheme = _choice(c, 5, "ISOP", ("", "REDUCED", "1", "FULL"), "must be blank, REDUCED, 1 or "
                      "FULL")
     bubble = network in ("", "0", "BUBBLE")
+    three = network in ("3", "THREE")
     if bubble and scheme in ("1", "FULL"):
         raise c.error("bubble functions (IN blank, 0 or BUBBLE) go with reduced shear "
                       "integration (ISOP blank or REDUCED) only", c.text(5), "ISOP")
-    if not bubble and scheme in ("", "REDUCED"):
+    if network in ("2", "TWO") and scheme in ("", "REDUCED"):
         raise c.error("2 x 2 x 2 reduced shear integration without bubble functions is not "
                       "supported (IN 2 needs ISOP 1 or FULL)", c.text(5) or "blank", "ISOP")
     _choice(c, 6, "FCTN", ("", "SMECH"), "only structural solids (FCTN blank or SMECH) are "
             "supported")
     if c.text(2) and nastran_int(c.text(2)) is None:
         raise c.error("must be an integer", c.text(2), "CORDM")
-    return Psolid(pid, mid, cordm, c.line, bubble)
+    return Psolid(pid, mid, cordm, c.line, bubble, three, scheme in ("1", "FULL"))
+
+
+def quadratic_integration_error(cell: SolidCell, p: Psolid) -> tuple[str, str, str] | None:
+    """``(problem, value, PSOLID field)`` when the PSOLID's integration does not fit the element,
+    else None.  The 20-grid CHEXA and 15-grid CPENTA are built with full integration only
+    (``IN`` 3/THREE with ``ISOP`` 1/FULL): Nastran's default for them (``IN`` and ``ISOP``
+    blank) is reduced shear integration, whose points and terms the QRG does not give, and
+    ``IN = 2`` is reduced integration.  The elements without mid-side grids do not take
+    ``IN = 3``.  The 10-grid CTETRA takes any (module docstring)."""
+    n = len(cell.nodes)
+    if cell.kind == "CTETRA":
+        return None
+    if n == SOLID_CORNERS[cell.kind][0]:
+        if p.three:
+            return (f"3 x 3 x 3 Gauss points (IN 3) are for the {cell.kind} with mid-side grids; "
+                    "the one without takes bubble functions (IN blank, 0 or BUBBLE) or IN 2",
+                    "THREE", "IN")
+        return None
+    if not (p.three and p.full):
+        return (f"the {n}-grid {cell.kind} is built with full 3 x 3 x 3 integration only "
+                "(PSOLID IN 3 or THREE with ISOP 1 or FULL); Nastran's default reduced shear "
+                "integration and IN 2 are not reproduced",
+                f"IN {'THREE' if p.three else ('2' if not p.bubble else 'blank')}, ISOP "
+                f"{'FULL' if p.full else 'blank/REDUCED'}", "IN" if not p.three else "ISOP")
+    return None

@@ -18,7 +18,7 @@ from substruct.case.bdf_fields import BdfError, RawCard
 from substruct.case.bdf_model import BulkData, BushSpring, BdfSection, ShellSection
 from substruct.case.bdf_pcomp import COUPLING_TOLERANCE, Pcomp, laminate
 from substruct.case.bdf_shells import Pshell
-from substruct.case.bdf_solids import Psolid
+from substruct.case.bdf_solids import SOLID_CORNERS, Psolid, quadratic_integration_error
 from substruct.case.fields import MAX_ELEMENTS, MAX_MATRIX_SIZE
 
 __all__ = ["ELEMENTS", "Cards", "coordinate_systems", "cross_reference"]
@@ -179,7 +179,12 @@ def cross_reference(cards: Cards) -> BulkData:
             for k, g in enumerate(cell.nodes):
                 grid(card, g, f"G{k + 1}")
             mat = _solid_material(card, cell.pid, cards, systems)
-            bubble = cell.kind in ("CHEXA", "CPENTA") and cards.psolid[cell.pid][1].bubble
+            pcard, psolid = cards.psolid[cell.pid]
+            wrong = quadratic_integration_error(cell, psolid)
+            if wrong is not None:
+                raise pcard.error(wrong[0], wrong[1], wrong[2])
+            bubble = cell.kind in ("CHEXA", "CPENTA") and psolid.bubble and \
+                len(cell.nodes) == SOLID_CORNERS[cell.kind][0]
             out.solids.append((replace(cell, bubble=bubble), mat))
     for card, b in by.get("CBUSH", []):
         grid(card, b.ga, "GA")
@@ -247,12 +252,13 @@ def cross_reference(cards: Cards) -> BulkData:
     if not out.wtmass > 0:
         raise params["WTMASS"][0].error("must be positive", out.wtmass, "V1")
     out.coupled = param(params, "COUPMASS", "int", -1) > 0
-    quadratic = [cell for cell, _ in out.solids if len(cell.nodes) == 10]
+    quadratic = [cell for cell, _ in out.solids
+                 if len(cell.nodes) > SOLID_CORNERS[cell.kind][0]]
     if quadratic and not out.coupled:
-        raise BdfError(source, "the 10-grid CTETRA needs coupled mass (PARAM,COUPMASS,1): "
-                       "Nastran's lumped mass of quadratic solids is not reproduced",
-                       "no COUPMASS", line=quadratic[0].line, card="CTETRA",
-                       ident=quadratic[0].id)
+        q = quadratic[0]
+        raise BdfError(source, f"the {len(q.nodes)}-grid {q.kind} needs coupled mass "
+                       "(PARAM,COUPMASS,1): Nastran's lumped mass of quadratic solids is not "
+                       "reproduced", "no COUPMASS", line=q.line, card=q.kind, ident=q.id)
     out.autospc = param(params, "AUTOSPC", "yes", True)
     return out
 

@@ -20,8 +20,11 @@ bubble functions (IN and ISOP blank, Nastran's default) take their stiffness fro
 :func:`~substruct.models.nastran_bubble.bubble_wedge_stiffness` instead, their mass as above.
 
 The 10-grid CTETRA (all six mid-side grids) takes its stiffness and consistent mass from
-:func:`substruct.models.nastran_tet10.tet10_matrices` and needs ``PARAM,COUPMASS``: Nastran's
-lumped mass of quadratic solids is not published in detail and equal shares would be wrong.
+:func:`substruct.models.nastran_tet10.tet10_matrices`, the 20-grid CHEXA and 15-grid CPENTA
+from :func:`substruct.models.nastran_quad_solids.hex20_matrices` and
+:func:`~substruct.models.nastran_quad_solids.penta15_matrices` (3 x 3 x 3 and 7 x 3 Gauss
+points); all three need ``PARAM,COUPMASS``: Nastran's lumped mass of quadratic solids is not
+published in detail and equal shares would be wrong.
 
 Mass, as in Nastran: lumped by default, the element's mass :math:`\rho V_e` in equal shares on
 the translations of its corners; coupled (``PARAM,COUPMASS`` positive), the consistent
@@ -31,7 +34,7 @@ an element, a link or a point of the case names them.
 
 from __future__ import annotations
 
-from typing import Iterator
+from typing import Callable, Iterator
 
 import meshio
 import numpy as np
@@ -47,6 +50,7 @@ from substruct.case.bdf_model import BulkData
 from substruct.case.bdf_solids import SOLID_CORNERS
 from substruct.models.nastran_bubble import bubble_hex_stiffness, bubble_wedge_stiffness, \
     isotropic_D
+from substruct.models.nastran_quad_solids import hex20_matrices, penta15_matrices
 from substruct.models.nastran_tet10 import tet10_matrices
 
 __all__ = ["solid_blocks", "wedge_quadrature"]
@@ -69,8 +73,8 @@ def solid_blocks(bulk: BulkData, index: dict[int, int]
         groups.setdefault((cell.kind, mat.id, cell.bubble, len(cell.nodes)), []).append(
             (cell, mat))
     for (card, _, bubble, nv), items in groups.items():
-        if nv == 10:  # the quadratic CTETRA
-            yield _tet10_block(bulk, items, index)
+        if nv > SOLID_CORNERS[card][0]:  # the quadratic solids
+            yield _quadratic_block(bulk, items, index)
             continue
         kind = SOLID_CORNERS[card][2]
         mat = items[0][1]
@@ -141,42 +145,60 @@ def _bubble_stiffness(kind: str, X: np.ndarray, local: np.ndarray, nv: int, E: f
     return sp.coo_array((Ke.ravel(), (rows, cols)), shape=(3 * nv, 3 * nv))
 
 
-def _tet10_block(bulk: BulkData, items: list, index: dict[int, int]
-                 ) -> tuple[str, np.ndarray, sp.coo_array, sp.coo_array]:
-    """The 10-grid CTETRA of one material (:func:`tet10_matrices`), coupled mass only."""
+#: Per quadratic card: its element matrices, meshio's name of the cell drawn and the grids of
+#: the card in meshio's (VTK's) order, whose edge grids come in another order than Nastran's;
+#: the 15-grid CPENTA is drawn by its corners (meshio 5.3 has no 15-node wedge).
+_QUADRATIC = {
+    "CTETRA": (tet10_matrices, "tetra10", tuple(range(10))),
+    "CHEXA": (hex20_matrices, "hexahedron20",
+              tuple(range(12)) + (16, 17, 18, 19, 12, 13, 14, 15)),
+    "CPENTA": (penta15_matrices, "wedge", tuple(range(6))),
+}
+
+
+def _quadratic_block(bulk: BulkData, items: list, index: dict[int, int]
+                     ) -> tuple[str, np.ndarray, sp.coo_array, sp.coo_array]:
+    """The 10-grid CTETRA (:func:`tet10_matrices`), 20-grid CHEXA (:func:`hex20_matrices`) or
+    15-grid CPENTA (:func:`penta15_matrices`) of one material, coupled mass only; the cells
+    returned as meshio draws them (``_QUADRATIC``)."""
     cell0, mat = items[0]
+    element, kind, order = _QUADRATIC[cell0.kind]
+    nv = len(cell0.nodes)
     if not bulk.coupled:
-        raise BdfError(bulk.source, "the 10-grid CTETRA needs coupled mass (PARAM,COUPMASS,1): "
-                       "Nastran's lumped mass of quadratic solids is not reproduced",
-                       "no COUPMASS", line=cell0.line, card=cell0.kind, ident=cell0.id)
+        raise BdfError(bulk.source, f"the {nv}-grid {cell0.kind} needs coupled mass "
+                       "(PARAM,COUPMASS,1): Nastran's lumped mass of quadratic solids is not "
+                       "reproduced", "no COUPMASS", line=cell0.line, card=cell0.kind,
+                       ident=cell0.id)
     N = 6 * len(index)
     conn = np.array([[index[g] for g in cell.nodes] for cell, _ in items], dtype=np.int64)
     X = np.array([[bulk.grids[g] for g in cell.nodes] for cell, _ in items], dtype=float)
-    _check_volumes(bulk, items, X[:, :4])
+    _check_volumes(bulk, items, X[:, :SOLID_CORNERS[cell0.kind][0]])
     D = isotropic_D(mat.E, mat.nu)
     Ks, Ms = [], []
-    for k in range(0, len(X), 4096):
+    chunk = max(1, 2 ** 17 // nv ** 2)  # about 12 MB of element matrices at a time
+    for k in range(0, len(X), chunk):
         try:
-            Ke, Me = tet10_matrices(X[k:k + 4096], D, mat.rho)
+            Ke, Me = element(X[k:k + chunk], D, mat.rho)
         except ValueError as err:
-            bad = next(j for j in range(k, min(k + 4096, len(X)))
-                       if _fails(X[j:j + 1], D, mat.rho))
+            bad = next(j for j in range(k, min(k + chunk, len(X)))
+                       if _fails(element, X[j:j + 1], D, mat.rho))
             cell = items[bad][0]
             raise BdfError(bulk.source, str(err), list(cell.nodes), line=cell.line,
                            card=cell.kind, ident=cell.id) from None
         Ks.append(Ke)
         Ms.append(Me)
-    dofs = (6 * conn[:, :, None] + np.arange(3)).reshape(len(conn), 30)
-    rows = np.repeat(dofs, 30, axis=1).ravel()
-    cols = np.tile(dofs, (1, 30)).ravel()
+    n = 3 * nv
+    dofs = (6 * conn[:, :, None] + np.arange(3)).reshape(len(conn), n)
+    rows = np.repeat(dofs, n, axis=1).ravel()
+    cols = np.tile(dofs, (1, n)).ravel()
     K = sp.coo_array((np.concatenate(Ks).ravel(), (rows, cols)), shape=(N, N))
     M = sp.coo_array((np.concatenate(Ms).ravel(), (rows, cols)), shape=(N, N))
-    return "tetra10", conn, K, M
+    return kind, conn[:, list(order)], K, M
 
 
-def _fails(X: np.ndarray, D: np.ndarray, rho: float) -> bool:
+def _fails(element: Callable, X: np.ndarray, D: np.ndarray, rho: float) -> bool:
     try:
-        tet10_matrices(X, D, rho)
+        element(X, D, rho)
     except ValueError:
         return True
     return False
