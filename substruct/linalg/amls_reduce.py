@@ -207,21 +207,27 @@ def amls_reduce(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, root: 
     for lev in range(depth, -1, -1):
         t = time.perf_counter()
         here = [i for i, b in enumerate(order) if b.level == lev]
-        jobs = []
-        for i in here:
+
+        def job(i: int) -> BlockJob:
             below = []
             for c in order[i].children:
                 j = index[id(c)]
                 rc = results[j]
                 assert rc is not None
                 below.append((bounds[j], rc))
-            jobs.append(_job(K, M, order[i], bounds[i], lam_cut, factorization, below))
-        for i, r in zip(here, run(reduce_block, jobs)):
+            return _job(K, M, order[i], bounds[i], lam_cut, factorization, below)
+
+        if map is None:   # one job at a time: one dense local pencil alive, not a level's
+            out = []
+            for i in here:
+                out.append(reduce_block(job(i)))
+                _release(results, order[i], index)
+        else:
+            out = list(run(reduce_block, [job(i) for i in here]))
+            for i in here:
+                _release(results, order[i], index)
+        for i, r in zip(here, out):
             results[i] = r
-            for c in order[i].children:  # only its coupling G is still needed
-                rc = results[index[id(c)]]
-                assert rc is not None
-                rc.G = rc.G[:0]
         if progress is not None:
             kept = sum(int(r.lam.size) for r in (results[i] for i in here) if r is not None)
             coords = sum(int(order[i].dofs.size) for i in here)
@@ -229,6 +235,18 @@ def amls_reduce(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, root: 
                      f"block(s) of {coords} coordinates, {kept} modes kept "
                      f"({time.perf_counter() - t:.1f} s)")
     return _assemble(K, order, bounds, results, n, factorization)
+
+
+def _release(results: list[BlockResult | None], b: DissectionNode, index: dict[int, int]
+             ) -> None:
+    """Once block ``b`` is reduced, its children's condensation and boundary coupling are no
+    longer needed (their modes, constraint modes and cross blocks are)."""
+    for c in b.children:
+        rc = results[index[id(c)]]
+        assert rc is not None
+        rc.G = rc.G[:0]
+        rc.CK = rc.CK[:0, :0]
+        rc.CM = rc.CM[:0, :0]
 
 
 def _assemble(K: sp.csr_array, order: list[DissectionNode], bounds: list[np.ndarray],
