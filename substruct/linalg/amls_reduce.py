@@ -258,9 +258,9 @@ def _release(results: list[BlockResult | None], b: DissectionNode, index: dict[i
     for c in b.children:
         rc = results[index[id(c)]]
         assert rc is not None
-        rc.G = rc.G[:0]
-        rc.CK = rc.CK[:0, :0]
-        rc.CM = rc.CM[:0, :0]
+        rc.G = np.zeros((0, rc.G.shape[1]))   # new arrays: a view would keep the data
+        rc.CK = np.zeros((0, 0))
+        rc.CM = np.zeros((0, 0))
 
 
 def _assemble(K: sp.csr_array, order: list[DissectionNode], bounds: list[np.ndarray],
