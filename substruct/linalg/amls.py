@@ -190,10 +190,14 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
     t = time.perf_counter()
     U = red.expand(Y, map) if Y.shape[1] else np.zeros((red.n, 0))
     times["expand"] = time.perf_counter() - t
+    n_reduced = red.size
+    levels = np.bincount(red.level, minlength=int(red.level.max(initial=0)) + 1)
+    del red, Y   # the blocks' modes and constraint modes: not held through the iteration
     t = time.perf_counter()
     if iterations and U.shape[1]:
         solve = factorizer(AUTO)(sp.csc_array(K - SHIFT_FRACTION * lam_w * M))
         lam, U = subspace_iteration(K, M, U, solve, iterations, lam_w, say)
+        del solve
     times["improve"] = time.perf_counter() - t
     keep = lam <= lam_w
     if not keep.all():
@@ -201,5 +205,4 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
     t = time.perf_counter()
     res = relative_residuals(K, M, lam, U)
     times["residual"] = time.perf_counter() - t
-    levels = np.bincount(red.level, minlength=int(red.level.max(initial=0)) + 1)
-    return AMLSModes(lam, U, res, red.size, levels, n_blocks, iterations, times)
+    return AMLSModes(lam, U, res, n_reduced, levels, n_blocks, iterations, times)
