@@ -1,8 +1,8 @@
 """AMLS against shift-invert Lanczos: the lowest k modes of a clamped solid box.
 
     OMP_NUM_THREADS=1 python benchmarks/amls.py [--sizes 30000 300000 1000000 2000000]
-        [--modes 50 200 500 2000] [--cutoff 2] [--iterations 1] [--leaf-size 1000]
-        [--workers N] [--quick] [--accuracy]
+        [--modes 50 200 500 2000] [--cutoff 2] [--iterations 2] [--leaf-size 1000]
+        [--workers N] [--lanczos-dir DIR] [--quick] [--accuracy]
 
 The model: a steel box ``4 x 1 x 1`` of Q1 hexahedra clamped at ``x = 0`` (the monolithic mesh
 of benchmarks/modes.py).  For each size and number of modes k, each in a fresh subprocess
@@ -18,7 +18,10 @@ The table: wall and CPU seconds and peak MB of both, the ratio of times, the num
 reduced coordinates, the count of AMLS modes against k, the largest relative frequency error
 against (a) and the largest relative residual ``||K u - w^2 M u|| / ||K u||`` of AMLS.  With
 several sizes or numbers of modes, the exponents of the fitted growth ``t ~ n^a`` (for each k)
-and ``t ~ k^b`` (for each n) follow.  ``--workers N``: the AMLS side runs its tree levels as
+and ``t ~ k^b`` (for each n) follow.  ``--lanczos-dir DIR``: each Lanczos measurement is
+written to ``DIR/lanczos_<size>_<k>.json`` and read from there when present, so that AMLS
+settings or versions are compared against one Lanczos run (its seconds and peak are those of
+that run, on the same machine).  ``--workers N``: the AMLS side runs its tree levels as
 tasks on a Dask LocalCluster of N worker processes (``substruct run --workers N``); its
 reduction time ("A: red s") against the single-process run's is the parallel speed-up.
 
@@ -97,12 +100,28 @@ def measure(kind: str, size: int, k: int, args: argparse.Namespace,
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
+def lanczos(size: int, k: int, args: argparse.Namespace) -> dict:
+    """The Lanczos measurement of ``size``, ``k``: from ``--lanczos-dir`` if stored there,
+    else measured (and stored there)."""
+    if not args.lanczos_dir:
+        return measure("lanczos", size, k, args)
+    path = os.path.join(args.lanczos_dir, f"lanczos_{size}_{k}.json")
+    if os.path.exists(path):
+        with open(path) as f:
+            return json.load(f)
+    a = measure("lanczos", size, k, args)
+    os.makedirs(args.lanczos_dir, exist_ok=True)
+    with open(path, "w") as f:
+        json.dump(a, f)
+    return a
+
+
 def main(argv: list[str] | None = None) -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--sizes", type=int, nargs="+", default=[30000, 100000])
     p.add_argument("--modes", type=int, nargs="+", default=[50, 200, 500])
     p.add_argument("--cutoff", type=float, default=2.0)
-    p.add_argument("--iterations", type=int, default=1)
+    p.add_argument("--iterations", type=int, default=2)
     p.add_argument("--ritz-ratio", type=float, default=1.5)
     p.add_argument("--leaf-size", type=int, default=1000)
     p.add_argument("--quick", action="store_true", help="30000 coordinates only")
@@ -110,6 +129,8 @@ def main(argv: list[str] | None = None) -> None:
                    help="AMLS: the tree levels as tasks on a LocalCluster of N workers")
     p.add_argument("--accuracy", action="store_true",
                    help="the cut-off against accuracy table (small box, dense reference)")
+    p.add_argument("--lanczos-dir", default=None,
+                   help="reuse (or store) the Lanczos measurements in this directory")
     p.add_argument("--json", default=None, help="also write the raw measurements here")
     p.add_argument("--worker", choices=["lanczos", "amls"], help=argparse.SUPPRESS)
     p.add_argument("--size", type=int, help=argparse.SUPPRESS)
@@ -136,7 +157,7 @@ def main(argv: list[str] | None = None) -> None:
     rows = []
     for size in sizes:
         for k in args.modes:
-            a = measure("lanczos", size, k, args)
+            a = lanczos(size, k, args)
             lam = np.array(a["lam"])
             wmax = float(np.sqrt(0.5 * (lam[k - 1] + lam[k])))
             b = measure("amls", size, k, args, wmax)

@@ -14,7 +14,8 @@ below a wanted frequency, for many modes of large sparse models.
    coordinates :math:`U = Z Y`.
 4. Optionally ``iterations`` steps of subspace iteration with the full factorization,
    :math:`W = (K - \sigma M)^{-1} M U`, then Rayleigh-Ritz on :math:`W`
-   (:func:`substruct.linalg.lanczos.rayleigh_ritz`); one step multiplies the error of
+   (:func:`substruct.linalg.amls_improve.subspace_iteration`, in blocks); one step
+   multiplies the error of
    :math:`\lambda_j` by about :math:`((\lambda_j - \sigma)/(\lambda_{p+1} - \sigma))^2`,
    :math:`\lambda_{p+1}` the first Ritz value left out.
 
@@ -36,10 +37,10 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from substruct.linalg.amls_block import TaskMap
+from substruct.linalg.amls_improve import CHUNK, subspace_iteration
 from substruct.linalg.amls_reduce import ReducedModel, amls_reduce
 from substruct.linalg.amls_tree import DissectionNode, dissection_tree
 from substruct.linalg.factorize import factorizer
-from substruct.linalg.lanczos import rayleigh_ritz
 
 __all__ = ["AMLSModes", "amls_modes", "relative_residuals"]
 
@@ -83,11 +84,15 @@ def relative_residuals(K: sp.sparray, M: sp.sparray, lam: np.ndarray, U: np.ndar
                        ) -> np.ndarray:
     r""":math:`\|K u_j - \lambda_j M u_j\| / \|K u_j\|` per column (``inf`` where
     :math:`K u_j = 0`)."""
-    KU = K @ U
-    num = np.linalg.norm(KU - (M @ U) * lam, axis=0)
-    den = np.linalg.norm(KU, axis=0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        return np.where(den > 0, num / np.where(den > 0, den, 1.0), np.inf)
+    out = np.empty(U.shape[1])
+    for j in range(0, U.shape[1], CHUNK):
+        Uj = np.ascontiguousarray(U[:, j:j + CHUNK])
+        KU = K @ Uj
+        num = np.linalg.norm(KU - (M @ Uj) * lam[j:j + CHUNK], axis=0)
+        den = np.linalg.norm(KU, axis=0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            out[j:j + CHUNK] = np.where(den > 0, num / np.where(den > 0, den, 1.0), np.inf)
+    return out
 
 
 #: The factorization of the subdomains and of the full matrix: the registry's choice
@@ -107,7 +112,7 @@ def reduced_eigenpairs(red: ReducedModel, lam_max: float) -> tuple[np.ndarray, n
     standard symmetric problem
 
     .. math::  \hat M z = \mu z, \qquad \hat M = \Lambda^{-1/2} M_r \Lambda^{-1/2}, \qquad
-               \mu = 1/\lambda, \quad y = \Lambda^{-1/2} z,
+               \mu = 1/\lambda, \quad y = \Lambda^{-1/2} z / \sqrt{\mu},
 
     whose largest eigenvalues Lanczos (``eigsh``, ``which="LA"``) finds with sparse products
     only (the inverse iteration is free: :math:`K_r` is diagonal); the number asked for grows
@@ -131,7 +136,7 @@ def reduced_eigenpairs(red: ReducedModel, lam_max: float) -> tuple[np.ndarray, n
     lam = 1.0 / mu
     order = np.argsort(lam)
     order = order[lam[order] <= lam_max]
-    return lam[order], Z[:, order] * d[:, None]
+    return lam[order], Z[:, order] * d[:, None] * np.sqrt(lam[order])
 
 
 def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_max: float,
@@ -185,18 +190,19 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
     t = time.perf_counter()
     U = red.expand(Y, map) if Y.shape[1] else np.zeros((red.n, 0))
     times["expand"] = time.perf_counter() - t
+    n_reduced = red.size
+    levels = np.bincount(red.level, minlength=int(red.level.max(initial=0)) + 1)
+    del red, Y   # the blocks' modes and constraint modes: not held through the iteration
     t = time.perf_counter()
     if iterations and U.shape[1]:
         solve = factorizer(AUTO)(sp.csc_array(K - SHIFT_FRACTION * lam_w * M))
-        for it in range(iterations):
-            W = np.asarray(solve(M @ U)).reshape(U.shape)
-            lam, U = rayleigh_ritz(K, M, W)
-            say(f"AMLS subspace iteration {it + 1}: {U.shape[1]} vectors")
+        lam, U = subspace_iteration(K, M, U, solve, iterations, lam_w, say)
+        del solve
     times["improve"] = time.perf_counter() - t
     keep = lam <= lam_w
-    lam, U = lam[keep], U[:, keep]
+    if not keep.all():
+        lam, U = lam[keep], U[:, keep]
     t = time.perf_counter()
     res = relative_residuals(K, M, lam, U)
     times["residual"] = time.perf_counter() - t
-    levels = np.bincount(red.level, minlength=int(red.level.max(initial=0)) + 1)
-    return AMLSModes(lam, U, res, red.size, levels, n_blocks, iterations, times)
+    return AMLSModes(lam, U, res, n_reduced, levels, n_blocks, iterations, times)

@@ -38,8 +38,10 @@ for their constraint modes; separators (dense after their children's condensatio
 Cholesky.
 
 The blocks of one tree level are independent once the level below is reduced: each is one task
-(:func:`substruct.linalg.amls_block.reduce_block`) of a ``map`` given by the caller (in this
-process by default; a Dask client's map runs them on its workers), the levels bottom-up.  The
+(:func:`substruct.linalg.amls_block.reduce_block`) of a ``map`` given by the caller (a Dask
+client's map runs them on its workers), the levels bottom-up.  In this process (no ``map``)
+the blocks run one at a time in post-order instead, so that only the condensations still
+waiting for their parent are held (at most two per level), not a whole level's.  The
 tasks are pure functions of their data and the numbering of the reduced coordinates is made
 here afterwards, so the reduced model does not depend on where the tasks ran.
 """
@@ -193,8 +195,9 @@ def amls_reduce(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, root: 
     (a free body's rigid modes).
 
     The blocks of each level, deepest first, are the tasks of one call of ``map``
-    (:data:`~substruct.linalg.amls_block.TaskMap`; default: in this process, one after the
-    other); ``progress`` receives one line as each level is done."""
+    (:data:`~substruct.linalg.amls_block.TaskMap`); without it they run in this process, one
+    at a time in post-order (the same numbers); ``progress`` receives one line as each level
+    is done."""
     K = sp.csr_array(K, dtype=float)
     M = sp.csr_array(M, dtype=float)
     run = map or serial_map
@@ -204,31 +207,60 @@ def amls_reduce(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, root: 
     index = {id(b): i for i, b in enumerate(order)}
     depth = max(b.level for b in order)
     results: list[BlockResult | None] = [None] * len(order)
-    for lev in range(depth, -1, -1):
-        t = time.perf_counter()
-        here = [i for i, b in enumerate(order) if b.level == lev]
-        jobs = []
-        for i in here:
-            below = []
-            for c in order[i].children:
-                j = index[id(c)]
-                rc = results[j]
-                assert rc is not None
-                below.append((bounds[j], rc))
-            jobs.append(_job(K, M, order[i], bounds[i], lam_cut, factorization, below))
-        for i, r in zip(here, run(reduce_block, jobs)):
-            results[i] = r
-            for c in order[i].children:  # only its coupling G is still needed
-                rc = results[index[id(c)]]
-                assert rc is not None
-                rc.G = rc.G[:0]
+
+    def job(i: int) -> BlockJob:
+        below = []
+        for c in order[i].children:
+            j = index[id(c)]
+            rc = results[j]
+            assert rc is not None
+            below.append((bounds[j], rc))
+        return _job(K, M, order[i], bounds[i], lam_cut, factorization, below)
+
+    def report(lev: int, here: list[int], seconds: float) -> None:
         if progress is not None:
             kept = sum(int(r.lam.size) for r in (results[i] for i in here) if r is not None)
             coords = sum(int(order[i].dofs.size) for i in here)
             progress(f"AMLS level {lev} ({depth - lev + 1} of {depth + 1}): {len(here)} "
-                     f"block(s) of {coords} coordinates, {kept} modes kept "
-                     f"({time.perf_counter() - t:.1f} s)")
+                     f"block(s) of {coords} coordinates, {kept} modes kept ({seconds:.1f} s)")
+
+    levels = {lev: [i for i, b in enumerate(order) if b.level == lev]
+              for lev in range(depth, -1, -1)}
+    if map is None:
+        # in this process: one block at a time in post-order, each child's condensation
+        # freed once its parent is reduced, so at most two per level are alive (level by
+        # level, a whole level's would be)
+        left = {lev: len(here) for lev, here in levels.items()}
+        spent = dict.fromkeys(levels, 0.0)
+        for i, b in enumerate(order):
+            t = time.perf_counter()
+            results[i] = reduce_block(job(i))
+            _release(results, b, index)
+            spent[b.level] += time.perf_counter() - t
+            left[b.level] -= 1
+            if not left[b.level]:
+                report(b.level, levels[b.level], spent[b.level])
+    else:
+        for lev, here in levels.items():
+            t = time.perf_counter()
+            out = list(run(reduce_block, [job(i) for i in here]))
+            for i, r in zip(here, out):
+                results[i] = r
+                _release(results, order[i], index)
+            report(lev, here, time.perf_counter() - t)
     return _assemble(K, order, bounds, results, n, factorization)
+
+
+def _release(results: list[BlockResult | None], b: DissectionNode, index: dict[int, int]
+             ) -> None:
+    """Once block ``b`` is reduced, its children's condensation and boundary coupling are no
+    longer needed (their modes, constraint modes and cross blocks are)."""
+    for c in b.children:
+        rc = results[index[id(c)]]
+        assert rc is not None
+        rc.G = np.zeros((0, rc.G.shape[1]))   # new arrays: a view would keep the data
+        rc.CK = np.zeros((0, 0))
+        rc.CM = np.zeros((0, 0))
 
 
 def _assemble(K: sp.csr_array, order: list[DissectionNode], bounds: list[np.ndarray],

@@ -1,0 +1,94 @@
+r"""Subspace iteration on the AMLS Ritz vectors with the full factorization, in blocks.
+
+The ``n x p`` Ritz vectors ``U`` (``p`` a few times the wanted number of modes) are the
+largest arrays of AMLS; this module keeps them the only ``n x p`` array.  One step is
+
+.. math::  W = (K - \sigma M)^{-1} M U, \qquad
+           (W^T K W)\, y = \lambda\, (W^T M W)\, y, \qquad U \leftarrow W y,
+
+which multiplies the error of :math:`\lambda_j` by about
+:math:`((\lambda_j - \sigma)/(\lambda_{p+1} - \sigma))^2`, :math:`\lambda_{p+1}` the first
+Ritz value left out.  The solves overwrite ``U`` ``CHUNK`` columns at a time; the projections
+are summed by column blocks over the upper triangle only (half the products of the full
+``W^T (K W)``); the rotation :math:`W y` is done by row blocks.  Between two steps only the
+span matters, so an intermediate step makes :math:`W` ``M``-orthonormal by a Cholesky QR,
+:math:`W \leftarrow W R^{-1}`, :math:`R^T R = W^T M W` (one projection, no ``K``-projection,
+eigensolve or rotation); the Rayleigh-Ritz is done once, after the last step, for the
+eigenpairs up to the wanted one only.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+
+from substruct.linalg.factorize import Solve
+
+__all__ = ["CHUNK", "ROWS", "projection", "subspace_iteration"]
+
+#: Columns of an ``n x p`` block of vectors handled at once (solves, sparse products,
+#: residuals): the temporaries are ``n x CHUNK``, not ``n x p``.
+CHUNK = 128
+
+#: Rows of an ``n x p`` block rotated at once.
+ROWS = 4096
+
+
+def projection(A: sp.csr_array, W: np.ndarray) -> np.ndarray:
+    r""":math:`W^T A W` for a symmetric sparse ``A``, summed by blocks of ``CHUNK`` columns
+    over the upper triangle (block ``j``: :math:`W_{:, :j+c}^T (A W_{:, j:j+c})`), then
+    mirrored: half the dense products of ``W.T @ (A @ W)`` and an ``n x CHUNK`` temporary."""
+    p = W.shape[1]
+    out = np.empty((p, p))
+    for j in range(0, p, CHUNK):
+        e = min(j + CHUNK, p)
+        AW = A @ np.ascontiguousarray(W[:, j:e])
+        out[:e, j:e] = W[:, :e].T @ AW
+    upper = np.triu(out)
+    return upper + np.triu(upper, 1).T
+
+
+def _rotate(W: np.ndarray, R: np.ndarray, out: np.ndarray) -> None:
+    """``out = W @ R`` by row blocks (``out`` may be ``W`` itself when ``R`` is square)."""
+    for i in range(0, W.shape[0], ROWS):
+        out[i:i + ROWS] = W[i:i + ROWS] @ R
+
+
+def _orthonormalize(M: sp.csr_array, W: np.ndarray) -> None:
+    r"""``W`` made ``M``-orthonormal in place, same span: Cholesky QR of the column-scaled
+    ``W`` (:math:`G = W^T M W = R^T R`, :math:`W \leftarrow W R^{-1}`)."""
+    G = projection(M, W)
+    s = 1.0 / np.sqrt(np.diag(G))
+    R = sla.cholesky(G * s[:, None] * s[None, :])
+    _rotate(W, s[:, None] * sla.solve_triangular(R, np.eye(R.shape[0])), W)
+
+
+def subspace_iteration(K: sp.csr_array, M: sp.csr_array, U: np.ndarray, solve: Solve,
+                       iterations: int, lam_max: float,
+                       say: Callable[[str], None] | None = None
+                       ) -> tuple[np.ndarray, np.ndarray]:
+    r"""``iterations`` (>= 1) steps of subspace iteration on the ``n x p`` vectors ``U``
+    (module docstring; ``solve``: :math:`(K - \sigma M)^{-1}`), then the Rayleigh-Ritz
+    eigenpairs with :math:`\lambda \le` ``lam_max``, ascending, ``M``-orthonormal.  ``U`` is
+    overwritten; the memory is ``U``, the ``n x k`` result and ``n x CHUNK`` temporaries."""
+    n, p = U.shape
+    W = U
+    for it in range(iterations):
+        if it:
+            _orthonormalize(M, W)
+        for j in range(0, p, CHUNK):
+            B = M @ np.ascontiguousarray(W[:, j:j + CHUNK])
+            W[:, j:j + CHUNK] = np.asarray(solve(B)).reshape(B.shape)
+        if say is not None:
+            say(f"AMLS subspace iteration {it + 1}: {p} vectors")
+    Mp = projection(M, W)
+    s = 1.0 / np.sqrt(np.diag(Mp))    # unit columns: W's scale by about 1 / lambda_j
+    lam, rot = sla.eigh(projection(K, W) * s[:, None] * s[None, :],
+                        Mp * s[:, None] * s[None, :], overwrite_a=True, overwrite_b=True,
+                        subset_by_value=(-np.inf, lam_max), driver="gvx")
+    out = np.empty((n, lam.size))
+    _rotate(W, s[:, None] * rot, out)
+    return lam, out
