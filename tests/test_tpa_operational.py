@@ -7,7 +7,8 @@ at targets on B when their blocked forces span the joint's six loads (three forc
 three points of A's plane x = -0.4 m not on one line, three in that plane), and the validation
 error says by how much they miss when they cannot (three forces at one point; six at two
 points, whose line they cannot turn about).  Operational TPA: responses under random operating
-forces at three places give the transmissibility H_ts H_is^-1 of the generating model.
+forces at three places give the transmissibility H_ts H_is^-1 of the generating model, and at
+two places (fewer than the indicators) the minimum-norm H_ts H_is^+.
 
 Tolerance: the finite-element receptances are accurate to about 3.5e-10 of their largest entry
 (tests/test_virtual_point.py); 1e-8 leaves a margin of about 30.  The transmissibility and the
@@ -127,6 +128,30 @@ def test_operational_tpa(lab):
     bad[2, 1, 0] = np.inf
     with pytest.raises(ValueError, match=r"target responses are not finite at index \[2, 1, 0\]"):
         transmissibility(U_i, bad)
+
+
+def test_operational_tpa_fewer_sources_than_indicators(lab):
+    """Two operating-force places seen by three indicators: U_i has rank 2 < 3, T is not
+    unique, and the default inversion (singular values below 1e-12 of the largest dropped)
+    gives the least-squares, minimum-norm one, U_t U_i^+ = H_ts F F^+ H_is^+ = H_ts H_is^+
+    (F of full row rank, H_is of full column rank); it predicts a condition left out."""
+    AB = lab["AB"]
+    Y = receptance(AB, lab["out"], _at(AB, SPANNING[3:5]))
+    H_i, H_t = Y[:, [0, 4, 8]], Y[:, 9:]
+    exact = H_t @ np.linalg.pinv(H_i)
+    bound = 100 * 1e-14 * np.linalg.cond(H_i).max()
+    rng = np.random.default_rng(2)
+    Fo = rng.normal(size=(len(OMEGA), 2, 7)) + 1j * rng.normal(size=(len(OMEGA), 2, 7))
+    U_i, U_t = H_i @ Fo, H_t @ Fo
+    T = transmissibility(U_i[:, :, :6], U_t[:, :, :6])
+    err = np.abs(T - exact).max() / np.abs(exact).max()
+    pred = (T @ U_i[:, :, 6:])[:, :, 0]
+    e = np.abs(pred - U_t[:, :, 6]).max() / np.abs(U_t[:, :, 6]).max()
+    print("rank 2 of 3: transmissibility", err, "held-out prediction", e, "bound", bound)
+    assert err < bound and e < bound
+    # the same definition by an explicit rank
+    T2 = transmissibility(U_i[:, :, :6], U_t[:, :, :6], Regularisation("tsvd", rank=2))
+    assert np.abs(T2 - exact).max() < bound * np.abs(exact).max()
 
 
 def test_pseudo_forces_bad_input(lab):

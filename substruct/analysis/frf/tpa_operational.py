@@ -103,8 +103,12 @@ def transmissibility(U_i: np.ndarray, U_t: np.ndarray,
     pseudo-inverse of :math:`U_i`).
 
     With fewer conditions than indicators :math:`U_i U_i^{\dagger} \ne I` and ``T`` is not
-    determined by the data: refused.  Conditions that are not independent (a rank below
-    ``n_i``) are not detected here; the singular values of ``U_i`` show them.
+    determined by the data: refused.  Conditions that are not independent, or fewer sources
+    than indicators (a rank below ``n_i``), are not detected here (the singular values of
+    ``U_i`` show them); the default inversion drops the singular values that are round-off,
+    so that ``T`` is then the minimum-norm least-squares one, :math:`H_{ts} H_{is}^{\dagger}`
+    when the ``n_s < n_i`` sources are all excited (an untruncated pseudo-inverse would
+    divide by that round-off).
 
     Raises:
         ValueError: fewer conditions than indicators, shapes that do not match, values not
