@@ -2,7 +2,7 @@
 form it replaces: ``W = (K - sigma M)^{-1} M U`` and a full Rayleigh-Ritz after every step,
 on whole ``n x p`` arrays.
 
-With more vectors than one column block (``p > CHUNK``) the blocked form spans the same
+With more vectors than one column block (``p > SOLVE_COLUMNS``) the blocked form spans the same
 subspace (a Cholesky QR between steps instead of a Rayleigh-Ritz changes the basis, not its
 span), so the Ritz values agree to round-off of the projected eigenproblem (1e-10 relative,
 its condition times eps), the vectors are M-orthonormal (1e-10) and equal the reference's up
@@ -17,7 +17,7 @@ import pytest
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from substruct.linalg.amls_improve import CHUNK, projection, subspace_iteration
+from substruct.linalg.amls_improve import SOLVE_COLUMNS, projection, subspace_iteration
 from substruct.linalg.factorize import factorizer
 from substruct.models.solid import BoxGrid, solid_box
 
@@ -43,7 +43,7 @@ def reference(K, M, U, solve, iterations):
 
 def test_projection_is_the_full_product(pencil):
     K, _, _ = pencil
-    W = np.random.default_rng(1).standard_normal((K.shape[0], CHUNK + 70))
+    W = np.random.default_rng(1).standard_normal((K.shape[0], SOLVE_COLUMNS + 70))
     full = W.T @ (K @ W)
     P = projection(K, W)
     assert np.array_equal(P, P.T)
@@ -53,7 +53,7 @@ def test_projection_is_the_full_product(pencil):
 @pytest.mark.parametrize("iterations", [1, 2, 3])
 def test_blocked_iteration_equals_the_whole_array_form(pencil, iterations):
     K, M, lam = pencil
-    n, p = K.shape[0], CHUNK + 72          # two column blocks, the second partial
+    n, p = K.shape[0], SOLVE_COLUMNS + 72          # two column blocks, the second partial
     U0 = np.random.default_rng(0).standard_normal((n, p))
     sigma = -1e-3 * lam[0]
     solve = factorizer("auto")(sp.csc_array(K - sigma * M))

@@ -118,8 +118,8 @@ def test_streamed_fields_equal_the_in_memory_run_bit_for_bit(tmp_path, method):
     with h5py.File(tmp_path / "f.h5", "w") as f:
         sink = _Counting(f, "F", block_bytes=7 * n * 8, chunk_bytes=n * 8)
         sink.starts = []
-        got = transient(M, C, K, A, None, load, outs, initial=_initial(n), options=opts,
-                        fields=sink)
+        got = transient(M, C, K, A, None, load, dataclasses.replace(outs, fields=sink),
+                        initial=_initial(n), options=opts)
         assert sink.starts == [0, 7, 14, 21, 28, 35]
         assert isinstance(got.snapshots, StoredFields) and got.snapshots.shape == (41, n)
         stored = f["F"][()]
@@ -249,8 +249,8 @@ def test_the_streamed_run_never_holds_the_history(tmp_path):
         sink = DatasetSink(f, "F", block_bytes=block)
         tracemalloc.start()
         try:
-            tr = transient(M, None, K, None, None, load, outs, initial=init, options=opts,
-                           fields=sink)
+            tr = transient(M, None, K, None, None, load, dataclasses.replace(outs, fields=sink),
+                           initial=init, options=opts)
             streamed = tracemalloc.get_traced_memory()[1]
         finally:
             tracemalloc.stop()

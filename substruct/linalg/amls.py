@@ -37,7 +37,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from substruct.linalg.amls_block import TaskMap
-from substruct.linalg.amls_improve import CHUNK, subspace_iteration
+from substruct.linalg.amls_improve import SOLVE_COLUMNS, subspace_iteration
 from substruct.linalg.amls_reduce import ReducedModel, amls_reduce
 from substruct.linalg.amls_tree import DissectionNode, dissection_tree
 from substruct.linalg.factorize import factorizer
@@ -85,13 +85,13 @@ def relative_residuals(K: sp.sparray, M: sp.sparray, lam: np.ndarray, U: np.ndar
     r""":math:`\|K u_j - \lambda_j M u_j\| / \|K u_j\|` per column (``inf`` where
     :math:`K u_j = 0`)."""
     out = np.empty(U.shape[1])
-    for j in range(0, U.shape[1], CHUNK):
-        Uj = np.ascontiguousarray(U[:, j:j + CHUNK])
+    for j in range(0, U.shape[1], SOLVE_COLUMNS):
+        Uj = np.ascontiguousarray(U[:, j:j + SOLVE_COLUMNS])
         KU = K @ Uj
-        num = np.linalg.norm(KU - (M @ Uj) * lam[j:j + CHUNK], axis=0)
+        num = np.linalg.norm(KU - (M @ Uj) * lam[j:j + SOLVE_COLUMNS], axis=0)
         den = np.linalg.norm(KU, axis=0)
         with np.errstate(divide="ignore", invalid="ignore"):
-            out[j:j + CHUNK] = np.where(den > 0, num / np.where(den > 0, den, 1.0), np.inf)
+            out[j:j + SOLVE_COLUMNS] = np.where(den > 0, num / np.where(den > 0, den, 1.0), np.inf)
     return out
 
 

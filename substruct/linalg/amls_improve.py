@@ -8,7 +8,7 @@ largest arrays of AMLS; this module keeps them the only ``n x p`` array.  One st
 
 which multiplies the error of :math:`\lambda_j` by about
 :math:`((\lambda_j - \sigma)/(\lambda_{p+1} - \sigma))^2`, :math:`\lambda_{p+1}` the first
-Ritz value left out.  The solves overwrite ``U`` ``CHUNK`` columns at a time; the projections
+Ritz value left out.  The solves overwrite ``U`` ``SOLVE_COLUMNS`` columns at a time; the projections
 are summed by column blocks over the upper triangle only (half the products of the full
 ``W^T (K W)``); the rotation :math:`W y` is done by row blocks.  Between two steps only the
 span matters, so an intermediate step makes :math:`W` ``M``-orthonormal by a Cholesky QR,
@@ -27,24 +27,24 @@ import scipy.sparse as sp
 
 from substruct.linalg.factorize import Solve
 
-__all__ = ["CHUNK", "ROWS", "projection", "subspace_iteration"]
+__all__ = ["SOLVE_COLUMNS", "ROWS", "projection", "subspace_iteration"]
 
 #: Columns of an ``n x p`` block of vectors handled at once (solves, sparse products,
-#: residuals): the temporaries are ``n x CHUNK``, not ``n x p``.
-CHUNK = 128
+#: residuals): the temporaries are ``n x SOLVE_COLUMNS``, not ``n x p``.
+SOLVE_COLUMNS = 128
 
 #: Rows of an ``n x p`` block rotated at once.
 ROWS = 4096
 
 
 def projection(A: sp.csr_array, W: np.ndarray) -> np.ndarray:
-    r""":math:`W^T A W` for a symmetric sparse ``A``, summed by blocks of ``CHUNK`` columns
+    r""":math:`W^T A W` for a symmetric sparse ``A``, summed by blocks of ``SOLVE_COLUMNS`` columns
     over the upper triangle (block ``j``: :math:`W_{:, :j+c}^T (A W_{:, j:j+c})`), then
-    mirrored: half the dense products of ``W.T @ (A @ W)`` and an ``n x CHUNK`` temporary."""
+    mirrored: half the dense products of ``W.T @ (A @ W)`` and an ``n x SOLVE_COLUMNS`` temporary."""
     p = W.shape[1]
     out = np.empty((p, p))
-    for j in range(0, p, CHUNK):
-        e = min(j + CHUNK, p)
+    for j in range(0, p, SOLVE_COLUMNS):
+        e = min(j + SOLVE_COLUMNS, p)
         AW = A @ np.ascontiguousarray(W[:, j:e])
         out[:e, j:e] = W[:, :e].T @ AW
     upper = np.triu(out)
@@ -73,15 +73,15 @@ def subspace_iteration(K: sp.csr_array, M: sp.csr_array, U: np.ndarray, solve: S
     r"""``iterations`` (>= 1) steps of subspace iteration on the ``n x p`` vectors ``U``
     (module docstring; ``solve``: :math:`(K - \sigma M)^{-1}`), then the Rayleigh-Ritz
     eigenpairs with :math:`\lambda \le` ``lam_max``, ascending, ``M``-orthonormal.  ``U`` is
-    overwritten; the memory is ``U``, the ``n x k`` result and ``n x CHUNK`` temporaries."""
+    overwritten; the memory is ``U``, the ``n x k`` result and ``n x SOLVE_COLUMNS`` temporaries."""
     n, p = U.shape
     W = U
     for it in range(iterations):
         if it:
             _orthonormalize(M, W)
-        for j in range(0, p, CHUNK):
-            B = M @ np.ascontiguousarray(W[:, j:j + CHUNK])
-            W[:, j:j + CHUNK] = np.asarray(solve(B)).reshape(B.shape)
+        for j in range(0, p, SOLVE_COLUMNS):
+            B = M @ np.ascontiguousarray(W[:, j:j + SOLVE_COLUMNS])
+            W[:, j:j + SOLVE_COLUMNS] = np.asarray(solve(B)).reshape(B.shape)
         if say is not None:
             say(f"AMLS subspace iteration {it + 1}: {p} vectors")
     Mp = projection(M, W)

@@ -263,9 +263,8 @@ def transient_result(case: Case, model: Model, extra: sp.csr_array | None = None
         initial = InitialConditions(d0=d0, v0=v0, static=spec.initial.static)
         return transient(asm.M, asm.C, asm.K, asm.A, asm.b,
                          LoadHistory(B, f, spec.dt, steps, pairs=pairs, base=ground),
-                         TransientOutputs(O, names),
-                         constraint_labels=asm.constraint_labels, initial=initial, options=opts,
-                         fields=field_sink)
+                         TransientOutputs(O, names, fields=field_sink),
+                         constraint_labels=asm.constraint_labels, initial=initial, options=opts)
     except InitialStateError as err:
         raise case.error(("analysis", "transient", "initial"), " ".join(str(err).split())
                          ) from None

@@ -77,7 +77,7 @@ from substruct.vocabulary import GENERALIZED_INVERSE, KKT
 __all__ = ["MODAL_ABOVE", "ModalOptions", "frf_method", "DEFAULT_CUTOFF",
            "MODAL_CHECK_FREQUENCIES", "ModalBasis", "modal_basis", "static_solver",
            "static_moments", "modal_terms", "modal_moment", "RESIDUAL_ORDER",
-           "RIGID_ROOT_FRACTION", "BLOCK_BYTES", "modal_receptance_sweep", "check_indices"]
+           "RIGID_ROOT_FRACTION", "MODAL_BLOCK_BYTES", "modal_receptance_sweep", "check_indices"]
 
 #: ``method: auto`` takes the modal sweep above this many coordinates.
 MODAL_ABOVE = 2000
@@ -88,7 +88,7 @@ MODAL_CHECK_FREQUENCIES = 3
 RESIDUAL_ORDER = {"none": -1, "static": 0, "second-order": 2}
 #: Bytes of receptances computed at a time when the sweep keeps the whole array (a sink
 #: sets its own block).
-BLOCK_BYTES = 64 << 20
+MODAL_BLOCK_BYTES = 64 << 20
 
 
 @dataclass(frozen=True)
@@ -229,7 +229,7 @@ def modal_receptance_sweep(system: ConstrainedSystem, omegas: Sequence[float] | 
     H: Any
     if sink is None:
         H = np.empty(shape, dtype=complex)
-        rows = max(1, BLOCK_BYTES // max(1, 16 * shape[1] * shape[2]))
+        rows = max(1, MODAL_BLOCK_BYTES // max(1, 16 * shape[1] * shape[2]))
         for start in range(0, len(w), rows):
             fill(w[start:start + rows], H[start:start + rows])
         checked = H[idx]

@@ -23,6 +23,7 @@ import scipy.sparse as sp
 
 from substruct.analysis.results import DEFAULT_TOLERANCE
 from substruct.analysis.transient.base import BaseMotion
+from substruct.analysis.transient.fields import FieldSink
 from substruct.analysis.transient.initial import InitialStateError
 from substruct.analysis.transient.integrators import Scheme, scheme
 from substruct.vocabulary import GENERALIZED_INVERSE, TRANSIENT_FORMS
@@ -103,11 +104,17 @@ class InitialConditions:
 
 @dataclass(frozen=True)
 class TransientOutputs:
-    """The output rows of a transient run, :math:`y = O q`.
+    """The output rows of a transient run, :math:`y = O q`, and where its full fields go.
 
     Attributes:
         rows: ``n_out x n``, the rows :math:`O`.
         names: their names (empty, or one per row).
+        fields: where the main form's fields (every ``options.field_every`` steps) go, a
+            block of instants at a time as they are recorded
+            (:class:`~substruct.analysis.transient.fields.FieldSink`; ``None``: kept whole).
+            The result's ``snapshots`` is then a
+            :class:`~substruct.analysis.transient.fields.StoredFields` (selections read back).
+            The checks compare the final fields, which every run keeps; they store none.
 
     Raises:
         ValueError: a count of names that is neither 0 nor the number of rows.
@@ -115,6 +122,7 @@ class TransientOutputs:
 
     rows: sp.sparray | np.ndarray
     names: Sequence[str] = ()
+    fields: FieldSink | None = None
 
     def __post_init__(self) -> None:
         n_rows = self.rows.shape[0] if self.rows.ndim == 2 else 1

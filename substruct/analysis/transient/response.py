@@ -53,7 +53,7 @@ from substruct.analysis.transient.integrators import (
 from substruct.analysis.modes.krylov import eliminate
 from substruct.analysis.formulations.projection import constrained_acceleration
 from substruct.analysis.transient.base import BaseMotion, Motion, ground_history, influence
-from substruct.analysis.transient.fields import FieldSink, FieldStore, field_steps
+from substruct.analysis.transient.fields import FieldStore, field_steps
 from substruct.analysis.transient.loads import for_scheme
 from substruct.analysis.transient.initial import InitialStateError, check_initial, static_state
 from substruct.analysis.transient.modal import modal_run
@@ -274,8 +274,7 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
               K: sp.sparray | np.ndarray, A: sp.sparray | np.ndarray | None,
               b: np.ndarray | None, load: LoadHistory, outputs: TransientOutputs, *,
               constraint_labels: Sequence[str] = (), initial: InitialConditions | None = None,
-              options: TransientOptions | None = None,
-              fields: FieldSink | None = None) -> Transient:
+              options: TransientOptions | None = None) -> Transient:
     r"""Time histories of :math:`M \ddot q + C \dot q + K q = B f(t) + Q^c`, :math:`A q = b`
     (eqs 5, 10), by ``options.method``, checked by ``options.checks``.
 
@@ -288,17 +287,11 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
             :math:`P(t_k) = B f_k` at :math:`t_k = k\, dt`, ``k = 0 .. n_steps``, their jumps
             and a moving ground.
         outputs: :class:`~substruct.analysis.transient.options.TransientOutputs`, the rows
-            recorded and their names.
+            recorded and their names, and where the full fields go (``outputs.fields``).
         initial: :class:`~substruct.analysis.transient.options.InitialConditions` (``None``:
             at rest, :math:`q_0 = 0`).
         options: :class:`~substruct.analysis.transient.options.TransientOptions`: the form,
             its checks and their tolerance, the integrator, what is recorded.
-        fields: where the main form's fields (every ``options.field_every`` steps) go, a
-            block of instants at a time as they are recorded
-            (:class:`~substruct.analysis.transient.fields.FieldSink`; ``None``: kept whole).
-            The result's ``snapshots`` is then a
-            :class:`~substruct.analysis.transient.fields.StoredFields` (selections read back).
-            The checks compare the final fields, which every run keeps; they store none.
 
     Returns:
         :class:`~substruct.analysis.transient.results.Transient` of the main form, with the
@@ -375,7 +368,7 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
         return rec
 
     steps = field_steps(n_steps, opts.every, opts.field_every)
-    main = run(method, FieldStore(n, steps, dt, fields) if steps.size else None)
+    main = run(method, FieldStore(n, steps, dt, outputs.fields) if steps.size else None)
     agreement = {m: _difference(run(m), main) for m in check_methods(method, opts.checks)}
     require_agreement(opts.what, method, agreement, tolerance)
     r = main.arrays()
