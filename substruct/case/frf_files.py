@@ -36,6 +36,7 @@ from pathlib import Path
 import numpy as np
 
 from substruct.case.npz_files import npz_members, read_npz
+from substruct.case.uff_geometry import node_positions, uff_coordinate_systems
 from substruct.case.uff_records import Uff58, read_uff_records
 from substruct.case.uff_units import unit_exponents
 
@@ -154,6 +155,12 @@ def _as_receptance(f: Uff58) -> np.ndarray:
 
 def _read_uff58(path: Path) -> tuple[np.ndarray, list[str], np.ndarray]:
     read = read_uff_records(path)
+    try:  # the geometry is not used here, but a file whose geometry is broken is refused
+        node_positions(read, uff_coordinate_systems(read))
+    except ValueError as err:  # a system's message names the file already, a node's not
+        text = str(err)
+        raise ValueError(text if text.startswith(path.name) else f"{path.name}: {text}"
+                         ) from None
     frfs = read.functions
     if not frfs:
         raise ValueError(f"{path.name} holds no UFF 58 function")
@@ -177,6 +184,9 @@ def _read_uff58(path: Path) -> tuple[np.ndarray, list[str], np.ndarray]:
         if f.x.shape != x.shape or not np.allclose(f.x, x, rtol=1e-12, atol=0):
             raise ValueError(f"{f.where}: the function {rsp}/{ref} has another abscissa "
                              f"than the first ({f.x.size} vs {x.size} points)")
+        if not (np.all(np.isfinite(f.x)) and np.all(np.isfinite(f.y))):
+            raise ValueError(f"{f.where}: record 12, values that are not finite (NaN or "
+                             f"infinite) in the function {rsp}/{ref}")
         sign = np.sign(f.rsp_dir) * np.sign(f.ref_dir)
         data = sign * _as_receptance(f)
         if (rsp, ref) in entries:

@@ -110,8 +110,8 @@ def node_positions(uff: UffFile, systems: dict[int, tuple[np.ndarray, np.ndarray
                 raise ValueError(f"node {label}: its {what} coordinate system {cs} is not "
                                  "defined in the file (datasets 18/2420)")
         if not np.all(np.isfinite(node.xyz)):
-            raise ValueError(f"node {label}: coordinates that are not finite, got "
-                             f"{list(node.xyz)}")
+            raise ValueError(f"node {label}: coordinates that are not finite "
+                             f"{[float(v) for v in node.xyz]}")
         A, o = systems[node.def_cs]
         out[label] = (o + A.T @ np.asarray(node.xyz, dtype=float), systems[node.disp_cs][0])
     return out
@@ -129,8 +129,9 @@ def channels_from_uff(path: str | os.PathLike) -> ChannelTable:
     uff = read_uff_records(p)
     try:
         where = node_positions(uff, uff_coordinate_systems(uff))
-    except ValueError as err:
-        raise ValueError(f"{p.name}: {err}") from None
+    except ValueError as err:  # a system's message names the file already, a node's not
+        text = str(err)
+        raise ValueError(text if text.startswith(p.name) else f"{p.name}: {text}") from None
     if not uff.functions:
         raise ValueError(f"{p.name} holds no UFF 58 function to name the channels")
     kinds: dict[str, str] = {}

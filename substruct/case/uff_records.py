@@ -14,7 +14,8 @@ before it, to fit in :data:`~substruct.case.fields.MEMORY_LIMIT`.  Record 12 mus
 exactly the values declared (``ASCII``: the columns of the spec's case 1-8 formats; ``58b``:
 the bytes of its values in the declared precision, as many as its id line declares, or the
 count ``pyuff`` writes there, one value a point: ``num_pts * 8`` for doubles).  What the codes mean is checked by the caller
-(:mod:`substruct.case.frf_files`).  Other datasets are skipped.
+(:mod:`substruct.case.frf_files`).  Other datasets (:data:`READ_DATASETS` are read) are
+refused: they would go unused.
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ from substruct.case.uff_lines import (MAX_UFF_LINE, UffLines, fixed_field, float
 from substruct.case.uff_units import UffHeader, UffUnits, parse_151, parse_164, to_si
 
 __all__ = ["Uff58", "UffNode", "UffSystem", "UffFile", "read_uff_records", "MAX_UFF_LINE",
-           "MAX_POINTS"]
+           "MAX_POINTS", "READ_DATASETS"]
 
 #: Most points a function may declare (ten times the frequencies an analysis may have).
 MAX_POINTS = 1_000_000
@@ -308,9 +309,8 @@ def _rows(lines: UffLines, where: str) -> list[str]:
     return [raw.decode("latin-1") for raw in lines.until_delimiter(f"{where}:")]
 
 
-def _skip(lines: UffLines, where: str) -> None:
-    for _ in lines.until_delimiter(f"{where}:"):
-        pass
+#: The datasets a Universal File may hold.
+READ_DATASETS = (15, 18, 58, 151, 164, 2411, 2420)
 
 
 def read_uff_records(path: str | os.PathLike) -> UffFile:
@@ -377,6 +377,7 @@ def read_uff_records(path: str | os.PathLike) -> UffFile:
             elif number in (18, 2420):
                 _systems(lines, number, systems, where)
             else:
-                _skip(lines, where)
+                raise ValueError(f"{where}: dataset {number} is not read (read: "
+                                 f"{', '.join(map(str, READ_DATASETS))}); it would go unused")
     functions, table, systems = to_si(units, functions, table, systems)
     return UffFile(functions, nodes, table, systems, header, units)
