@@ -89,6 +89,13 @@ def _read_npz(path: Path) -> tuple[np.ndarray, list[str], np.ndarray]:
     if "H" not in names or "labels" not in names or not names.keys() & {"omega", "freq_hz"}:
         raise ValueError(f"{path.name} needs arrays H, labels and omega (or freq_hz); "
                          f"it has {', '.join(sorted(names)) or 'none'}")
+    if {"omega", "freq_hz"} <= names.keys():
+        raise ValueError(f"{path.name} has both omega and freq_hz: give the grid once")
+    other = sorted(names.keys() - {"H", "labels", "omega", "freq_hz"})
+    if other:
+        raise ValueError(f"{path.name}: arrays {', '.join(repr(k[:40]) for k in other[:5])} "
+                         "are not read (an FRF file holds H, labels and omega or freq_hz); "
+                         "they would go unused")
     grid = "omega" if "omega" in names else "freq_hz"
     for key, kinds in (("H", "biufc"), (grid, "biuf"), ("labels", "U")):
         if names[key].dtype.kind not in kinds:
@@ -101,6 +108,10 @@ def _read_npz(path: Path) -> tuple[np.ndarray, list[str], np.ndarray]:
                          f"shapes {list(z[grid].shape)} and {list(z['labels'].shape)}")
     omega = z[grid] if grid == "omega" else 2 * np.pi * z[grid]
     return omega, labels, z["H"]
+
+
+#: Longest coordinate label read from an FRF file (characters).
+MAX_LABEL = 64
 
 
 #: UFF 58 function types (record 6 field 1), for the messages.
@@ -248,6 +259,11 @@ def read_frf_file(path: str | os.PathLike) -> tuple[np.ndarray, list[str], np.nd
     if H.shape != (omega.size, n, n):
         raise ValueError(f"{p.name}: H has shape {list(H.shape)}, expected "
                          f"[{omega.size}, {n}, {n}] for {omega.size} frequencies and {n} labels")
+    for label in labels:  # names of coordinates: they reach messages, results and exports
+        if not 1 <= len(label) <= MAX_LABEL or not label.isprintable() or \
+                label != label.strip():
+            raise ValueError(f"{p.name}: a label is 1 to {MAX_LABEL} printable characters "
+                             f"without surrounding blanks: {label[:40]!r}")
     if len(set(labels)) != n:
         raise ValueError(f"{p.name}: labels repeated")
     if not (np.all(np.isfinite(omega)) and np.all(np.isfinite(H))):
