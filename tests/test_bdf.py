@@ -210,7 +210,7 @@ def test_rigid_elements_and_mpc_are_the_library_rows(tmp_path):
     ("GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nGRID,3,,0.,1.,0.\nGRID,4,,1.,1.,0.\n"
      "CROD,1,1,1,2\nCROD,2,1,2,3\nPROD,1,1,1.\nMAT1,1,1.,,.3\nRBE2,8,1,123,4\n"
      "RBE3,9,,4,12,1.,123,1,2,3\nEIGRL,1,,,2",
-     "line 10: RBE3 9: model@{'node': 4, 'component': 'ux'} is already dependent in model: "
+     "line 10: RBE3 9: model@4:ux is already dependent in model: "
      "RBE2 8"),
     ("GRID,1,,0.,0.,0.\nRBE3,5,,1,123456,1.,123,1\nPARAM,LGDISP,1",
      "line 3: PARAM LGDISP: PARAM LGDISP is not supported"),

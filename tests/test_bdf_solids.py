@@ -268,5 +268,33 @@ def test_bad_solid_cards_are_one_line_and_exit_2(tmp_path, capsys, change, messa
 def test_a_flat_element_is_refused_naming_its_card():
     pts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], dtype=float)
     text = "\n".join(HEAD + grids(pts) + ["CTETRA,5,1,1,2,3,4", "ENDDATA"])
-    with pytest.raises(BdfError, match="CTETRA 5: .*span no volume"):
-        nastran_matrices(parse_bulk(text, "f.bdf"))
+    with pytest.raises(BdfError, match="CTETRA 5: the element is collapsed"):
+        parse_bulk(text, "f.bdf")
+
+
+CUBE = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0],
+                 [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]], dtype=float)
+
+
+@pytest.mark.parametrize("change, problem", [
+    ((4, [0.0, 0.0, 0.0]), "collapsed"),       # G5 on G1: a zero Jacobian at both corners
+    ((6, [0.0, 0.0, 1.0]), "collapsed"),       # G7 on G8
+    ((6, [-1.0, -1.0, 1.0]), "folded"),        # G7 pulled across G5: corners of both signs
+])
+def test_a_collapsed_or_folded_hexahedron_is_refused_when_read(change, problem):
+    """The corner Jacobians of the trilinear map: the unit cube's are all 1; a corner moved
+    onto another makes two of them 0, one pulled across the element makes some negative."""
+    pts = CUBE.copy()
+    pts[change[0]] = change[1]
+    text = "\n".join(HEAD + grids(pts) + ["CHEXA,5,1,1,2,3,4,5,6,", ",7,8", "ENDDATA"])
+    with pytest.raises(BdfError, match=f"line 12: CHEXA 5: the element is {problem}"):
+        parse_bulk(text, "f.bdf")
+
+
+def test_a_mirrored_hexahedron_is_read_with_the_volume_of_the_cube():
+    """Every corner Jacobian negative (the numbering of a mirrored element) is accepted, and
+    its lumped mass is still rho V (the unit cube's 7850 kg)."""
+    pts = CUBE * [1.0, 1.0, -1.0]
+    text = "\n".join(HEAD + grids(pts) + ["CHEXA,5,1,1,2,3,4,5,6,", ",7,8", "ENDDATA"])
+    M = nastran_matrices(parse_bulk(text, "f.bdf")).M
+    assert abs(M.diagonal()[0::6].sum() - 7850.0) < 1e-9 * 7850.0

@@ -97,6 +97,10 @@ CASES = {
     "variant_is_dataset": (_set("variants/half", np.zeros(3)), "/variants/half is not a group"),
     "drawing_not_numbered": (lambda f: f.move("model/drawings/1", "model/drawings/x"),
                              "holds a member that is not numbered"),
+    "frf_negative_frequency": (_set("frf/omega", np.array([-1.0, 2.0, 3.0])),
+                               "/frf/omega holds the negative frequency -1.0"),
+    "frf_label_100k": (_set("frf/outputs", np.array(["x" * 100_000], dtype=object).astype(
+        h5py.string_dtype())), "/frf/outputs[0] is a label of 100000 characters"),
 }
 
 

@@ -98,7 +98,7 @@ def test_header_kept_and_units_read_as_pyuff_writes_them(tmp_path):
                                     temp_mode=1, length=1000.0, force=1000.0, temp=1.0,
                                     temp_offset=273.15)], mode="add")
     with open(path, "a") as fh:
-        fh.write(_nodes2411() + "".join(_functions()))
+        fh.write(_cs2420() + _nodes2411() + "".join(_functions()))
     theirs = {s["type"]: s for s in pyuff.UFF(str(path)).read_sets([0, 1])}
     read = read_uff_records(path)
     assert read.header is not None and read.units is not None
@@ -113,7 +113,7 @@ def test_header_kept_and_units_read_as_pyuff_writes_them(tmp_path):
                                       theirs[164]["length"], theirs[164]["force"],
                                       theirs[164]["temp"], theirs[164]["temp_offset"])
     omega, labels, H = read_frf_file(path)
-    raw = read_frf_file(_file(tmp_path, _nodes2411(), *_functions()))[2]
+    raw = read_frf_file(_file(tmp_path, _cs2420(), _nodes2411(), *_functions()))[2]
     # mm/mN -> m/N (x 1); rad/mN -> rad/N (x 1e3); mm/(mN mm) = 1/mN (x 1e3); rad/(mN mm)
     # -> rad/(N m) (x 1e6)
     np.testing.assert_allclose(H / raw, np.broadcast_to([[1.0, 1e3], [1e3, 1e6]], H.shape),
@@ -126,8 +126,8 @@ def test_exponents_that_agree_with_the_data_type_are_read(tmp_path):
     given = [f.replace(f"{8:10d}{0:5d}{0:5d}{0:5d}", f"{8:10d}{1:5d}{0:5d}{0:5d}")
              .replace(f"{13:10d}{0:5d}{0:5d}{0:5d}", f"{13:10d}{0:5d}{1:5d}{0:5d}")
              for f in base[:1]] + base[1:]
-    a = read_frf_file(_file(tmp_path, _units164(), _nodes2411(), *base, name="a.uff"))[2]
-    b = read_frf_file(_file(tmp_path, _units164(), _nodes2411(), *given, name="b.uff"))[2]
+    a = read_frf_file(_file(tmp_path, _units164(), _cs2420(), _nodes2411(), *base, name="a.uff"))[2]
+    b = read_frf_file(_file(tmp_path, _units164(), _cs2420(), _nodes2411(), *given, name="b.uff"))[2]
     np.testing.assert_array_equal(a, b)
 
 
@@ -160,7 +160,7 @@ def test_exponents_that_contradict_the_data_type_refused(tmp_path):
     f = _functions()
     bad = f[0].replace(f"{8:10d}{0:5d}{0:5d}{0:5d}", f"{8:10d}{2:5d}{0:5d}{0:5d}")
     with pytest.raises(ValueError) as err:
-        read_frf_file(_file(tmp_path, _nodes2411(), bad, *f[1:]))
+        read_frf_file(_file(tmp_path, _cs2420(), _nodes2411(), bad, *f[1:]))
     assert ("record 9 fields 2-4, units exponents (length, force, temperature) [2, 0, 0]: "
             "data type 8 at direction 2 has [1, 0, 0]") in str(err.value)
 
@@ -221,3 +221,23 @@ def test_units_that_cannot_be_honoured_are_refused(tmp_path, code, factors, nume
         read_uff_records(path)
     msg = str(err.value)
     assert "\n" not in msg and msg.startswith("bad.uff: dataset ") and words in msg, msg
+
+
+def test_drawing_datasets_are_passed_over_and_others_refused(tmp_path):
+    """Trace lines (82) and elements (2412) draw the geometry only: a file with them reads the
+    same nodes and functions as the file without; a dataset that could qualify the functions
+    (1858: weighting, window) is refused naming it."""
+    trace = "\n".join(["    -1", "    82", f"{1:10d}{2:10d}{0:10d}", "wire", f"{1:10d}{2:10d}",
+                       "    -1"]) + "\n"
+    elements = "\n".join(["    -1", "  2412", f"{1:10d}{21:10d}{1:10d}{1:10d}{7:10d}{2:10d}",
+                          f"{0:10d}{1:10d}{1:10d}", f"{1:10d}{2:10d}", "    -1"]) + "\n"
+    plain = _file(tmp_path, _units164(), _cs2420(), _nodes2411(), *_functions(), name="a.uff")
+    drawn = _file(tmp_path, _units164(), _cs2420(), _nodes2411(), trace, elements,
+                  *_functions(), name="b.uff")
+    (w1, l1, H1), (w2, l2, H2) = read_frf_file(plain), read_frf_file(drawn)
+    assert l1 == l2
+    np.testing.assert_array_equal(w1, w2)
+    np.testing.assert_array_equal(H1, H2)
+    qualifiers = "\n".join(["    -1", "  1858", f"{1:12d}{0:12d}{0:12d}", "    -1"]) + "\n"
+    with pytest.raises(ValueError, match=r"dataset 1858 is not read"):
+        read_uff_records(_file(tmp_path, _units164(), qualifiers, *_functions(), name="c.uff"))

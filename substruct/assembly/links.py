@@ -154,7 +154,10 @@ def _link(subs: Mapping[str, Substructure], name: str, kind: str,
             continue
         constraints.append(con)
         dependent.append((dep.substructure, _key(subs, dep, name)))
-        labels.append(f"{dep.substructure}@{dep.where}")
+        where = dep.where
+        if isinstance(where, dict):  # a node and component: written as in a case file
+            where = ":".join(str(v) for v in where.values())
+        labels.append(f"{dep.substructure}@{where}")
     return Link(name, kind, tuple(constraints), tuple(dependent), tuple(labels))
 
 

@@ -146,8 +146,17 @@ def read_cord2r(c: RawCard) -> Coord:
 def read_prod(c: RawCard) -> tuple[int, int, float, float, float]:
     """PROD PID MID A J C NSM: ``(pid, mid, A, J, nsm)`` (``C``, stress recovery, unused)."""
     c.blank_after(6, "PROD has six fields")
-    return (c.integer(0, "PID"), c.integer(1, "MID"), c.real(2, "A"), c.real(3, "J", 0.0),
-            c.real(5, "NSM", 0.0))
+    values = (c.real(2, "A"), c.real(3, "J", 0.0), c.real(5, "NSM", 0.0))
+    _not_negative(c, values, ("A", "J", "NSM"))
+    return (c.integer(0, "PID"), c.integer(1, "MID"), *values)
+
+
+def _not_negative(c: RawCard, values: tuple[float, ...], names: tuple[str, ...]) -> None:
+    """Refuse a negative section property (area, moments of inertia, torsion constant,
+    non-structural mass)."""
+    for value, name in zip(values, names):
+        if value < 0:
+            raise c.error("must not be negative", value, name)
 
 
 def read_pbar(c: RawCard) -> tuple[int, int, float, float, float, float, float]:
@@ -160,8 +169,10 @@ def read_pbar(c: RawCard) -> tuple[int, int, float, float, float, float, float]:
     if c.text(18) and c.real(18, "I12") != 0.0:
         raise c.error("unsymmetric sections (I12) are not supported", c.text(18), "I12")
     c.blank_after(19, "PBAR has three lines")
-    return (c.integer(0, "PID"), c.integer(1, "MID"), c.real(2, "A", 0.0), c.real(3, "I1", 0.0),
-            c.real(4, "I2", 0.0), c.real(5, "J", 0.0), c.real(6, "NSM", 0.0))
+    values = (c.real(2, "A", 0.0), c.real(3, "I1", 0.0), c.real(4, "I2", 0.0),
+              c.real(5, "J", 0.0), c.real(6, "NSM", 0.0))
+    _not_negative(c, values, ("A", "I1", "I2", "J", "NSM"))
+    return (c.integer(0, "PID"), c.integer(1, "MID"), *values)
 
 
 def read_pbarl(c: RawCard) -> tuple[int, int, float, float, float, float, float]:
@@ -186,7 +197,8 @@ def read_pbarl(c: RawCard) -> tuple[int, int, float, float, float, float, float]
 
 def read_mat1(c: RawCard) -> Mat1:
     """MAT1 MID E G NU RHO A TREF GE / ST SC SS MCSID, with Nastran's rules for the blank one
-    of ``E, G, NU``: two given fix the third; ``E`` or ``G`` alone leaves the other 0."""
+    of ``E, G, NU``: two given fix the third; ``E`` or ``G`` alone leaves the other 0.
+    ``A, TREF`` and the stress limits are not used; a ``GE`` other than 0 is refused."""
     c.blank_after(12, "MAT1 has two lines")
     E, G = c.real(1, "E", 0.0) if c.text(1) else None, c.real(2, "G") if c.text(2) else None
     nu = c.real(3, "NU") if c.text(3) else None
@@ -197,6 +209,7 @@ def read_mat1(c: RawCard) -> Mat1:
     elif G is not None and E is None:
         E = 2 * (1 + nu) * G if nu is not None else 0.0
     rho = c.real(4, "RHO", 0.0)
+    c.no_damping(7, "GE")
     for value, name in ((E, "E"), (G, "G"), (rho, "RHO")):
         if value is None or value < 0:
             raise c.error("must not be negative", value, name)

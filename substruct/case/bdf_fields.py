@@ -4,7 +4,8 @@ A bulk data file is read as Nastran reads it:
 
 * **Sections.** Lines before ``CEND`` are executive control, lines between ``CEND`` and
   ``BEGIN BULK`` case control, lines after ``BEGIN BULK`` bulk data up to ``ENDDATA``.  A file
-  without ``BEGIN BULK`` is bulk data only.
+  without ``BEGIN BULK`` is bulk data only.  A card after ``ENDDATA`` is refused (it would not
+  be read), and so is text beyond column 80 of a bulk data line.
 * **Comments** start with ``$``; blank lines are skipped; tabs are expanded to 8 columns.
 * **Small field:** columns 1-8 hold the card name (field 1), columns 9-72 eight fields of 8
   (fields 2-9), columns 73-80 the continuation marker (field 10, not read).
@@ -59,15 +60,26 @@ class BdfError(CaseError):
         if line:
             where.append(f"line {line}")
         if card:
-            where.append(card if ident is None else f"{card} {ident}")
+            shown = str(ident) if ident is not None else ""
+            shown = shown if len(shown) <= 16 else shown[:13] + "..."  # a field holds 16
+            where.append(card if ident is None else f"{card} {shown}")
         if name:
             where.append(name)
         super().__init__(source, ": ".join(where), problem, value)
 
 
+#: The largest integer a field holds (Nastran's 32-bit integers); ids and counts beyond it
+#: are refused before they reach an array.
+MAX_NASTRAN_INT = 2_147_483_647
+
+
 def nastran_int(text: str) -> int | None:
-    """The integer of a field (``None`` if it is not one)."""
-    return int(text) if _INT.match(text) else None
+    """The integer of a field (``None`` if it is not one, or if it lies outside Nastran's
+    32-bit range, ``|i| <= MAX_NASTRAN_INT``)."""
+    if len(text) > 12 or not _INT.match(text):
+        return None
+    value = int(text)
+    return value if abs(value) <= MAX_NASTRAN_INT else None
 
 
 def nastran_real(text: str) -> float | None:
@@ -114,7 +126,8 @@ class RawCard:
             return default
         v = nastran_int(t)
         if v is None:
-            raise self.error("must be an integer", t, name)
+            raise self.error(f"must be an integer of at most {MAX_NASTRAN_INT} in size", t,
+                             name)
         return v
 
     def real(self, i: int, name: str, default: float | None = None) -> float:
@@ -131,6 +144,15 @@ class RawCard:
         if v != v or v in (float("inf"), float("-inf")):
             raise self.error("must be finite", t, name)
         return v
+
+    def no_damping(self, i: int, name: str) -> None:
+        """Refuse a structural damping coefficient ``GE`` other than blank or 0: normal modes
+        and the undamped responses of a substructure do not use it (its damping comes from
+        the case file's ``analysis``)."""
+        if self.real(i, name, 0.0) != 0.0:
+            raise self.error(f"{name} (structural damping) is not supported: normal modes and "
+                             "the undamped responses of a substructure do not use it (damp "
+                             "in the case file's analysis)", self.text(i), name)
 
     def blank_after(self, i: int, what: str) -> None:
         """Refuse any non-blank field from ``i`` on (fields that would not be read)."""
@@ -210,6 +232,16 @@ def _line_fields(text: str, source: str, n: int) -> tuple[str, list[str], bool]:
     return head, [text[8 + 8 * k: 16 + 8 * k].strip().upper() for k in range(8)], False
 
 
+def _nothing_after(text: list[tuple[str, int, str]], lines: list[str], start: int) -> None:
+    """Refuse a card after ``ENDDATA`` (it would not be read); comments and blank lines are
+    fine."""
+    for k in range(start, len(lines)):
+        rest = lines[k].split("$", 1)[0].strip()
+        if rest:
+            raise BdfError(text[k][0], "a card after ENDDATA would not be read", rest,
+                           line=text[k][1])
+
+
 def split_bdf(text: str | list[tuple[str, int, str]], source: str) -> BdfText:
     """Split bulk data text, or lines ``(file name, line number, text)`` (a file and its
     includes, :mod:`substruct.case.bdf_include`), into control lines and cards (module
@@ -244,7 +276,11 @@ def split_bdf(text: str | list[tuple[str, int, str]], source: str) -> BdfText:
             continue
         src, n = text[k][0], text[k][1]
         if raw.strip().upper().split()[0].split(",")[0] == "ENDDATA":  # text after it: ignored
+            _nothing_after(text, lines, k + 1)
             break
+        if len(raw) > 80:
+            raise BdfError(src, "a bulk data line holds 80 columns: the text beyond column 80 "
+                           "would not be read", raw[80:].strip(), line=n)
         if raw.upper().startswith("INCLUDE"):
             raise BdfError(src, "INCLUDE is read from a file (substruct run MODEL.bdf, or "
                            "type: nastran): the included file is named relative to it",

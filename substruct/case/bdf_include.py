@@ -27,6 +27,8 @@ __all__ = ["MAX_INCLUDE_DEPTH", "bdf_lines", "include_name"]
 #: Deepest nesting of INCLUDE statements.
 MAX_INCLUDE_DEPTH = 8
 
+#: The longest file name an INCLUDE may give (characters).
+MAX_INCLUDE_NAME = 255
 _INCLUDE = re.compile(r"^INCLUDE\b", re.IGNORECASE)
 _QUOTED = re.compile(r"^INCLUDE\s*'([^']*)'\s*$", re.IGNORECASE)
 
@@ -43,13 +45,20 @@ def include_name(statement: str, source: str, line: int) -> str:
         raise BdfError(source, "INCLUDE names one file in single quotes on its line, as "
                        "INCLUDE 'part.bdf'", statement.strip(), line=line, card="INCLUDE")
     name = m.group(1).strip()
+    if len(name) > MAX_INCLUDE_NAME:
+        raise BdfError(source, f"an included file's name is at most {MAX_INCLUDE_NAME} "
+                       "characters", name, line=line, card="INCLUDE")
     parts = PurePosixPath(name.replace("\\", "/")).parts
     if not name or any(ord(ch) < 32 for ch in name) or name.startswith(("/", "\\")) or \
             re.match(r"^[A-Za-z]:", name) or ".." in parts or "~" in name[:1]:
         raise BdfError(source, "an included file is named relative to the including file, "
                        "inside its directory (no absolute path, drive or '..')", name,
                        line=line, card="INCLUDE")
-    return "/".join(p for p in parts if p != ".")
+    kept = "/".join(p for p in parts if p != ".")
+    if not kept:
+        raise BdfError(source, "INCLUDE names a file, not the directory", name, line=line,
+                       card="INCLUDE")
+    return kept
 
 
 def bdf_lines(path: Path, source: str) -> tuple[list[tuple[str, int, str]],
@@ -91,6 +100,10 @@ def bdf_lines(path: Path, source: str) -> tuple[list[tuple[str, int, str]],
                 raise BdfError(label, "an included file stays inside the directory of the "
                                "including file (a link leads out of it)", name, line=k + 1,
                                card="INCLUDE") from None
+            if not inside.is_file():
+                raise BdfError(label, "no such file (an included file is a regular file "
+                               "next to the including file)", name, line=k + 1,
+                               card="INCLUDE")
             if str(inside) in chain:
                 raise BdfError(label, "the file includes itself (through its includes)",
                                name, line=k + 1, card="INCLUDE")

@@ -23,7 +23,8 @@ one material Nastran's default ``TS/T`` of a PSHELL).  Mass per area
 Fields: ``PID Z0 NSM SB FT TREF GE LAM / MIDi Ti THETAi SOUTi ...``; a blank ``MIDi`` or
 ``Ti`` repeats the ply before, a ply with all four fields blank does not exist (Nastran's
 rules); ``LAM`` blank (every ply listed) or ``SYM`` (the plies listed are the lower half of a
-symmetric stack); ``SB, FT, TREF, GE`` (failure, thermal, damping) are read and not used.
+symmetric stack); ``SB, FT, TREF`` (failure, thermal) are read and not used, a ``GE``
+other than 0 (damping) is refused.
 """
 
 from __future__ import annotations
@@ -68,7 +69,7 @@ def read_pcomp(c: RawCard) -> Pcomp:
     if ft not in ("", "HILL", "HOFF", "TSAI", "STRN"):
         raise c.error("must be HILL, HOFF, TSAI or STRN", ft, "FT")
     c.real(5, "TREF", 0.0)
-    c.real(6, "GE", 0.0)
+    c.no_damping(6, "GE")
     lam = c.text(7)
     if lam not in ("", "SYM"):
         raise c.error("LAM blank (all plies) or SYM is supported (MEM, BEND, SMEAR and "

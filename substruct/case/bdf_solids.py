@@ -23,10 +23,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from substruct.case.bdf_fields import RawCard, nastran_int
+import numpy as np
+
+from substruct.case.bdf_fields import BdfError, RawCard, nastran_int
 
 __all__ = ["SolidCell", "Psolid", "read_solid", "read_psolid", "SOLID_CORNERS",
-           "quadratic_integration_error"]
+           "quadratic_integration_error", "check_solid_shapes"]
 
 #: Corner grids of each solid card, the most grids it can have, and meshio's name of the cell
 #: (whose corner order is Nastran's: G1-G4 one face of the hexahedron, G5-G8 the other; G1-G3
@@ -162,3 +164,53 @@ def quadratic_integration_error(cell: SolidCell, p: Psolid) -> tuple[str, str, s
                 f"IN {'THREE' if p.three else ('2' if not p.bubble else 'blank')}, ISOP "
                 f"{'FULL' if p.full else 'blank/REDUCED'}", "IN" if not p.three else "ISOP")
     return None
+
+
+#: The three edges at each corner of a solid, ``[corner, a, b, c]`` (Nastran's grid order),
+#: ordered so that a positively numbered element has a positive Jacobian at every corner.
+_CORNER_EDGES = {
+    8: np.array([[0, 1, 3, 4], [1, 2, 0, 5], [2, 3, 1, 6], [3, 0, 2, 7],
+                 [4, 7, 5, 0], [5, 4, 6, 1], [6, 5, 7, 2], [7, 6, 4, 3]]),
+    6: np.array([[0, 1, 2, 3], [1, 2, 0, 4], [2, 0, 1, 5], [3, 5, 4, 0], [4, 3, 5, 1],
+                 [5, 4, 3, 2]]),
+    4: np.array([[0, 1, 2, 3]]),
+}
+#: A corner Jacobian below this fraction of the element's span cubed is zero.
+DEGENERATE = 1e-12
+
+
+def check_solid_shapes(cells: list[SolidCell], grids: dict[int, np.ndarray],
+                       source: str) -> None:
+    r"""Refuse a collapsed or folded solid before anything is built: at each corner ``c``
+    of its corner grids the Jacobian determinant
+    :math:`J_c = \det[x_a - x_c,\ x_b - x_c,\ x_d - x_c]` over the corner's three edges, zero
+    (:math:`|J_c| \le 10^{-12} h^3`, ``h`` the element's largest extent along an axis: two
+    grids at one point, a flat corner) or of both signs over the corners (a folded element).
+    All corners negative is a mirrored numbering, which integrates correctly.
+
+    Args:
+        cells: the solids.
+        grids: grid id -> position in basic coordinates.
+        source: the file, for messages.
+
+    Raises:
+        BdfError: the first collapsed or folded element, naming its card and grids.
+    """
+    for nv, corners in _CORNER_EDGES.items():
+        group = [cell for cell in cells if SOLID_CORNERS[cell.kind][0] == nv]
+        if not group:
+            continue
+        X = np.array([[grids[g] for g in cell.nodes[:nv]] for cell in group])
+        span = np.ptp(X, axis=1).max(axis=1)
+        edges = X[:, corners[:, 1:], :] - X[:, corners[:, :1], :]  # (cells, corners, 3, 3)
+        with np.errstate(all="ignore"):
+            jac = np.linalg.det(edges)
+        small = ~(np.abs(jac) > DEGENERATE * span[:, None] ** 3)
+        mixed = (jac.max(axis=1) > 0) & (jac.min(axis=1) < 0)
+        for k in np.flatnonzero(small.any(axis=1) | mixed):
+            cell = group[int(k)]
+            what = "collapsed (a zero Jacobian at a corner: grids at one point, or a flat " \
+                "corner)" if small[k].any() else "folded (its corners have Jacobians of " \
+                "both signs)"
+            raise BdfError(source, f"the element is {what}", list(cell.nodes),
+                           line=cell.line, card=cell.kind, ident=cell.id)

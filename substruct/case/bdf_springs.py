@@ -56,21 +56,26 @@ def _end(c: RawCard, gi: int, name: str, blank_ok: bool) -> tuple[int, int] | No
 
 
 def read_celas(c: RawCard) -> Spring:
-    """CELAS1 EID PID G1 C1 G2 C2 or CELAS2 EID K G1 C1 G2 C2 GE S (``GE``, ``S`` unused by
-    normal modes)."""
+    """CELAS1 EID PID G1 C1 G2 C2 or CELAS2 EID K G1 C1 G2 C2 GE S (``S`` unused by
+    normal modes; a ``GE`` other than 0 refused)."""
     eid = c.integer(0, "EID")
     c.blank_after(8 if c.name == "CELAS2" else 6, f"{c.name} has one line")
     a = _end(c, 2, "1", blank_ok=False)
     b = _end(c, 4, "2", blank_ok=True)
     assert a is not None
+    if c.name == "CELAS2":
+        c.no_damping(6, "GE")
     if c.name == "CELAS1":
         return Spring(eid, None, c.integer(1, "PID", eid), a, b, c.line)
     return Spring(eid, c.real(1, "K"), None, a, b, c.line)
 
 
 def read_pelas(c: RawCard) -> list[tuple[int, float]]:
-    """PELAS PID1 K1 GE1 S1 PID2 K2 GE2 S2: ``[(pid, k), ...]`` (``GE``, ``S`` unused)."""
+    """PELAS PID1 K1 GE1 S1 PID2 K2 GE2 S2: ``[(pid, k), ...]`` (``S`` unused, a ``GE``
+    other than 0 refused)."""
     c.blank_after(8, "PELAS has one line")
+    c.no_damping(2, "GE1")
+    c.no_damping(6, "GE2")
     out = [(c.integer(0, "PID1"), c.real(1, "K1"))]
     if c.text(4):
         out.append((c.integer(4, "PID2"), c.real(5, "K2")))

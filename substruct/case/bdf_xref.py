@@ -18,7 +18,12 @@ from substruct.case.bdf_fields import BdfError, RawCard
 from substruct.case.bdf_model import BulkData, BushSpring, BdfSection, ShellSection
 from substruct.case.bdf_pcomp import COUPLING_TOLERANCE, Pcomp, laminate
 from substruct.case.bdf_shells import Pshell
-from substruct.case.bdf_solids import SOLID_CORNERS, Psolid, quadratic_integration_error
+from substruct.case.bdf_solids import (
+    SOLID_CORNERS,
+    Psolid,
+    check_solid_shapes,
+    quadratic_integration_error,
+)
 from substruct.case.fields import MAX_ELEMENTS, MAX_MATRIX_SIZE
 
 __all__ = ["ELEMENTS", "Cards", "coordinate_systems", "cross_reference"]
@@ -252,6 +257,7 @@ def cross_reference(cards: Cards) -> BulkData:
     if not out.wtmass > 0:
         raise params["WTMASS"][0].error("must be positive", out.wtmass, "V1")
     out.coupled = param(params, "COUPMASS", "int", -1) > 0
+    check_solid_shapes([cell for cell, _ in out.solids], out.grids, source)
     quadratic = [cell for cell, _ in out.solids
                  if len(cell.nodes) > SOLID_CORNERS[cell.kind][0]]
     if quadratic and not out.coupled:

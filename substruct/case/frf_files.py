@@ -39,6 +39,7 @@ from pathlib import Path
 import numpy as np
 
 from substruct.case.npz_files import npz_members, read_npz
+from substruct.case.uff_geometry import node_positions, uff_coordinate_systems
 from substruct.case.uff_records import Uff58, read_uff_records
 from substruct.case.uff_units import unit_exponents
 
@@ -100,6 +101,13 @@ def _read_npz(path: Path, rectangular: bool = False
         want = "labels (or outputs and inputs)" if rectangular else "labels"
         raise ValueError(f"{path.name} needs arrays H, {want} and omega (or freq_hz); "
                          f"it has {', '.join(sorted(names)) or 'none'}")
+    if {"omega", "freq_hz"} <= names.keys():
+        raise ValueError(f"{path.name} has both omega and freq_hz: give the grid once")
+    other = sorted(names.keys() - {"H", "omega", "freq_hz", *keys})
+    if other:
+        raise ValueError(f"{path.name}: arrays {', '.join(repr(k[:40]) for k in other[:5])} "
+                         f"are not read (an FRF file holds H, {' and '.join(keys)} and omega "
+                         "or freq_hz); they would go unused")
     grid = "omega" if "omega" in names else "freq_hz"
     for key, kinds in (("H", "biufc"), (grid, "biuf"), *((k, "U") for k in keys)):
         if names[key].dtype.kind not in kinds:
@@ -113,6 +121,10 @@ def _read_npz(path: Path, rectangular: bool = False
     lists = [[str(s) for s in z[k].ravel()] for k in keys]
     omega = z[grid] if grid == "omega" else 2 * np.pi * z[grid]
     return omega, lists[0], lists[-1], z["H"]
+
+
+#: Longest coordinate label read from an FRF file (characters).
+MAX_LABEL = 64
 
 
 #: UFF 58 function types (record 6 field 1), for the messages.
@@ -170,6 +182,12 @@ def _read_uff58(path: Path, rectangular: bool = False
     """``(omega, outputs, inputs, H)``: every label on both sides (the square matrix) or,
     when ``rectangular``, the responses (in the order met) x the references."""
     read = read_uff_records(path)
+    try:  # the geometry is not used here, but a file whose geometry is broken is refused
+        node_positions(read, uff_coordinate_systems(read))
+    except ValueError as err:  # a system's message names the file already, a node's not
+        text = str(err)
+        raise ValueError(text if text.startswith(path.name) else f"{path.name}: {text}"
+                         ) from None
     frfs = read.functions
     if not frfs:
         raise ValueError(f"{path.name} holds no UFF 58 function")
@@ -195,6 +213,9 @@ def _read_uff58(path: Path, rectangular: bool = False
         if f.x.shape != x.shape or not np.allclose(f.x, x, rtol=1e-12, atol=0):
             raise ValueError(f"{f.where}: the function {rsp}/{ref} has another abscissa "
                              f"than the first ({f.x.size} vs {x.size} points)")
+        if not (np.all(np.isfinite(f.x)) and np.all(np.isfinite(f.y))):
+            raise ValueError(f"{f.where}: record 12, values that are not finite (NaN or "
+                             f"infinite) in the function {rsp}/{ref}")
         sign = np.sign(f.rsp_dir) * np.sign(f.ref_dir)
         data = sign * _as_receptance(f)
         if (rsp, ref) in entries:
@@ -285,6 +306,11 @@ def _read(p: Path, rectangular: bool
     for names in (outs, ins):
         if len(set(names)) != len(names):
             raise ValueError(f"{p.name}: labels repeated")
+    for label in (*outs, *ins):  # names of coordinates: they reach messages, results, exports
+        if not 1 <= len(label) <= MAX_LABEL or not label.isprintable() or \
+                label != label.strip():
+            raise ValueError(f"{p.name}: a label is 1 to {MAX_LABEL} printable characters "
+                             f"without surrounding blanks: {label[:40]!r}")
     if not (np.all(np.isfinite(omega)) and np.all(np.isfinite(H))):
         raise ValueError(f"{p.name}: frequencies and receptances must be finite")
     if omega.size == 0 or np.any(omega <= 0) or np.any(np.diff(omega) <= 0):

@@ -128,6 +128,11 @@ def npz_members(path: str | os.PathLike, keys: Sequence[str] | None = None
         if len(infos) > MAX_NPZ_MEMBERS:
             raise ValueError(f"{name} has {len(infos)} members, more than the "
                              f"{MAX_NPZ_MEMBERS} accepted")
+        seen: set[str] = set()
+        for i in infos:  # two members of one name: which one a reader takes is arbitrary
+            if i.filename in seen:
+                raise ValueError(f"{name}: member {i.filename[:80]!r} is in the archive twice")
+            seen.add(i.filename)
         by_key = {i.filename[:-4]: i for i in infos if i.filename.endswith(".npy")}
         wanted = list(by_key) if keys is None else list(keys)
         out: dict[str, NpzMember] = {}

@@ -88,7 +88,7 @@ class MatrixBuilder:
         self.name, self.form, self.type = name, form, mtype
         if not MATRIX_NAME.match(name):
             raise Op4Error(f"{file}: a matrix name is letters, digits, '_', '.' or '-' "
-                           f"(at most 16), got {name!r}")
+                           f"(at most 16): {name!r}")
         if mtype not in (1, 2, 3, 4):
             raise Op4Error(f"{self.where}: type {mtype} is not 1-4 (real/complex, "
                            f"single/double)")

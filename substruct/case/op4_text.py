@@ -47,7 +47,7 @@ class _Lines:
             at += w
             if not re.fullmatch(r"-?\d{1,15}", field):
                 raise Op4Error(f"{where}: line {self.number}: expected {len(widths)} integers "
-                               f"of {w} characters, got {line[:60]!r}")
+                               f"of {w} characters: {line[:60]!r}")
             out.append(int(field))
         return out
 
@@ -56,7 +56,7 @@ class _Lines:
         line = self.next(where) or ""
         if not re.fullmatch(r"\s*\d{1,15}\s*", line):
             raise Op4Error(f"{where}: line {self.number}: expected a string header (one "
-                           f"integer), got {line[:60]!r}")
+                           f"integer): {line[:60]!r}")
         return [int(line)]
 
     def numbers(self, where: str, count: int, per: int, width: int) -> np.ndarray:
@@ -70,7 +70,7 @@ class _Lines:
                                         for f in fields]
             except ValueError:
                 raise Op4Error(f"{where}: line {self.number}: expected {k} numbers of "
-                               f"{width} characters, got {line[:60]!r}") from None
+                               f"{width} characters: {line[:60]!r}") from None
         return out
 
 
@@ -94,7 +94,7 @@ def read_text(fp: BinaryIO, file: str, wanted: Callable[[str], bool],
                                        int(text[2 * w + 8:2 * w + 16]))
         except ValueError:
             raise Op4Error(f"{file}: line {lines.number}: not an OP4 matrix header (columns, "
-                           f"rows, form, type, name, format), got {line[:60]!r}") from None
+                           f"rows, form, type, name, format): {line[:60]!r}") from None
         name = text[2 * w + 16:2 * w + 24].replace(" ", "")
         fmt = text[2 * w + 24:].strip().upper()
         m = MatrixBuilder(file, (cols, rows, form, mtype, name), wanted(name), budget)

@@ -123,8 +123,8 @@ def node_positions(uff: UffFile, systems: dict[int, UffFrame]
                 raise ValueError(f"node {label}: record 1 field {at}, {what} coordinate "
                                  f"system {cs}: not defined in the file (datasets 18/2420)")
         if not np.all(np.isfinite(node.xyz)):
-            raise ValueError(f"node {label}: coordinates that are not finite, got "
-                             f"{list(node.xyz)}")
+            raise ValueError(f"node {label}: coordinates that are not finite "
+                             f"{[float(v) for v in node.xyz]}")
         own, disp = systems[node.def_cs], systems[node.disp_cs]
         c = np.asarray(node.xyz, dtype=float)
         pos = own.o + own.A.T @ local_to_cartesian(own.kind, c)

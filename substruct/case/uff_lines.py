@@ -26,6 +26,9 @@ class UffLines:
         if len(raw) > MAX_UFF_LINE and not raw.endswith(b"\n"):
             raise ValueError(f"{self.name}: line {self.number} is longer than {MAX_UFF_LINE} "
                              "characters: not a Universal File")
+        if b"\0" in raw:
+            raise ValueError(f"{self.name}: line {self.number} holds a NUL byte: not a text "
+                             "line of a Universal File")
         return raw.rstrip(b"\r\n")
 
     def left(self) -> int:

@@ -14,7 +14,10 @@ before it, to fit in :data:`~substruct.case.fields.MEMORY_LIMIT`.  Record 12 mus
 exactly the values declared (``ASCII``: the columns of the spec's case 1-8 formats; ``58b``:
 the bytes of its values in the declared precision, as many as its id line declares, or the
 count ``pyuff`` writes there, one value a point: ``num_pts * 8`` for doubles).  What the codes mean is checked by the caller
-(:mod:`substruct.case.frf_files`).  Other datasets are skipped.
+(:mod:`substruct.case.frf_files`).  The datasets that only draw the geometry or name the
+model (:data:`DRAWING_DATASETS`: 82 trace lines, 2400, 2412 elements) are passed over; any
+other (:data:`READ_DATASETS` are read; e.g. 1858, whose weighting and window codes would
+qualify the functions) is refused: it would go unused.
 """
 
 from __future__ import annotations
@@ -31,7 +34,7 @@ from substruct.case.uff_lines import (MAX_UFF_LINE, UffLines, fixed_field, float
 from substruct.case.uff_units import UffHeader, UffUnits, parse_151, parse_164, to_si
 
 __all__ = ["Uff58", "UffNode", "UffSystem", "UffFile", "read_uff_records", "MAX_UFF_LINE",
-           "MAX_POINTS"]
+           "MAX_POINTS", "READ_DATASETS", "DRAWING_DATASETS"]
 
 #: Most points a function may declare (ten times the frequencies an analysis may have).
 MAX_POINTS = 1_000_000
@@ -308,9 +311,11 @@ def _rows(lines: UffLines, where: str) -> list[str]:
     return [raw.decode("latin-1") for raw in lines.until_delimiter(f"{where}:")]
 
 
-def _skip(lines: UffLines, where: str) -> None:
-    for _ in lines.until_delimiter(f"{where}:"):
-        pass
+#: The datasets a Universal File may hold.
+READ_DATASETS = (15, 18, 58, 151, 164, 2411, 2420)
+#: Datasets that only draw a test's geometry (82 trace lines, 2412 elements) or name its model
+#: (2400): nothing in them changes a node, a system or a function, so they are passed over.
+DRAWING_DATASETS = (82, 2400, 2412)
 
 
 def read_uff_records(path: str | os.PathLike) -> UffFile:
@@ -376,7 +381,10 @@ def read_uff_records(path: str | os.PathLike) -> UffFile:
                 _nodes(lines, number, nodes, table, where)
             elif number in (18, 2420):
                 _systems(lines, number, systems, where)
+            elif number in DRAWING_DATASETS:
+                _rows(lines, where)
             else:
-                _skip(lines, where)
+                raise ValueError(f"{where}: dataset {number} is not read (read: "
+                                 f"{', '.join(map(str, READ_DATASETS))}); it would go unused")
     functions, table, systems = to_si(units, functions, table, systems)
     return UffFile(functions, nodes, table, systems, header, units)

@@ -112,7 +112,14 @@ class _Reader:
         return data
 
     def strings(self, g: h5py.Group, name: str, count: int | None = None) -> list[str]:
-        return [str(s) for s in self.array(g, name, "s", 1, (count,))]
+        """Labels: each at most :data:`MAX_LABEL` characters (the writer stores the names of
+        a case, which are short; control characters are escaped where they are shown)."""
+        out = [str(s) for s in self.array(g, name, "s", 1, (count,))]
+        for k, s in enumerate(out):
+            if len(s) > MAX_LABEL:
+                raise _Bad(f"{g.name}/{name}[{k}] is a label of {len(s)} characters, more "
+                           f"than {MAX_LABEL}")
+        return out
 
     def csr(self, g: h5py.Group, name: str, rows: int | None, cols: int) -> sp.csr_array:
         m = self.node(g, name, h5py.Group)
@@ -134,6 +141,13 @@ class _Reader:
                             shape=(r, c))
 
 
+def _no_negative_frequency(g: h5py.Group, omega: np.ndarray) -> None:
+    """Refuse a negative frequency of a response grid (the writer stores the case's grid,
+    whose frequencies are never negative)."""
+    if omega.size and float(omega.min()) < 0:
+        raise _Bad(f"{g.name}/omega holds the negative frequency {float(omega.min())}")
+
+
 def _require_finite(where: str, values: np.ndarray) -> None:
     """Refuse an array with a NaN or an infinite value (a corrupt file: the writer stores
     finite results only), naming the first one and how many there are."""
@@ -151,6 +165,10 @@ def _number(attrs: dict[str, Any], key: str, where: str, default: float | None =
     if not math.isfinite(value):
         raise _Bad(f"{where} attribute {key} is not finite, got {value}")
     return value
+
+
+#: Longest label read from a result file (characters).
+MAX_LABEL = 1000
 
 
 def _text(value: Any) -> str:
@@ -198,6 +216,7 @@ def _modes(rd: _Reader, g: h5py.Group, n: int) -> Modes:
 def _frf(rd: _Reader, g: h5py.Group) -> Receptance:
     attrs = _scalar_attrs(g)
     omega = rd.array(g, "omega", "f", 1, finite=True)
+    _no_negative_frequency(g, omega)
     inputs, outputs = rd.strings(g, "inputs"), rd.strings(g, "outputs")
     return Receptance(
         method=_text(attrs["method"]), omega=omega,
@@ -212,6 +231,7 @@ def _base_frf(rd: _Reader, g: h5py.Group) -> BaseFrf:
     """``/base_frf`` (:func:`substruct.io.spec_hdf5.write_base_frf`)."""
     attrs = _scalar_attrs(g)
     omega = rd.array(g, "omega", "f", 1, finite=True)
+    _no_negative_frequency(g, omega)
     inputs, outputs = rd.strings(g, "inputs"), rd.strings(g, "outputs")
     agreement = {}
     if g.get("agreement", getlink=True) is not None:

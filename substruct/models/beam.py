@@ -222,9 +222,10 @@ def rotation(xi: Sequence[float], xj: Sequence[float], orientation: Sequence[flo
     v = np.asarray(orientation, dtype=float)
     L, nv = float(np.linalg.norm(d)), float(np.linalg.norm(v))
     if not (L > 0 and np.isfinite(L)):
-        raise ValueError(f"element from {list(xi)} to {list(xj)} has no length")
+        raise ValueError(f"element from {np.asarray(xi, dtype=float).tolist()} to "
+                         f"{np.asarray(xj, dtype=float).tolist()} has no length")
     if not (nv > 0 and np.isfinite(nv)):
-        raise ValueError(f"orientation vector {list(v)} is not a finite non-zero vector")
+        raise ValueError(f"orientation vector {v.tolist()} is not a finite non-zero vector")
     ex = d / L
     ez = np.cross(ex, v / nv)
     nz = float(np.linalg.norm(ez))

@@ -77,7 +77,8 @@ def shell_axes(X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     ``(n, 2)`` its corners in its plane, from the corner positions ``X`` ``(n, 3)``.
 
     Raises:
-        ValueError: coincident or collinear corners, or a warp above :data:`MAX_WARP`.
+        ValueError: coincident or collinear corners, a warp above :data:`MAX_WARP`, or a
+            quadrilateral with a zero or negative Jacobian at a corner (collapsed, folded).
     """
     n = len(X)
     if n == 3:
@@ -96,9 +97,18 @@ def shell_axes(X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             raise ValueError(f"the quadrilateral is warped by {warp:.3g} of its diagonal "
                              f"(at most {MAX_WARP} for a flat facet)")
     ex = (X[1] - X[0]) - ((X[1] - X[0]) @ ez) * ez
+    if not np.linalg.norm(ex) > 1e-12 * size:
+        raise ValueError("the corners are coincident or collinear")
     ex = ex / np.linalg.norm(ex)
     R = np.vstack([ex, np.cross(ez, ex), ez])
     xy = (X - c) @ R[:2].T
+    if n == 4:  # the corner Jacobians (edge cross products): a collapsed or folded corner
+        e1 = np.roll(xy, -1, axis=0) - xy
+        e2 = np.roll(xy, 1, axis=0) - xy
+        corner = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+        if not np.all(corner > 1e-12 * size**2):
+            raise ValueError("the element is degenerate or not convex (det J <= 0 at a "
+                             "corner)")
     return R, xy
 
 

@@ -67,6 +67,11 @@ def _axes(X: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     ex = ex / np.where(nx > 0, nx, 1.0)[:, None]
     R = np.stack([ex, np.cross(ez, ex), ez], axis=1)
     xy = np.einsum("mkc,mic->mki", X - c[:, None], R[:, :2])
+    if n == 4:  # the corner Jacobians, as shell_axes: a collapsed or folded corner
+        e1 = np.roll(xy, -1, axis=1) - xy
+        e2 = np.roll(xy, 1, axis=1) - xy
+        corner = e1[..., 0] * e2[..., 1] - e1[..., 1] * e2[..., 0]
+        ok &= np.all(corner > 1e-12 * size[:, None] ** 2, axis=1)
     return R, xy, ok
 
 
