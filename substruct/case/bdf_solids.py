@@ -176,7 +176,7 @@ _CORNER_EDGES = {
     4: np.array([[0, 1, 2, 3]]),
 }
 #: A corner Jacobian below this fraction of the element's span cubed is zero.
-DEGENERATE = 1e-12
+COLLAPSED_JACOBIAN = 1e-12
 
 
 def check_solid_shapes(cells: list[SolidCell], grids: dict[int, np.ndarray],
@@ -205,7 +205,7 @@ def check_solid_shapes(cells: list[SolidCell], grids: dict[int, np.ndarray],
         edges = X[:, corners[:, 1:], :] - X[:, corners[:, :1], :]  # (cells, corners, 3, 3)
         with np.errstate(all="ignore"):
             jac = np.linalg.det(edges)
-        small = ~(np.abs(jac) > DEGENERATE * span[:, None] ** 3)
+        small = ~(np.abs(jac) > COLLAPSED_JACOBIAN * span[:, None] ** 3)
         mixed = (jac.max(axis=1) > 0) & (jac.min(axis=1) < 0)
         for k in np.flatnonzero(small.any(axis=1) | mixed):
             cell = group[int(k)]

@@ -124,7 +124,7 @@ def _read_npz(path: Path, rectangular: bool = False
 
 
 #: Longest coordinate label read from an FRF file (characters).
-MAX_LABEL = 64
+MAX_FRF_LABEL = 64
 
 
 #: UFF 58 function types (record 6 field 1), for the messages.
@@ -307,9 +307,9 @@ def _read(p: Path, rectangular: bool
         if len(set(names)) != len(names):
             raise ValueError(f"{p.name}: labels repeated")
     for label in (*outs, *ins):  # names of coordinates: they reach messages, results, exports
-        if not 1 <= len(label) <= MAX_LABEL or not label.isprintable() or \
+        if not 1 <= len(label) <= MAX_FRF_LABEL or not label.isprintable() or \
                 label != label.strip():
-            raise ValueError(f"{p.name}: a label is 1 to {MAX_LABEL} printable characters "
+            raise ValueError(f"{p.name}: a label is 1 to {MAX_FRF_LABEL} printable characters "
                              f"without surrounding blanks: {label[:40]!r}")
     if not (np.all(np.isfinite(omega)) and np.all(np.isfinite(H))):
         raise ValueError(f"{p.name}: frequencies and receptances must be finite")

@@ -112,13 +112,13 @@ class _Reader:
         return data
 
     def strings(self, g: h5py.Group, name: str, count: int | None = None) -> list[str]:
-        """Labels: each at most :data:`MAX_LABEL` characters (the writer stores the names of
+        """Labels: each at most :data:`MAX_RESULT_LABEL` characters (the writer stores the names of
         a case, which are short; control characters are escaped where they are shown)."""
         out = [str(s) for s in self.array(g, name, "s", 1, (count,))]
         for k, s in enumerate(out):
-            if len(s) > MAX_LABEL:
+            if len(s) > MAX_RESULT_LABEL:
                 raise _Bad(f"{g.name}/{name}[{k}] is a label of {len(s)} characters, more "
-                           f"than {MAX_LABEL}")
+                           f"than {MAX_RESULT_LABEL}")
         return out
 
     def csr(self, g: h5py.Group, name: str, rows: int | None, cols: int) -> sp.csr_array:
@@ -168,7 +168,7 @@ def _number(attrs: dict[str, Any], key: str, where: str, default: float | None =
 
 
 #: Longest label read from a result file (characters).
-MAX_LABEL = 1000
+MAX_RESULT_LABEL = 1000
 
 
 def _text(value: Any) -> str:
