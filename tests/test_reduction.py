@@ -117,3 +117,21 @@ def test_sparse_path_uses_given_factorization():
     red = modal_truncation(rod, 3, dense_limit=10, factorization=factorize)
     assert calls == [(400, 400)]
     assert np.allclose(red.meta["omega"], uniform_rod_frequencies(1, 1, 1, 3), rtol=1e-8)
+
+
+def test_free_part_elastic_modes_to_round_off():
+    """A free-free solid (six rigid-body modes) truncated by shift-invert Lanczos: its elastic
+    modes satisfy ``K phi = w^2 M phi`` to round-off (3.9e-14 measured; 1.7e-9 before the
+    rigid-body modes were deflated from the operator, whose largest eigenvalue they were)."""
+    import scipy.sparse as sp
+
+    from substruct.models.reduction import undamped_modes
+    from substruct.models.solid import BoxGrid, solid_box
+
+    b = solid_box("b", BoxGrid((1.0, 0.4, 0.3), (10, 4, 3)), 2.1e11, 0.3, 7850.0)
+    K, M = sp.csr_array(b.K), sp.csr_array(b.M)
+    w, Phi = undamped_modes(b, 20, dense_limit=10)
+    assert np.all(w[:6] < 1e-6 * w[6])                  # six rigid-body modes
+    R = K @ Phi[:, 6:] - (M @ Phi[:, 6:]) * w[6:] ** 2
+    rel = np.linalg.norm(R, axis=0) / np.linalg.norm(K @ Phi[:, 6:], axis=0)
+    assert rel.max() < 1e-11, rel.max()

@@ -24,7 +24,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from substruct.linalg.factorize import Factorize, factorizer
-from substruct.linalg.lanczos import rayleigh_ritz, shift_invert_lanczos
+from substruct.linalg.lanczos import rayleigh_ritz, shift_invert_lanczos_deflated
 from substruct.substructure import Substructure, as_csr
 
 __all__ = ["modal_truncation", "undamped_modes"]
@@ -105,7 +105,8 @@ def undamped_modes(sub: Substructure, n_modes: int, *, dense_limit: int = 2000,
     else:
         shift = -1e-9 * scale if sigma is None else float(sigma)
         solve = factorizer(factorization, spd=True)(sp.csc_array(K - shift * M))
-        _, vecs = shift_invert_lanczos(K, M, g, shift, solve)
+        # rigid-body modes (a free part) deflated: the elastic modes to round-off
+        _, vecs = shift_invert_lanczos_deflated(K, M, g, shift, solve, 1e-12 * scale)
         lam, Phi = rayleigh_ritz(K, M, vecs)
     if lam[0] < -1e-8 * scale:
         raise ValueError(f"{sub.name}: K has a negative eigenvalue {lam[0]:.6g} "
