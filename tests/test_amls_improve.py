@@ -71,5 +71,8 @@ def test_blocked_iteration_equals_the_whole_array_form(pencil, iterations):
     R = ref_U[:, keep]
     dots = np.abs(np.einsum("ij,ij->j", got_U, M @ R))[simple]
     assert np.allclose(dots, 1.0, atol=1e-8)
-    # Rayleigh-Ritz values: upper bounds of the exact eigenvalues
-    assert np.all(got_lam >= lam[:got_lam.size] * (1 - 1e-10))
+    # Rayleigh-Ritz values: upper bounds of the exact eigenvalues, to the round-off of the
+    # dense reference, whose eigenvalues are exact to a few eps times the largest (measured:
+    # 10 eps lam_max below on one OpenBLAS kernel, 6 on another); bound 1000 eps lam_max
+    floor = 1e3 * np.finfo(float).eps * lam.max()
+    assert np.all(got_lam >= lam[:got_lam.size] - floor)
