@@ -44,7 +44,6 @@ import json
 import os
 import platform
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
@@ -55,27 +54,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from frf_sweep import N_CHAIN, case_text, chains  # noqa: E402
+from fbs_common import child  # noqa: E402
 
 BARE = "import numpy, scipy.sparse.linalg, h5py"
 ROD = ["--set", "substructures[0].discretization.elements=4000"]
-
-
-def child(cmd: list[str], env: dict) -> dict:
-    """Wall time, CPU time (user + system) and peak resident set (bytes) of one process (and
-    the children it waited for), and its standard output."""
-    with tempfile.TemporaryFile() as err:
-        t0 = time.perf_counter()
-        proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=err, cwd=ROOT)
-        assert proc.stdout is not None
-        out = proc.stdout.read().decode()
-        _, status, usage = os.wait4(proc.pid, 0)
-        wall = time.perf_counter() - t0
-        code = os.waitstatus_to_exitcode(status)
-        if code != 0:
-            err.seek(0)
-            raise RuntimeError(f"{' '.join(cmd)} failed ({code}):\n{err.read().decode()[-3000:]}")
-    return {"wall": wall, "cpu": usage.ru_utime + usage.ru_stime,
-            "peak": usage.ru_maxrss * 1024.0, "out": out}
 
 
 def worker_library(frequencies: int, raw: str) -> None:
@@ -141,14 +123,14 @@ def big_output(opts: argparse.Namespace, env: dict, work: Path) -> None:
                str(work / "out"), "--force", "--quiet", "--no-pictures"]
     a_rows, b_rows, equal = [], [], True
     for _ in range(opts.repeat):
-        a = child(lib_cmd, env)
+        a = child(lib_cmd, env, ROOT)
         a.update(json.loads(a["out"].strip().splitlines()[-1]))
-        b = child(run_cmd, env)
+        b = child(run_cmd, env, ROOT)
         h5 = work / "out" / "two_chains.h5"
         b["size"] = h5.stat().st_size
         compare = child([sys.executable, __file__, "--worker", "compare", "--raw", str(raw),
                          "--h5", str(h5), "--shape", ",".join(str(d) for d in a["shape"])],
-                        env)
+                        env, ROOT)
         equal = equal and json.loads(compare["out"].strip().splitlines()[-1])["equal"]
         raw.unlink()
         a_rows.append(a)
@@ -193,9 +175,9 @@ def startup(opts: argparse.Namespace, env: dict, work: Path) -> None:
     rod = [sys.executable, "-m", "substruct.cli", "run", "cases/tapered_rod_fe.yaml", *ROD,
            "--out", str(work / "rod"), "--force", "--quiet", "--no-pictures"]
     bare = [sys.executable, "-c", BARE]
-    child(rod, env)  # a first run: the files of both in the page cache
+    child(rod, env, ROOT)  # a first run: the files of both in the page cache
     load_before = os.getloadavg()[0]
-    runs = [(child(rod, env), child(bare, env)) for _ in range(opts.startup_repeat)]
+    runs = [(child(rod, env, ROOT), child(bare, env, ROOT)) for _ in range(opts.startup_repeat)]
     load_after = os.getloadavg()[0]
     cpu_r = statistics.median(r["cpu"] for r, _ in runs)
     cpu_b = statistics.median(b["cpu"] for _, b in runs)

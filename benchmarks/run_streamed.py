@@ -36,7 +36,6 @@ import json
 import os
 import platform
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
@@ -47,6 +46,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from frf_sweep import N_CHAIN, case_text, chains  # noqa: E402
+from fbs_common import child  # noqa: E402
 
 ROD = """\
 name: {name}
@@ -70,25 +70,6 @@ analysis:
 output: {{pictures: false}}
 """
 DATASET = {"transient": "transient/snapshots", "modal": "frf/H"}
-
-
-def child(cmd: list[str], env: dict, cwd: Path) -> dict:
-    """Wall time, CPU time (user + system) and peak resident set (bytes) of one process (and
-    the children it waited for), and its standard output.  Run in ``cwd``, away from this
-    checkout: ``python -m`` puts the working directory first on the path."""
-    with tempfile.TemporaryFile() as err:
-        t0 = time.perf_counter()
-        proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=err, cwd=cwd)
-        assert proc.stdout is not None
-        out = proc.stdout.read().decode()
-        _, status, usage = os.wait4(proc.pid, 0)
-        wall = time.perf_counter() - t0
-        code = os.waitstatus_to_exitcode(status)
-        if code != 0:
-            err.seek(0)
-            raise RuntimeError(f"{' '.join(cmd)} failed ({code}):\n{err.read().decode()[-3000:]}")
-    return {"wall": wall, "cpu": usage.ru_utime + usage.ru_stime,
-            "peak": usage.ru_maxrss * 1024.0, "out": out}
 
 
 def write_cases(work: Path, opts: argparse.Namespace) -> dict[str, Path]:

@@ -36,6 +36,7 @@ from substruct.models.nastran import nastran_matrices
 from substruct.models.nastran_bubble import isotropic_D
 from substruct.models.nastran_quad_solids import HEX20_EDGES, PENTA15_EDGES, penta15_matrices
 from test_bdf_tet10 import timoshenko_free_free
+from skfem_dofs import skfem_to_grids
 
 E, NU, RHO = 2.1e11, 0.3, 7850.0
 FULL = "PSOLID,1,1,,THREE,,FULL"
@@ -120,13 +121,7 @@ def test_the_same_matrices_as_scikit_fems_serendipity_hexahedron():
     assert basis.X.shape[1] == 27
     Kr = asm(linear_elasticity(LAM, MU), basis)
     Mr = asm(BilinearForm(lambda u, v, w: RHO * dot(u, v)), basis)
-    key = {tuple(np.round(x, 12)): k for k, x in enumerate(pts)}
-    target = np.empty(basis.N, dtype=np.int64)
-    for c in range(3):
-        for dofs in (basis.nodal_dofs[c], basis.edge_dofs[c]):
-            for d in dofs:
-                target[d] = 3 * key[tuple(np.round(basis.doflocs[:, d], 12))] + c
-    P = sp.csr_array((np.ones(basis.N), (target, np.arange(basis.N))), shape=K.shape)
+    P = skfem_to_grids(basis, pts, K.shape[0])
     for ours, ref in ((K, Kr), (M, Mr)):
         diff = abs(ours - P @ sp.csr_array(ref) @ P.T).max()
         assert diff <= 1e-12 * abs(ours).max(), diff

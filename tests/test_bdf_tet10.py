@@ -29,6 +29,7 @@ from substruct.case.bdf_fields import BdfError
 from substruct.models.beam_batch import BeamBatch, beam_matrices_batch
 from substruct.models.nastran import nastran_matrices
 from substruct.models.nastran_tet10 import TET10_EDGES
+from skfem_dofs import skfem_to_grids
 
 E, NU, RHO = 2.1e11, 0.3, 7850.0
 HEAD = ["BEGIN BULK", "MAT1,1,2.1+11,,.3,7850.", "PSOLID,1,1"]
@@ -76,14 +77,7 @@ def test_the_same_matrices_as_scikit_fems_quadratic_tetrahedron():
     mu, lam = E / (2 * (1 + NU)), E * NU / ((1 + NU) * (1 - 2 * NU))
     Kr = asm(linear_elasticity(lam, mu), basis)
     Mr = asm(BilinearForm(lambda u, v, w: RHO * dot(u, v)), basis)
-    # each scikit-fem DOF's grid (by its position) and component
-    key = {tuple(np.round(x, 12)): k for k, x in enumerate(pts)}
-    target = np.empty(basis.N, dtype=np.int64)
-    for c in range(3):
-        for dofs in (basis.nodal_dofs[c], basis.edge_dofs[c]):
-            for d in dofs:
-                target[d] = 3 * key[tuple(np.round(basis.doflocs[:, d], 12))] + c
-    P = sp.csr_array((np.ones(basis.N), (target, np.arange(basis.N))), shape=K.shape)
+    P = skfem_to_grids(basis, pts, K.shape[0])
     for ours, ref in ((K, Kr), (M, Mr)):
         diff = abs(ours - P @ sp.csr_array(ref) @ P.T).max()
         assert diff <= 1e-13 * abs(ours).max(), diff
