@@ -117,3 +117,26 @@ def test_summary_and_exit_codes(tmp_path, capsys):
     assert code == 1 and "amls-residual" in err and "tolerance" in err
     assert len(err.strip().splitlines()) == 1, err
     assert not (tmp_path / "bad").exists() or not any((tmp_path / "bad").iterdir())
+
+
+def test_ritz_ratio_is_used_and_checked(exact, tmp_path, capsys):
+    """``amls.ritz_ratio``: fewer Ritz vectors iterated (1.2 x the wanted frequency against the
+    default 2 x) give larger errors after the same two steps, still upper bounds; given
+    without iterations, or above the cut-off, it is refused (exit 2, one line)."""
+    rel = {}
+    for ratio in (1.2, None):
+        extra = "" if ratio is None else f", ritz_ratio: {ratio}"
+        r = solve("{count: 20, solver: amls, tolerance: 0.05, "
+                  f"amls: {{cutoff: 3, leaf_size: 100, iterations: 2{extra}}}}}")
+        rel[ratio] = (r.omega / exact.omega) ** 2 - 1
+        # upper bounds, to the round-off of the two solves (2e-12 measured on the lowest)
+        assert rel[ratio].min() > -1e-10
+    assert rel[1.2].max() > 10 * rel[None].max()       # measured 9.3e-7 against 1.4e-8
+    for bad, says in (("{iterations: 0, ritz_ratio: 1.5}", "iterations is 0"),
+                      ("{cutoff: 3, iterations: 1, ritz_ratio: 4}", "at most the cut-off 3")):
+        path = tmp_path / "bad.yaml"
+        path.write_text(case(f"{{count: 8, solver: amls, amls: {bad}}}"))
+        code, out, err = run(capsys, "run", path, "--out", tmp_path / "out")
+        assert code == 2 and "analysis.modes.amls.ritz_ratio" in err and says in err, err
+        assert len(err.strip().splitlines()) == 1
+        assert not (tmp_path / "out").exists()

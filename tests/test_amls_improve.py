@@ -8,6 +8,10 @@ span), so the Ritz values agree to round-off of the projected eigenproblem (1e-1
 its condition times eps), the vectors are M-orthonormal (1e-10) and equal the reference's up
 to sign on simple eigenvalues.  Only those up to ``lam_max`` come back.  The upper-triangle
 projection equals ``W.T @ (A @ W)`` to round-off of the products.
+
+The Chebyshev-shifted steps: their shifts are the roots of ``T_k`` (against NumPy's Chebyshev
+series), the blocked shifted form equals the whole-array one, and on AMLS's own Ritz vectors
+two shifted steps beat two plain ones in frequency error and residual.
 """
 
 from __future__ import annotations
@@ -17,7 +21,15 @@ import pytest
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from substruct.linalg.amls_improve import SOLVE_COLUMNS, projection, subspace_iteration
+from substruct.linalg.amls import reduced_eigenpairs, relative_residuals
+from substruct.linalg.amls_improve import (
+    SOLVE_COLUMNS,
+    chebyshev_shifts,
+    projection,
+    subspace_iteration,
+)
+from substruct.linalg.amls_reduce import amls_reduce
+from substruct.linalg.amls_tree import dissection_tree
 from substruct.linalg.factorize import factorizer
 from substruct.models.solid import BoxGrid, solid_box
 
@@ -76,3 +88,68 @@ def test_blocked_iteration_equals_the_whole_array_form(pencil, iterations):
     # 10 eps lam_max below on one OpenBLAS kernel, 6 on another); bound 1000 eps lam_max
     floor = 1e3 * np.finfo(float).eps * lam.max()
     assert np.all(got_lam >= lam[:got_lam.size] - floor)
+
+
+def test_chebyshev_shifts_are_the_roots_of_t_k():
+    """prod (theta - x_i) is T_k(2 theta / a - 1) up to a constant (a = 1/(lam_u - sigma)):
+    at most 1 in size on [0, a] relative to |T_k| there, equal to it at 40 points."""
+    sigma, lam_u = -2.0, 48.0
+    a = 1.0 / (lam_u - sigma)
+    assert np.array_equal(chebyshev_shifts(1, sigma, lam_u), [0.0])     # one step: plain
+    assert np.array_equal(chebyshev_shifts(3, sigma, None), np.zeros(3))
+    theta = np.linspace(0, 3 * a, 40)
+    for k in (2, 3, 4):
+        x = chebyshev_shifts(k, sigma, lam_u)
+        assert np.all(np.diff(x) < 0) and np.all((x > 0) & (x < a))
+        p = np.prod([theta - xi for xi in x], axis=0)
+        t = np.polynomial.chebyshev.chebval(2 * theta / a - 1, [0] * k + [1])
+        assert np.allclose(p * 2 ** (2 * k - 1) / a ** k, t, rtol=1e-12, atol=1e-12)
+    with pytest.raises(ValueError, match="lam_unwanted"):
+        chebyshev_shifts(2, 1.0, 0.5)
+
+
+@pytest.mark.parametrize("iterations", [2, 3])
+def test_shifted_blocked_iteration_equals_the_whole_array_form(pencil, iterations):
+    K, M, lam = pencil
+    n, p = K.shape[0], SOLVE_COLUMNS + 72
+    U0 = np.random.default_rng(2).standard_normal((n, p))
+    sigma = -1e-3 * lam[0]
+    solve = factorizer("auto")(sp.csc_array(K - sigma * M))
+    lam_max, lam_u = 0.5 * (lam[39] + lam[40]), lam[150]
+    U = U0.copy()
+    for x in chebyshev_shifts(iterations, sigma, lam_u):
+        U = np.asarray(solve(M @ U)).reshape(U.shape) - x * U
+        U = np.linalg.qr(U)[0]                      # the span only
+    kr, mr = U.T @ (K @ U), U.T @ (M @ U)
+    ref = sla.eigh((kr + kr.T) / 2, (mr + mr.T) / 2, eigvals_only=True)
+    got, V = subspace_iteration(K, M, U0.copy(), solve, iterations, lam_max, sigma=sigma,
+                                lam_unwanted=lam_u)
+    keep = ref <= lam_max
+    assert got.size == keep.sum() > 0
+    assert np.allclose(got, ref[keep], rtol=1e-10, atol=0)
+    assert np.allclose(V.T @ (M @ V), np.eye(got.size), atol=1e-10)
+
+
+def test_chebyshev_steps_improve_the_amls_ritz_values(pencil):
+    """On AMLS's own Ritz vectors (cut-off 2, those up to 1.2 x the wanted frequency), two
+    Chebyshev-shifted steps on [0, 1/(lam_u - sigma)], lam_u between the Ritz bound and the
+    cut-off as amls_modes takes it, against two plain steps: smaller frequency errors, and
+    residuals no larger."""
+    K, M, lam = pencil
+    lam_w = 0.5 * (lam[59] + lam[60])
+    bound, lam_c = 1.2 ** 2 * lam_w, 4.0 * lam_w
+    red = amls_reduce(K, M, dissection_tree(K, 100), lam_c)
+    _, Y = reduced_eigenpairs(red, bound)
+    U0 = red.expand(Y)
+    sigma = -1e-3 * lam_w
+    solve = factorizer("auto")(sp.csc_array(K - sigma * M))
+    out = {}
+    for name, lam_u in (("plain", None), ("chebyshev", np.sqrt(bound * lam_c))):
+        got, V = subspace_iteration(K, M, U0.copy(), solve, 2, lam_w, sigma=sigma,
+                                    lam_unwanted=lam_u)
+        assert got.size == 60
+        out[name] = (np.max(got / lam[:60] - 1), relative_residuals(K, M, got, V).max())
+    (e_plain, r_plain), (e_cheb, r_cheb) = out["plain"], out["chebyshev"]
+    # measured: largest error 3.9e-4 against 8.6e-4, residual 1.5e-2 against 2.4e-2
+    assert e_cheb < 0.6 * e_plain, out
+    assert r_cheb <= r_plain, out

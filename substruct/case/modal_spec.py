@@ -19,11 +19,23 @@ class AmlsSpec(StrictModel):
     """How ``solver: amls`` reduces (:mod:`substruct.analysis.modes.amls`): every block keeps
     its modes up to ``cutoff`` times the highest wanted frequency; subdomains of at most
     ``leaf_size`` coordinates; ``iterations`` subspace iterations with the full factorization
-    after the reduction."""
+    after the reduction, on the Ritz vectors up to ``ritz_ratio`` times the wanted frequency
+    (at most ``cutoff``; default 2, only with iterations)."""
 
     cutoff: Annotated[Number, Field(gt=1)] = 5.0
     leaf_size: Annotated[int, Field(ge=8, le=1_000_000)] = 1000
     iterations: Annotated[int, Field(ge=0, le=10)] = 0
+    ritz_ratio: Annotated[Number, Field(ge=1)] | None = None
+
+    @model_validator(mode="after")
+    def _ritz_ratio(self) -> "AmlsSpec":
+        if self.ritz_ratio is not None and not self.iterations:
+            raise FieldError("ritz_ratio", "the Ritz vectors are iterated only with iterations "
+                             ">= 1; iterations is 0", self.ritz_ratio)
+        if self.ritz_ratio is not None and self.ritz_ratio > self.cutoff:
+            raise FieldError("ritz_ratio", f"at most the cut-off {self.cutoff:g} (the blocks "
+                             f"keep no mode above it)", self.ritz_ratio)
+        return self
 
 
 class ModalFrf(StrictModel):

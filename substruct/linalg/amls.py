@@ -17,7 +17,14 @@ below a wanted frequency, for many modes of large sparse models.
    (:func:`substruct.linalg.amls_improve.subspace_iteration`, in blocks); one step
    multiplies the error of
    :math:`\lambda_j` by about :math:`((\lambda_j - \sigma)/(\lambda_{p+1} - \sigma))^2`,
-   :math:`\lambda_{p+1}` the first Ritz value left out.
+   :math:`\lambda_{p+1}` the first Ritz value left out.  Two or more steps are
+   Chebyshev-shifted on the eigenvalues beyond
+   :math:`\lambda_u = \sqrt{\lambda_b \lambda_c}`, the geometric mean of the Ritz bound
+   :math:`\lambda_b = (s\,\omega_{max})^2` and the cut-off: the span's error lies in the
+   components near and above the cut-off, which the reduction truncated, while those between
+   the bound and the cut-off are Ritz vectors left out, which the Rayleigh-Ritz keeps apart
+   (measured on a 29,400-coordinate box, 500 modes, two steps: largest frequency error
+   7.6e-5 with this :math:`\lambda_u`, 1.9e-4 with :math:`\lambda_b`, 2.1e-4 plain).
 
 Accuracy: AMLS is a Rayleigh-Ritz method on nested subspaces, so every computed
 :math:`\lambda_j` is an upper bound of the exact one and decreases monotonically as the
@@ -42,7 +49,7 @@ from substruct.linalg.amls_reduce import ReducedModel, amls_reduce
 from substruct.linalg.amls_tree import DissectionNode, dissection_tree
 from substruct.linalg.factorize import factorizer
 
-__all__ = ["AMLSModes", "amls_modes", "relative_residuals"]
+__all__ = ["AMLSModes", "amls_modes", "reduced_eigenpairs", "relative_residuals"]
 
 #: The shift of the subspace iteration, as a fraction of the wanted eigenvalue
 #: :math:`\omega_{max}^2` (negative: ``K - sigma M`` is positive definite for a free body).
@@ -107,25 +114,32 @@ def reduced_eigenpairs(red: ReducedModel, lam_max: float) -> tuple[np.ndarray, n
     r"""Every eigenpair of :math:`\operatorname{diag}(\Lambda) y = \lambda M_r y` with
     :math:`\lambda \le` ``lam_max``, ``M_r``-normalized.
 
-    Small pencils (or a singular :math:`\Lambda`, a free body's rigid modes): dense ``eigh``
-    subset by value.  Otherwise, with :math:`\Lambda > 0` diagonal, the pencil is the
-    standard symmetric problem
+    A singular :math:`\Lambda` (a free body's rigid modes): dense generalized ``eigh`` subset by
+    value.  Otherwise, with :math:`\Lambda > 0` diagonal, the pencil is the standard symmetric
+    problem
 
     .. math::  \hat M z = \mu z, \qquad \hat M = \Lambda^{-1/2} M_r \Lambda^{-1/2}, \qquad
                \mu = 1/\lambda, \quad y = \Lambda^{-1/2} z / \sqrt{\mu},
 
-    whose largest eigenvalues Lanczos (``eigsh``, ``which="LA"``) finds with sparse products
-    only (the inverse iteration is free: :math:`K_r` is diagonal); the number asked for grows
-    until one found is beyond ``lam_max``.
+    solved by a dense ``eigh`` (MRRR, subset by value: a third of the generalized solver's
+    time at 2,821 reduced coordinates) up to :data:`DENSE_REDUCED` coordinates; above, its
+    largest eigenvalues by Lanczos (``eigsh``, ``which="LA"``) with sparse products only (the
+    inverse iteration is free: :math:`K_r` is diagonal), the number asked for growing until one
+    found is beyond ``lam_max``.
     """
     if red.size == 0:
         return np.zeros(0), np.zeros((0, 0))
-    if red.size <= DENSE_REDUCED or red.lam.min() <= 0:
+    if red.lam.min() <= 0:
         return sla.eigh(np.diag(red.lam), red.M.toarray(), subset_by_value=(-np.inf, lam_max),
                         driver="gvx")
     d = 1.0 / np.sqrt(red.lam)
     D = sp.diags_array(d)
     Mh = sp.csr_array(D @ red.M @ D)
+    if red.size <= DENSE_REDUCED:
+        mu, Z = sla.eigh(Mh.toarray(), subset_by_value=(1.0 / lam_max, np.inf), driver="evr",
+                         overwrite_a=True)
+        lam = 1.0 / mu[::-1]
+        return lam, Z[:, ::-1] * d[:, None] * np.sqrt(lam)
     k = min(max(32, 2 * int(np.sum(red.lam <= lam_max))), red.size - 2)
     v0 = np.random.default_rng(0).standard_normal(red.size)
     while True:
@@ -195,8 +209,10 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
     del red, Y   # the blocks' modes and constraint modes: not held through the iteration
     t = time.perf_counter()
     if iterations and U.shape[1]:
-        solve = factorizer(AUTO)(sp.csc_array(K - SHIFT_FRACTION * lam_w * M))
-        lam, U = subspace_iteration(K, M, U, solve, iterations, lam_w, say)
+        sigma = SHIFT_FRACTION * lam_w
+        solve = factorizer(AUTO)(sp.csc_array(K - sigma * M))
+        lam, U = subspace_iteration(K, M, U, solve, iterations, lam_w, say, sigma,
+                                    np.sqrt(bound * lam_c))
         del solve
     times["improve"] = time.perf_counter() - t
     keep = lam <= lam_w

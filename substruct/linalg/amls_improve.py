@@ -15,6 +15,33 @@ span matters, so an intermediate step makes :math:`W` ``M``-orthonormal by a Cho
 :math:`W \leftarrow W R^{-1}`, :math:`R^T R = W^T M W` (one projection, no ``K``-projection,
 eigensolve or rotation); the Rayleigh-Ritz is done once, after the last step, for the
 eigenpairs up to the wanted one only.
+
+**Chebyshev shifts.**  ``k`` plain steps apply :math:`A^k`, :math:`A = (K - \sigma M)^{-1}
+M`, which damps an unwanted component of eigenvalue :math:`\theta = 1/(\lambda - \sigma)`
+against the wanted mode ``j`` by :math:`(\theta/\theta_j)^k`.  Given an interval
+:math:`[0, a]`, :math:`a = 1/(\lambda_u - \sigma)`, that holds the unwanted components which
+matter, step ``i`` applies :math:`A - x_i I` instead, the :math:`x_i` the roots of the
+Chebyshev polynomial :math:`T_k` mapped onto :math:`[0, a]`,
+
+.. math::  x_i = \tfrac{a}{2}\,\bigl(1 + \cos\tfrac{(2i - 1)\pi}{2k}\bigr), \qquad
+           \prod_i (A - x_i I) \propto T_k\!\bigl(\tfrac{2A}{a} - I\bigr),
+
+the polynomial of degree ``k`` least on :math:`[0, a]` (at most 1 in size) for its growth
+above it: an unwanted component is damped by :math:`1/T_k(2\theta_j/a - 1)` instead of
+:math:`(\theta/\theta_j)^k`.  For a wanted mode at :math:`\lambda_u = 2.25 \lambda_j`, two
+steps give 0.043 against :math:`2.25^{-2} = 0.198`.  Each step is one solve per vector and an
+``axpy`` (no extra ``n x p`` array), and since :math:`(A - x I)(W R) = ((A - x I) W) R` the
+Cholesky QR between steps does not change the filter.  Components above :math:`a`
+(unwanted eigenvalues below :math:`\lambda_u`) are amplified, less than the wanted ones
+above them: the filter degrades gracefully and never favours an unwanted mode over a wanted
+one.  AMLS chooses :math:`\lambda_u` (:func:`substruct.linalg.amls.amls_modes`).
+
+A single step stays the plain one: :math:`T_1` leaves the high-frequency components
+(:math:`\theta \to 0`) as large as the wanted ones shrink them, and the residual
+:math:`\|K u - \lambda M u\|` weighs them by :math:`K`.  Measured on 500 modes of a
+29,400-coordinate box (docs/amls.md): one shifted step lowers the largest frequency error from
+7.8e-4 to 4.8e-4 but raises the largest residual from 5.7e-2 to 7.0e-2; two shifted steps
+lower both (2.1e-4 to 7.6e-5, 1.9e-2 to 1.2e-2).
 """
 
 from __future__ import annotations
@@ -27,7 +54,7 @@ import scipy.sparse as sp
 
 from substruct.linalg.factorize import Solve
 
-__all__ = ["SOLVE_COLUMNS", "ROWS", "projection", "subspace_iteration"]
+__all__ = ["SOLVE_COLUMNS", "ROWS", "chebyshev_shifts", "projection", "subspace_iteration"]
 
 #: Columns of an ``n x p`` block of vectors handled at once (solves, sparse products,
 #: residuals): the temporaries are ``n x SOLVE_COLUMNS``, not ``n x p``.
@@ -66,22 +93,44 @@ def _orthonormalize(M: sp.csr_array, W: np.ndarray) -> None:
     _rotate(W, s[:, None] * sla.solve_triangular(R, np.eye(R.shape[0])), W)
 
 
+def chebyshev_shifts(iterations: int, sigma: float, lam_unwanted: float | None
+                     ) -> np.ndarray:
+    r"""The shifts :math:`x_i` of the ``iterations`` steps (module docstring), descending; all
+    zero (plain subspace iteration) when ``lam_unwanted`` (:math:`\lambda_u`) is ``None`` or for
+    a single step."""
+    if lam_unwanted is None or iterations == 1:
+        return np.zeros(iterations)
+    if not lam_unwanted > sigma:
+        raise ValueError(f"lam_unwanted must exceed the shift {sigma!r}, got {lam_unwanted!r}")
+    a = 1.0 / (lam_unwanted - sigma)
+    i = np.arange(1, iterations + 1)
+    return 0.5 * a * (1.0 + np.cos((2 * i - 1) * np.pi / (2 * iterations)))
+
+
 def subspace_iteration(K: sp.csr_array, M: sp.csr_array, U: np.ndarray, solve: Solve,
                        iterations: int, lam_max: float,
-                       say: Callable[[str], None] | None = None
+                       say: Callable[[str], None] | None = None,
+                       sigma: float = 0.0, lam_unwanted: float | None = None
                        ) -> tuple[np.ndarray, np.ndarray]:
     r"""``iterations`` (>= 1) steps of subspace iteration on the ``n x p`` vectors ``U``
     (module docstring; ``solve``: :math:`(K - \sigma M)^{-1}`), then the Rayleigh-Ritz
     eigenpairs with :math:`\lambda \le` ``lam_max``, ascending, ``M``-orthonormal.  ``U`` is
-    overwritten; the memory is ``U``, the ``n x k`` result and ``n x SOLVE_COLUMNS`` temporaries."""
+    overwritten; the memory is ``U``, the ``n x k`` result and ``n x SOLVE_COLUMNS`` temporaries.
+
+    With ``lam_unwanted`` (:math:`\lambda_u`; ``sigma``: the shift ``solve`` was factorized
+    with) the steps are Chebyshev-shifted (:func:`chebyshev_shifts`)."""
     n, p = U.shape
     W = U
+    shifts = chebyshev_shifts(iterations, sigma, lam_unwanted)
     for it in range(iterations):
         if it:
             _orthonormalize(M, W)
         for j in range(0, p, SOLVE_COLUMNS):
-            B = M @ np.ascontiguousarray(W[:, j:j + SOLVE_COLUMNS])
-            W[:, j:j + SOLVE_COLUMNS] = np.asarray(solve(B)).reshape(B.shape)
+            Wj = np.ascontiguousarray(W[:, j:j + SOLVE_COLUMNS])
+            Y = np.asarray(solve(M @ Wj)).reshape(Wj.shape)
+            if shifts[it]:
+                Y -= shifts[it] * Wj
+            W[:, j:j + SOLVE_COLUMNS] = Y
         if say is not None:
             say(f"AMLS subspace iteration {it + 1}: {p} vectors")
     Mp = projection(M, W)
