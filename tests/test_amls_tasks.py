@@ -98,7 +98,9 @@ def test_workers_without_amls_is_refused(tmp_path):
     assert done.stderr.strip() == ("substruct: error: --workers: runs the blocks of an AMLS "
                                    "reduction or the samples of a virtual-point Monte Carlo "
                                    "study as tasks; the case has no virtual_points.monte_carlo"
-                                   " and its analysis.modes.solver is not amls, got sparse")
+                                   " and no solver: amls in analysis.modes or the modal "
+                                   "block of analysis.frf, random or transient, got "
+                                   "analysis.modes.solver sparse")
     assert not (tmp_path / "sparse").exists()
 
 

@@ -38,8 +38,8 @@ from substruct.cli.summary import print_summary, summary_json
 if TYPE_CHECKING:
     from substruct.run.result import Result
 
-__all__ = ["run_command", "run_backend", "monte_carlo_case", "picture_paths", "write_pictures",
-           "write_case_pictures", "compute",
+__all__ = ["run_command", "run_backend", "amls_solvers", "monte_carlo_case", "picture_paths",
+           "write_pictures", "write_case_pictures", "compute",
            "stage_set"]
 
 
@@ -76,8 +76,8 @@ def compute(case: Any, quiet: bool, frf_sink: Any = None, backend: Any = None,
 
 def run_backend(args: argparse.Namespace, case: Any) -> Any:
     """The backend of ``--workers``/``--scheduler`` (``None`` without them), refused unless
-    the case computes its modes by AMLS (``analysis.modes.solver: amls``) or has a Monte Carlo
-    study (``virtual_points.monte_carlo``), the analyses of ``run`` whose tasks it runs."""
+    the case reduces by AMLS (``solver: amls`` in any of :func:`amls_solvers`) or has a Monte
+    Carlo study (``virtual_points.monte_carlo``), the analyses of ``run`` whose tasks it runs."""
     if getattr(args, "workers", None) is None and getattr(args, "scheduler", None) is None:
         if getattr(args, "connect_timeout", None) is not None:
             raise InputError(f"--connect-timeout: only with --scheduler, got "
@@ -86,14 +86,36 @@ def run_backend(args: argparse.Namespace, case: Any) -> Any:
     from substruct.cli.study_command import backend_options
 
     backend = backend_options(args)
-    modes = case.analysis.modes
-    if (modes is None or modes.solver != "amls") and not monte_carlo_case(case):
+    solvers = amls_solvers(case)
+    if "amls" not in solvers.values() and not monte_carlo_case(case):
         flag = "--workers" if args.workers is not None else "--scheduler"
+        got = ", ".join(f"{k} {v}" for k, v in solvers.items()) or "no modal analysis"
         raise InputError(f"{flag}: runs the blocks of an AMLS reduction or the samples of a "
                          f"virtual-point Monte Carlo study as tasks; the case has no "
-                         f"virtual_points.monte_carlo and its analysis.modes.solver is not "
-                         f"amls, got {modes.solver if modes is not None else 'no modes'}")
+                         f"virtual_points.monte_carlo and no solver: amls in analysis.modes "
+                         f"or the modal block of analysis.frf, random or transient, got {got}")
     return backend
+
+
+def amls_solvers(case: Any) -> dict[str, str]:
+    """The eigensolver of each analysis of ``case`` that may reduce by AMLS, by its field:
+    ``analysis.modes``, and the modal sums of ``analysis.frf`` (``method`` modal or auto),
+    ``analysis.random`` (``method: modal``) and ``analysis.transient`` (the modal form, its
+    method or a check)."""
+    a = case.analysis
+    found = {}
+    if a.modes is not None:
+        found["analysis.modes.solver"] = a.modes.solver
+    if a.frf is not None and a.frf.method in ("modal", "auto"):
+        found["analysis.frf.modal.solver"] = a.frf.modal.solver
+    for name, block, used in (
+            ("random", a.random, a.random is not None and a.random.method == "modal"),
+            ("transient", a.transient, a.transient is not None
+             and "modal" in (a.transient.method, *a.transient.check))):
+        if used:
+            modal = block.modal
+            found[f"analysis.{name}.modal.solver"] = "auto" if modal is None else modal.solver
+    return found
 
 
 def monte_carlo_case(case: Any) -> bool:

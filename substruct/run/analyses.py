@@ -180,14 +180,17 @@ def check_dense_modes(case: Case, asm: Assembly) -> None:
 
 
 def frf_result(case: Case, model: Model, progress: Progress | None,
-               sink: FrequencySink | None = None) -> Receptance:
+               sink: FrequencySink | None = None, tasks: TaskMap | None = None
+               ) -> Receptance:
     """The receptances ``case.analysis.frf`` asks for, at its points
     (:func:`substruct.analysis.api.receptance_sweep`).
 
     Given a ``sink``, the receptances go to it a block of frequencies at a time as they are
     computed, already as ``analysis.frf.quantity`` (a
     :class:`~substruct.analysis.frf.stream.SweepTap` converts each block after keeping the
-    checked frequencies), and the result's ``H`` is their summary and selections.
+    checked frequencies), and the result's ``H`` is their summary and selections.  The tree
+    levels of an AMLS basis (``modal.solver: amls``) run through ``tasks``
+    (:data:`~substruct.linalg.amls_block.TaskMap`; ``None``: in this process).
 
     Raises:
         CaseError: at ``analysis.frf``, for input the solver cannot take (an inconsistent
@@ -203,7 +206,7 @@ def frf_result(case: Case, model: Model, progress: Progress | None,
     try:
         options = SweepOptions(method=spec.method, checks=spec.check, tolerance=spec.tolerance,
                                input_names=spec.inputs, output_names=spec.outputs,
-                               progress=progress, modal=_modal_options(case))
+                               progress=progress, modal=_modal_options(case, tasks))
         w = spec.omegas()
         if sink is None:
             return in_place_quantity(receptance_sweep(asm.system, w, inputs, outputs,
@@ -220,20 +223,21 @@ def frf_result(case: Case, model: Model, progress: Progress | None,
         raise CheckError(f"{err}; to accept it, raise analysis.frf.tolerance") from None
 
 
-def _modal_options(case: Case) -> ModalOptions:
+def _modal_options(case: Case, tasks: TaskMap | None) -> ModalOptions:
     spec = case.analysis.frf
     assert spec is not None
-    return modal_options(spec.modal)
+    return modal_options(spec.modal, tasks)
 
 
 def rows_receptance(case: Case, model: Model, rows: sp.csr_array,
-                    omegas: np.ndarray) -> np.ndarray:
+                    omegas: np.ndarray, tasks: TaskMap | None = None) -> np.ndarray:
     r"""The receptances of the output rows ``rows`` (``m x n``, on the coupled coordinates)
     to the inputs of ``case.analysis.frf`` at ``omegas``, by its method and without checks:
 
     .. math::  H_R[k, i, j] = \text{rows}_i \, \hat H(\omega_k)\, e_j
 
-    (a second sweep at the frequencies of the first; ``n_omega x m x n_inputs``, complex).
+    (a second sweep at the frequencies of the first; ``n_omega x m x n_inputs``, complex),
+    an AMLS basis's tree levels run through ``tasks`` (``None``: in this process).
 
     Raises:
         CaseError: at ``analysis.frf``, for input the solver cannot take.
@@ -245,7 +249,7 @@ def rows_receptance(case: Case, model: Model, rows: sp.csr_array,
     inputs = sp.csc_array(asm.rows([model.points[p] for p in spec.inputs]).T)
     try:
         options = SweepOptions(method=spec.method, input_names=spec.inputs,
-                               what="frf (recovery)", modal=_modal_options(case))
+                               what="frf (recovery)", modal=_modal_options(case, tasks))
         res = receptance_sweep(asm.system, np.asarray(omegas, dtype=float), inputs,
                                sp.csr_array(rows), options=options)
     except INPUT_ERRORS as err:

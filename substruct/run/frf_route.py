@@ -49,6 +49,7 @@ from substruct.builder.frf_parts import MODEL_PART, FrfPart, split_frf_case
 from substruct.builder.model import Model
 from substruct.case.fields import parse_point
 from substruct.case.loader import Case
+from substruct.linalg.amls_block import TaskMap
 from substruct.run.analyses import frf_result
 from substruct.vocabulary import GENERALIZED_INVERSE
 
@@ -93,7 +94,8 @@ def singular_interface(parts: list[FrfPart], pairs: list[tuple[str, str]]) -> fl
 
 
 def coupled_frf_result(case: Case, model: Model, progress: Progress | None = None,
-                       sink: FrequencySink | None = None) -> Receptance:
+                       sink: FrequencySink | None = None, tasks: TaskMap | None = None
+                       ) -> Receptance:
     """The receptances ``case.analysis.frf`` asks for, of the model coupled with the case's
     FRF substructures (``model`` is the finite-element part, built from
     :func:`substruct.builder.frf_parts.split_frf_case`'s ``model_case``).
@@ -103,7 +105,8 @@ def coupled_frf_result(case: Case, model: Model, progress: Progress | None = Non
     ``analysis.frf.quantity`` (a :class:`~substruct.analysis.frf.stream.SweepTap` converts
     each block), and the result's ``H`` is their summary and selections
     (:class:`~substruct.analysis.frf.stream.StreamedArray`), as
-    :func:`substruct.run.analyses.frf_result` does.
+    :func:`substruct.run.analyses.frf_result` does; the model's AMLS basis (``modal.solver:
+    amls``), if any, is reduced through ``tasks`` (``None``: in this process).
 
     Raises:
         CaseError: grids that differ without ``interpolate: linear``, a singular interface.
@@ -120,7 +123,7 @@ def coupled_frf_result(case: Case, model: Model, progress: Progress | None = Non
         first = FrfPart(ANALYSIS_GRID, w, [], np.zeros((len(w), 0, 0), dtype=complex))
         fe_method = ""
     else:
-        fe = frf_result(split.model_case, model, progress)
+        fe = frf_result(split.model_case, model, progress, tasks=tasks)
         first = FrfPart(MODEL_PART, fe.omega, list(split.model_points), fe.H)
         checks.update({f"{MODEL_PART} {k}": v for k, v in fe.agreement.items()})
         fe_method = f" ({MODEL_PART}: {fe.method})"

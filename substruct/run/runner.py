@@ -93,8 +93,11 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
         field_sink: where the fields a transient run stores (``field_every``) go as they
             are recorded, a block of instants at a time (the result file of
             ``substruct run``); ``None``: kept whole.
-        tasks: where the blocks of an AMLS reduction (``analysis.modes.solver: amls``) run
-            (:data:`substruct.linalg.amls_block.TaskMap`; ``None``: in this process).
+        tasks: where the blocks of an AMLS reduction run (:data:`substruct.linalg.
+            amls_block.TaskMap`; ``None``: in this process): the modes' (``analysis.modes.
+            solver: amls``) and the AMLS bases of the modal receptance, the random response
+            and the modal transient (``modal.solver: amls``), and a virtual-point Monte
+            Carlo study's samples.
 
     Returns:
         The :class:`~substruct.run.result.Result`: modes (physical modes ascending, spurious
@@ -160,7 +163,7 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
             result.frf = loss_frf_result(case, model, progress)
         else:
             route = coupled_frf_result if has_frf_parts(case) else frf_result
-            result.frf = route(case, model, progress, None if testlab else frf_sink)
+            result.frf = route(case, model, progress, None if testlab else frf_sink, tasks)
         if testlab:
             from substruct.run.testlab_route import semm_result, tpa_result  # when used
             if case.analysis.tpa is not None:
@@ -185,9 +188,10 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
         else:
             from substruct.run.spec_route import loss_rows_receptance
 
-            rows_of = rows_receptance if frf.loss_factor is None else loss_rows_receptance
             with np.errstate(over="ignore", invalid="ignore"):
-                got = omegas, rows_of(case, model, rec_rows, omegas)
+                got = omegas, (rows_receptance(case, model, rec_rows, omegas, tasks)
+                               if frf.loss_factor is None else
+                               loss_rows_receptance(case, model, rec_rows, omegas))
         if got is not None:
             recover_frf(plan, got[1], got[0], list(frf.inputs), result.recovery)
     if case.analysis.transient is not None:
@@ -201,14 +205,14 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
                  for _s in spec.histories() for lab in r.labels]
         # an overflow of the histories is refused below in one line, not warned about first
         with np.errstate(over="ignore", invalid="ignore"):
-            tr = transient_result(case, model, rows, names, field_sink)
+            tr = transient_result(case, model, rows, names, field_sink, tasks)
         result.transient = split_recovered(plan, tr, len(case.analysis.transient.outputs),
                                            result.recovery) if plan else tr
     # specification analyses (substruct.run.spec_route)
     if case.analysis.random is not None:
         from substruct.run.spec_route import random_result
 
-        result.random = random_result(case, model)
+        result.random = random_result(case, model, tasks)
         require_finite("random", psd=result.random.psd)
     if case.analysis.base_frf is not None:
         from substruct.run.base_frf_route import base_frf_result

@@ -52,6 +52,7 @@ from substruct.builder.model import Model
 from substruct.case.analysis import LossFactorSpec
 from substruct.case.loader import Case
 from substruct.case.random_cross import cross_matrix
+from substruct.linalg.amls_block import TaskMap
 from substruct.run.modal_options import modal_options
 from substruct.run.spec_results import RandomResponse, ShockSpectra
 from substruct.vocabulary import DERIVATIVE_ORDER
@@ -196,8 +197,11 @@ def base_columns(case: Case, model: Model, supports: Sequence[Sequence[str]], lo
     return E
 
 
-def random_result(case: Case, model: Model) -> RandomResponse:
-    """The response PSDs and RMS values of ``analysis.random`` (module docstring).
+def random_result(case: Case, model: Model, tasks: TaskMap | None = None
+                  ) -> RandomResponse:
+    """The response PSDs and RMS values of ``analysis.random`` (module docstring); with
+    ``method: modal`` and ``modal.solver: amls``, the AMLS basis's tree levels run through
+    ``tasks`` (:data:`~substruct.linalg.amls_block.TaskMap`; ``None``: in this process).
 
     Raises:
         CaseError: an unknown substructure of ``loss_factor``, a base point not grounded,
@@ -230,7 +234,7 @@ def random_result(case: Case, model: Model) -> RandomResponse:
                 [list(c.between) for c in spec.cross]) from None
     modal = spec.method == "modal"
     options = SweepOptions(**sweep_kw(spec, names, spec.outputs), what="random",
-                           modal=modal_options(spec.modal) if modal else None)
+                           modal=modal_options(spec.modal, tasks) if modal else None)
     try:
         if bases and modal:
             E = base_columns(case, model, [b.at for b in bases], loc, spec.base is not None)

@@ -31,7 +31,6 @@ from substruct.analysis.transient import (
     TransientOutputs,
     transient,
 )
-from substruct.analysis.modes.amls import AmlsOptions
 from substruct.analysis.transient.base import BaseMotion
 from substruct.analysis.transient.fields import FieldSink
 from substruct.analysis.transient.initial import InitialStateError
@@ -45,6 +44,8 @@ from substruct.case.modal_spec import TransientModal
 from substruct.case.transient import load_values
 from substruct.case.transient_files import npz_vector
 from substruct.case.transient_signals import waveform
+from substruct.linalg.amls_block import TaskMap
+from substruct.run.modal_options import amls_options
 
 __all__ = ["transient_result"]
 
@@ -207,24 +208,27 @@ def _initial(case: Case, model: Model) -> tuple[np.ndarray | None, np.ndarray | 
     return d0, v0
 
 
-def _modal(block: TransientModal | None) -> dict[str, Any]:
-    """The modal form's options of ``analysis.transient.modal`` (none if not given)."""
+def _modal(block: TransientModal | None, tasks: TaskMap | None) -> dict[str, Any]:
+    """The modal form's options of ``analysis.transient.modal`` (none if not given); an
+    AMLS basis's tree levels run through ``tasks`` (``None``: in this process)."""
     if block is None:
         return {}
-    amls = block.amls
     return dict(modal_solver=block.solver, modal_cutoff=block.cutoff,
                 modal_residual=block.residual,
-                modal_amls=None if amls is None else AmlsOptions(**amls.model_dump()))
+                modal_amls=amls_options(block.solver, block.amls, tasks))
 
 
 def transient_result(case: Case, model: Model, extra: sp.csr_array | None = None,
                      extra_names: list[str] | None = None,
-                     field_sink: FieldSink | None = None) -> Transient:
+                     field_sink: FieldSink | None = None,
+                     tasks: TaskMap | None = None) -> Transient:
     """The time histories ``case.analysis.transient`` asks for; ``extra`` output rows (named
     ``extra_names``) are recorded after the case's outputs (the recovery of superelements'
     interiors, :mod:`substruct.run.recovery`).  The fields stored every ``field_every`` steps
     go to ``field_sink`` a block at a time as they are recorded, if given (the result file of
-    ``substruct run``); else they are kept whole, and refused beyond the memory limit.
+    ``substruct run``); else they are kept whole, and refused beyond the memory limit.  The
+    tree levels of an AMLS basis (``modal.solver: amls``) run through ``tasks``
+    (:data:`~substruct.linalg.amls_block.TaskMap`; ``None``: in this process).
 
     Raises:
         CaseError: at ``analysis.transient``, for input the analysis cannot take.
@@ -259,7 +263,7 @@ def transient_result(case: Case, model: Model, extra: sp.csr_array | None = None
                                 integrator=spec.integrator, rho_inf=spec.spectral_radius,
                                 every=spec.every, field_every=spec.field_every,
                                 forces=spec.constraint_forces, modal_count=spec.modal_count,
-                                **_modal(spec.modal))
+                                **_modal(spec.modal, tasks))
         initial = InitialConditions(d0=d0, v0=v0, static=spec.initial.static)
         return transient(asm.M, asm.C, asm.K, asm.A, asm.b,
                          LoadHistory(B, f, spec.dt, steps, pairs=pairs, base=ground),

@@ -186,7 +186,8 @@ def vp_frf_result(case: Case, model: Model, progress: Progress | None = None,
     """The receptances ``case.analysis.frf`` asks for, of the parts coupled at their virtual
     points (module docstring), the consistency indicators per transformed part, and the
     Monte Carlo study of a ``monte_carlo:`` block (``None`` without one; its samples run
-    through ``tasks``, in process by default).
+    through ``tasks``, in process by default, as do the tree levels of the model's AMLS
+    basis, ``modal.solver: amls``).
 
     Raises:
         CaseError: as :func:`transformed_part`; an output that is not measured as an output
@@ -203,7 +204,7 @@ def vp_frf_result(case: Case, model: Model, progress: Progress | None = None,
         w0 = spec.omegas()
         first = FrfPart(ANALYSIS_GRID, w0, [], np.zeros((len(w0), 0, 0), dtype=complex))
     else:
-        fe = frf_result(split.model_case, model, progress)
+        fe = frf_result(split.model_case, model, progress, tasks=tasks)
         first = FrfPart(MODEL_PART, fe.omega, list(split.model_points), fe.H)
         checks.update({f"{MODEL_PART} {k}": v for k, v in fe.agreement.items()})
     w, same = common_grid([first, *split.parts])
