@@ -9,9 +9,6 @@ from typing import Any, Collection, Mapping
 import numpy as np
 import scipy.sparse as sp
 
-from substruct.builder.frames import build_frame
-from substruct.builder.solids import build_solid
-from substruct.builder.superelements import build_superelement
 from substruct.case.loader import (
     Case,
     DiscreteSpec,
@@ -26,7 +23,6 @@ from substruct.case.substructures import MassSpec, SpringSpec
 from substruct.case.superelements import SuperelementSpec
 from substruct.models.discrete import fixed_free, free_free, point_mass, spring
 from substruct.models.reduction import modal_truncation
-from substruct.models.rod import rod_assumed_modes, rod_fe
 from substruct.substructure import Geometry, PointError, Substructure, as_csr
 
 __all__ = ["make_substructures"]
@@ -71,6 +67,8 @@ def _chain_geometry(K: sp.csr_array, index: dict[str, int]) -> Geometry | None:
 
 
 def _rod(case: Case, i: int, spec: RodSpec, nodes_at: list[float]) -> Substructure:
+    from substruct.models.rod import rod_assumed_modes, rod_fe  # scikit-fem: for rods only
+
     disc = spec.discretization
     try:
         if isinstance(disc, FiniteElements):
@@ -127,13 +125,19 @@ def make_substructures(case: Case, positions: dict[str, list[float]],
             subs.append(spring(spec.name, spec.stiffness, spec.damping, grounded=spec.ground))
         elif isinstance(spec, MassSpec):
             subs.append(point_mass(spec.name, spec.mass))
-        elif isinstance(spec, SolidSpec):
+        elif isinstance(spec, SolidSpec):  # each kind's builder imported when used
+            from substruct.builder.solids import build_solid
+
             subs.append(build_solid(case, i, spec))
         elif isinstance(spec, MatrixSpec):
             subs.append(_matrices_substructure(spec))
         elif isinstance(spec, FrameSpec):
+            from substruct.builder.frames import build_frame
+
             subs.append(build_frame(case, i, spec))
         elif isinstance(spec, SuperelementSpec):
+            from substruct.builder.superelements import build_superelement
+
             subs.append(build_superelement(case, i, spec))
         elif isinstance(spec, NastranSpec):
             from substruct.builder.nastran import build_nastran  # Nastran: only when used

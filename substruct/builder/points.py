@@ -7,10 +7,6 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from substruct.builder.frames import frame_where
-from substruct.builder.links import link_point_texts
-from substruct.builder.solids import solid_where
-from substruct.builder.superelements import superelement_where
 from substruct.case.expressions import ExpressionError, scalar
 from substruct.case.loader import Case, DiscreteSpec, RodSpec
 from substruct.case.frames import FrameSpec
@@ -80,7 +76,10 @@ def point_uses(case: Case) -> list[PointUse]:
                  for k, b in enumerate(bfr.bases) for i, p in enumerate(b.at)]
         uses += [PointUse(p, ("analysis", "base_frf", "outputs", i))
                  for i, p in enumerate(bfr.outputs)]
-    uses += [PointUse(text, loc, shown) for text, loc, shown in link_point_texts(case)]
+    if case.links:  # the links' module (and the solids' it uses) only for a case with links
+        from substruct.builder.links import link_point_texts
+
+        uses += [PointUse(text, loc, shown) for text, loc, shown in link_point_texts(case)]
     return uses
 
 
@@ -117,11 +116,17 @@ def resolve_point(case: Case, spec: Any, where: str | None, use: PointUse) -> An
             raise case.error(use.loc, f"spring {spec.name!r} has two ends: write "
                              f"{spec.name}@i or {spec.name}@j", use.text)
         return "i" if where is None else where
-    if isinstance(spec, SolidSpec):
+    if isinstance(spec, SolidSpec):  # each kind's builder imported for a case that has it
+        from substruct.builder.solids import solid_where
+
         return solid_where(case, spec, where, use)
     if isinstance(spec, FrameSpec):
+        from substruct.builder.frames import frame_where
+
         return frame_where(case, spec, where, use)
     if isinstance(spec, SuperelementSpec):
+        from substruct.builder.superelements import superelement_where
+
         return superelement_where(case, spec, where, use)
     if isinstance(spec, NastranSpec):
         if where is None or ":" not in where:

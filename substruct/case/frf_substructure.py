@@ -32,7 +32,7 @@ from substruct.case.fields import Name, StrictModel
 from substruct.case.frf_files import read_frf_file, read_measured_file
 from substruct.case.virtual_points import VirtualPointsSpec
 
-__all__ = ["FrfSpec"]
+__all__ = ["FrfSpec", "has_frf_parts"]
 
 
 def _channel_labels(omega: np.ndarray, outs: list[str], ins: list[str], H: np.ndarray,
@@ -120,3 +120,9 @@ class FrfSpec(StrictModel):
     def n_dof(self) -> Any:
         """``None``: an FRF substructure adds no coordinates to the assembled model."""
         return None
+
+
+def has_frf_parts(case: Any) -> bool:
+    """Whether a substructure of the case is ``type: frf`` (its parts are coupled by their
+    receptances: :mod:`substruct.builder.frf_parts`)."""
+    return any(isinstance(s, FrfSpec) for s in case.substructures)

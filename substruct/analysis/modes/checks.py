@@ -123,8 +123,12 @@ def _stiffness_scale(K: sp.csr_array, w: np.ndarray) -> float:
 
 def _rigid_scale(K: sp.csr_array, w: np.ndarray, size: np.ndarray, lam: np.ndarray
                  ) -> np.ndarray:
-    """``|W K W|_inf * size_j`` for a rigid-body mode (``lam_j == 0``), 0 for the others."""
-    return np.where(np.asarray(lam) == 0.0, _stiffness_scale(K, w) * size, 0.0) + 1e-300
+    """``|W K W|_inf * size_j`` for a rigid-body mode (``lam_j == 0``), 0 for the others (the
+    scale computed only if there is one)."""
+    rigid = np.asarray(lam) == 0.0
+    if not rigid.any():
+        return np.zeros(np.shape(size)) + 1e-300
+    return np.where(rigid, _stiffness_scale(K, w) * size, 0.0) + 1e-300
 
 
 def _roots_and_shapes(eigenvalues: np.ndarray, U: np.ndarray,
