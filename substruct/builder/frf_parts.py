@@ -32,7 +32,8 @@ from substruct.builder.model import Model, assemble_case
 from substruct.builder.points import point_uses, resolve_point
 from substruct.case.fields import parse_point
 from substruct.case.frf_files import grid_problem
-from substruct.case.frf_substructure import FrfSpec, has_frf_parts
+from substruct.case.frf_substructure import FrfSpec
+from substruct.case.kinds import has_frf_parts
 from substruct.case.loader import Case
 from substruct.substructure import Substructure
 

@@ -32,8 +32,7 @@ from substruct.builder.drawings import layout_drawings
 from substruct.builder.factory import make_substructures
 from substruct.builder.points import PointUse, point_uses, resolve_point
 from substruct.case.loader import Case, RodSpec, parse_point
-from substruct.case.nastran import NastranSpec
-from substruct.case.solids import SolidSpec
+from substruct.case.kinds import is_nastran, is_solid
 from substruct.linalg.constraints import ConstraintError
 from substruct.substructure import PointError, Substructure
 
@@ -78,7 +77,7 @@ def point_positions(case: Case) -> tuple[list[PointUse], dict[str, tuple[str, An
         value = resolve_point(case, specs[sub], where, use)
         resolved[use.text] = (sub, value)
         spec = specs[sub]
-        if isinstance(spec, SolidSpec):
+        if is_solid(spec):
             positions.setdefault(sub, []).append(value)
         if isinstance(spec, RodSpec):
             positions.setdefault(sub, [])
@@ -103,8 +102,8 @@ def assemble_case(case: Case, prebuilt: Mapping[str, Substructure] | None = None
     """
     uses, resolved, positions = point_positions(case)
     subs = make_substructures(case, positions, prebuilt)
-    solids = any(isinstance(s, SolidSpec) for s in case.substructures)
-    nastran = any(isinstance(s, NastranSpec) for s in case.substructures)
+    solids = any(is_solid(s) for s in case.substructures)
+    nastran = any(is_nastran(s) for s in case.substructures)
     interface_ties: list[Connection] = []
     if solids or case.interfaces:  # the solids' and the links' modules for cases with them
         from substruct.builder.solids import tie_and_reduce

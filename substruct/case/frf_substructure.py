@@ -32,7 +32,7 @@ from substruct.case.fields import Name, StrictModel
 from substruct.case.frf_files import read_frf_file, read_measured_file
 from substruct.case.virtual_points import VirtualPointsSpec
 
-__all__ = ["FrfSpec", "has_frf_parts"]
+__all__ = ["FrfSpec"]
 
 
 def _channel_labels(omega: np.ndarray, outs: list[str], ins: list[str], H: np.ndarray,
@@ -121,8 +121,3 @@ class FrfSpec(StrictModel):
         """``None``: an FRF substructure adds no coordinates to the assembled model."""
         return None
 
-
-def has_frf_parts(case: Any) -> bool:
-    """Whether a substructure of the case is ``type: frf`` (its parts are coupled by their
-    receptances: :mod:`substruct.builder.frf_parts`)."""
-    return any(isinstance(s, FrfSpec) for s in case.substructures)

@@ -22,7 +22,7 @@ from substruct.analysis.results import Modes
 from substruct.builder.model import Model, assemble_case
 from substruct.builder.superelements import rigid_body_attrs
 from substruct.case.errors import CaseError
-from substruct.case.frf_substructure import has_frf_parts
+from substruct.case.kinds import has_frf_parts
 from substruct.case.loader import Case
 from substruct.run.analyses import (
     Progress,
