@@ -262,15 +262,17 @@ def generalized_inverse_residual(K: sp.csr_array, M: sp.csr_array, Ak: sp.csr_ar
         dinv = 1.0 / Md.diagonal()
         a = rhs * dinv[:, None]
         Y = sp.csr_array(sp.diags_array(dinv) @ Ak.T)
-        correction = Y @ _jacobi(Ak @ Y).solve(Ak @ a) if m else 0.0
+        S = _jacobi(Ak @ Y) if m else None  # S = A M_d^-1 A^T, once for both projections
+        correction = Y @ S.solve(Ak @ a) if S is not None else 0.0
     else:
         solve = factorizer("auto", spd=True)(sp.csc_array(Md))
         a = _solve_real(solve, rhs)
         if m:
             Yd = np.asarray(solve(Ak.T.toarray()))
-            correction = Yd @ _jacobi(Ak @ Yd).solve(Ak @ a)
+            S = _jacobi(Ak @ Yd)
+            correction = Yd @ S.solve(Ak @ a)
         else:
-            correction = 0.0
+            S, correction = None, 0.0
     Pa = a - correction
     R = Pa - U * l2
 
@@ -285,8 +287,8 @@ def generalized_inverse_residual(K: sp.csr_array, M: sp.csr_array, Ak: sp.csr_ar
     F = _roundoff(K, M, C, U, lam, l2) * signs
     if _is_diagonal(Md):
         aF = F * dinv[:, None]
-        PaF = aF - (Y @ _jacobi(Ak @ Y).solve(Ak @ aF) if m else 0.0)
+        PaF = aF - (Y @ S.solve(Ak @ aF) if S is not None else 0.0)
     else:
         aF = np.asarray(solve(F))
-        PaF = aF - (Yd @ _jacobi(Ak @ Yd).solve(Ak @ aF) if m else 0.0)
+        PaF = aF - (Yd @ S.solve(Ak @ aF) if S is not None else 0.0)
     return float(np.max(_net(norm(R), norm(PaF)) / denom))
