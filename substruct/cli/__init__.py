@@ -48,6 +48,10 @@ for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 # default (Intel) layer.
 if os.environ["OMP_NUM_THREADS"] == "1" and os.environ["MKL_NUM_THREADS"] == "1":
     os.environ.setdefault("MKL_THREADING_LAYER", "SEQUENTIAL")
+# The case schema's validation without pydantic's plugins (observability hooks, found by
+# scanning the entry points of every installed distribution at the first validation: 0.006 s
+# of each start); a value the user sets is kept.
+os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
 
 import sys  # noqa: E402
 

@@ -360,7 +360,8 @@ def rod_fe(name: str, length: float, EA: Profile | float, m: Profile | float,
 
     return Substructure(
         name=name, M=as_csr(M_all[free][:, free]), K=as_csr(K_all[free][:, free]),
-        C=as_csr(None, n), dof_labels=tuple(point_label(dofx[d]) for d in free), locate=locate,
+        C=as_csr(None, n), dof_labels=tuple(map(point_label, dofx[free].tolist())),
+        locate=locate,
         kind=f"rod/fe/P{order}", geometry=geometry,
         meta={"length": L, "order": order, "n_elements": int(mesh.t.shape[1]),
               "h_max": float(np.max(np.diff(mesh.p[0][np.argsort(mesh.p[0])]))),
