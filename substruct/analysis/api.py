@@ -41,13 +41,6 @@ from substruct.analysis.modes.eigen import (
     choose_solver,
     modes,
 )
-from substruct.analysis.frf.production import (
-    PRODUCTION_SWEEP,
-    constraint_residual,
-    production_sweep,
-    production_sweep_applies,
-    sweep_checks,
-)
 from substruct.analysis.frf.stream import FrequencySink, SweepTap, feed
 from substruct.analysis.results import DEFAULT_TOLERANCE, Receptance
 from substruct.analysis.system import (
@@ -207,6 +200,13 @@ def system_receptance_sweep(system: ConstrainedSystem, omegas: Sequence[float] |
         AnalysisInputError: a singular system (e.g. eq 15 at ``omega = 0``).
     """
     from substruct.analysis.frf.modal import frf_method, modal_receptance_sweep
+    from substruct.analysis.frf.production import (  # the sweeps' modules: when one runs
+        PRODUCTION_SWEEP,
+        constraint_residual,
+        production_sweep,
+        production_sweep_applies,
+        sweep_checks,
+    )
 
     opts = options if options is not None else SweepOptions()
     K, M, C, A, R = system.K, system.M, system.C, system.A, system.R
