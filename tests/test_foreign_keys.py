@@ -24,6 +24,7 @@ import yaml
 from pydantic import BaseModel
 
 from substruct.case.errors import CaseError
+from substruct.case.lazy_models import lazy_members
 from substruct.case.loader import Case, parse_case
 from substruct.run.runner import build_model
 
@@ -33,8 +34,11 @@ KEY = "zz_foreign"
 DATA_KEYED = ("terms", "rhs_force")
 
 
-def _models(tp: Any, seen: set[type]) -> Iterator[type[BaseModel]]:
-    """Every pydantic model class reachable from the annotation ``tp``."""
+def _models(tp: Any, seen: set[type], metadata: Any = ()) -> Iterator[type[BaseModel]]:
+    """Every pydantic model class reachable from the annotation ``tp`` (through the blocks
+    imported when a case has them, too: :mod:`substruct.case.lazy_models`)."""
+    for member in lazy_members(tp, metadata):
+        yield from _models(member, seen)
     origin = get_origin(tp)
     if origin is Annotated:
         yield from _models(get_args(tp)[0], seen)
@@ -46,7 +50,7 @@ def _models(tp: Any, seen: set[type]) -> Iterator[type[BaseModel]]:
         seen.add(tp)
         yield tp
         for field in tp.model_fields.values():
-            yield from _models(field.annotation, seen)
+            yield from _models(field.annotation, seen, field.metadata)
 
 
 def test_every_model_of_the_schema_forbids_extra_keys():

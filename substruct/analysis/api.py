@@ -21,7 +21,7 @@ and with :class:`~substruct.analysis.errors.AnalysisInputError` (or another of
 
 from __future__ import annotations
 
-from typing import Any, Sequence, cast
+from typing import TYPE_CHECKING, Any, Sequence, cast
 
 import numpy as np
 import scipy.sparse as sp
@@ -41,18 +41,6 @@ from substruct.analysis.modes.eigen import (
     choose_solver,
     modes,
 )
-from substruct.analysis.frf.modal import (
-    ModalOptions,
-    frf_method,
-    modal_receptance_sweep,
-)
-from substruct.analysis.frf.production import (
-    PRODUCTION_SWEEP,
-    constraint_residual,
-    production_sweep,
-    production_sweep_applies,
-    sweep_checks,
-)
 from substruct.analysis.frf.stream import FrequencySink, SweepTap, feed
 from substruct.analysis.results import DEFAULT_TOLERANCE, Receptance
 from substruct.analysis.system import (
@@ -63,6 +51,9 @@ from substruct.analysis.system import (
 )
 from substruct.linalg.system import Matrix
 from substruct.vocabulary import GENERALIZED_INVERSE
+
+if TYPE_CHECKING:  # the modal sweep's module is imported by the sweeps that need it
+    from substruct.analysis.frf.modal import ModalOptions
 
 __all__ = [
     "ConstrainedSystem",
@@ -208,6 +199,15 @@ def system_receptance_sweep(system: ConstrainedSystem, omegas: Sequence[float] |
         ConstraintError: a redundant constraint row with an inconsistent ``R``.
         AnalysisInputError: a singular system (e.g. eq 15 at ``omega = 0``).
     """
+    from substruct.analysis.frf.modal import frf_method, modal_receptance_sweep
+    from substruct.analysis.frf.production import (  # the sweeps' modules: when one runs
+        PRODUCTION_SWEEP,
+        constraint_residual,
+        production_sweep,
+        production_sweep_applies,
+        sweep_checks,
+    )
+
     opts = options if options is not None else SweepOptions()
     K, M, C, A, R = system.K, system.M, system.C, system.A, system.R
     method = frf_method(opts.method, system.n, R)

@@ -12,7 +12,6 @@ import scipy.sparse as sp
 
 from substruct.assembly.stack import Assembly, PointRef
 from substruct.builder.drawing import Drawing
-from substruct.builder.frame_drawing import beam_curves
 from substruct.models.selection import component_index
 from substruct.substructure import Geometry, Substructure
 
@@ -179,6 +178,8 @@ def layout_drawings(asm: Assembly, connections: list[list[PointRef]]) -> list[Dr
         cells = [(t, np.asarray(c)) for t, c in g.cells]
         rotations = g.rotations
         if s.kind.startswith("frame"):  # beams drawn as curves bent by the end rotations
+            from substruct.builder.frame_drawing import beam_curves
+
             points, cells, interp, rotations = beam_curves(s, points, cells, interp, rotations)
         out.append(Drawing(name=s.name, kind=s.kind, points=points, cells=cells,
                            interp=_lift(interp, int(asm.offsets[k]), asm.n_dof),

@@ -4,30 +4,20 @@ springs, point masses, matrices and meshed solids."""
 
 from __future__ import annotations
 
-from typing import Any, Collection, Mapping
+from typing import TYPE_CHECKING, Any, Collection, Mapping
 
 import numpy as np
 import scipy.sparse as sp
 
-from substruct.builder.frames import build_frame
-from substruct.builder.solids import build_solid
-from substruct.builder.superelements import build_superelement
-from substruct.case.loader import (
-    Case,
-    DiscreteSpec,
-    FiniteElements,
-    MatrixSpec,
-    RodSpec,
-)
-from substruct.case.frames import FrameSpec
-from substruct.case.nastran import NastranSpec
-from substruct.case.solids import SolidSpec
+from substruct.case.kinds import is_frame, is_matrices, is_nastran, is_solid, is_superelement
+from substruct.case.loader import Case, DiscreteSpec, FiniteElements, RodSpec
 from substruct.case.substructures import MassSpec, SpringSpec
-from substruct.case.superelements import SuperelementSpec
 from substruct.models.discrete import fixed_free, free_free, point_mass, spring
 from substruct.models.reduction import modal_truncation
-from substruct.models.rod import rod_assumed_modes, rod_fe
 from substruct.substructure import Geometry, PointError, Substructure, as_csr
+
+if TYPE_CHECKING:
+    from substruct.case.matrices import MatrixSpec
 
 __all__ = ["make_substructures"]
 
@@ -71,6 +61,8 @@ def _chain_geometry(K: sp.csr_array, index: dict[str, int]) -> Geometry | None:
 
 
 def _rod(case: Case, i: int, spec: RodSpec, nodes_at: list[float]) -> Substructure:
+    from substruct.models.rod import rod_assumed_modes, rod_fe  # scikit-fem: for rods only
+
     disc = spec.discretization
     try:
         if isinstance(disc, FiniteElements):
@@ -127,15 +119,21 @@ def make_substructures(case: Case, positions: dict[str, list[float]],
             subs.append(spring(spec.name, spec.stiffness, spec.damping, grounded=spec.ground))
         elif isinstance(spec, MassSpec):
             subs.append(point_mass(spec.name, spec.mass))
-        elif isinstance(spec, SolidSpec):
+        elif is_solid(spec):  # each kind's builder imported when used
+            from substruct.builder.solids import build_solid
+
             subs.append(build_solid(case, i, spec))
-        elif isinstance(spec, MatrixSpec):
+        elif is_matrices(spec):
             subs.append(_matrices_substructure(spec))
-        elif isinstance(spec, FrameSpec):
+        elif is_frame(spec):
+            from substruct.builder.frames import build_frame
+
             subs.append(build_frame(case, i, spec))
-        elif isinstance(spec, SuperelementSpec):
+        elif is_superelement(spec):
+            from substruct.builder.superelements import build_superelement
+
             subs.append(build_superelement(case, i, spec))
-        elif isinstance(spec, NastranSpec):
+        elif is_nastran(spec):
             from substruct.builder.nastran import build_nastran  # Nastran: only when used
 
             subs.append(build_nastran(spec))

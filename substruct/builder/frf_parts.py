@@ -33,6 +33,7 @@ from substruct.builder.points import point_uses, resolve_point
 from substruct.case.fields import parse_point
 from substruct.case.frf_files import grid_problem
 from substruct.case.frf_substructure import FrfSpec
+from substruct.case.kinds import has_frf_parts
 from substruct.case.loader import Case
 from substruct.substructure import Substructure
 
@@ -59,11 +60,6 @@ class FrfSplit:
     model_points: list[str]
     parts: list[FrfPart]
     pairs: list[tuple[str, str]]
-
-
-def has_frf_parts(case: Case) -> bool:
-    """Whether a substructure of the case is ``type: frf``."""
-    return any(isinstance(s, FrfSpec) for s in case.substructures)
 
 
 def frf_case_points(case: Case) -> tuple[list[str], list[str]]:

@@ -30,12 +30,9 @@ from substruct.builder.checks import (
 from substruct.builder.drawing import Drawing
 from substruct.builder.drawings import layout_drawings
 from substruct.builder.factory import make_substructures
-from substruct.builder.frame_drawing import bulk_spiders, link_spiders
-from substruct.builder.links import case_links
 from substruct.builder.points import PointUse, point_uses, resolve_point
-from substruct.builder.solids import tie_and_reduce
 from substruct.case.loader import Case, RodSpec, parse_point
-from substruct.case.solids import SolidSpec
+from substruct.case.kinds import is_nastran, is_solid
 from substruct.linalg.constraints import ConstraintError
 from substruct.substructure import PointError, Substructure
 
@@ -80,7 +77,7 @@ def point_positions(case: Case) -> tuple[list[PointUse], dict[str, tuple[str, An
         value = resolve_point(case, specs[sub], where, use)
         resolved[use.text] = (sub, value)
         spec = specs[sub]
-        if isinstance(spec, SolidSpec):
+        if is_solid(spec):
             positions.setdefault(sub, []).append(value)
         if isinstance(spec, RodSpec):
             positions.setdefault(sub, [])
@@ -105,7 +102,13 @@ def assemble_case(case: Case, prebuilt: Mapping[str, Substructure] | None = None
     """
     uses, resolved, positions = point_positions(case)
     subs = make_substructures(case, positions, prebuilt)
-    subs, interface_ties = tie_and_reduce(case, subs, positions, prebuilt)
+    solids = any(is_solid(s) for s in case.substructures)
+    nastran = any(is_nastran(s) for s in case.substructures)
+    interface_ties: list[Connection] = []
+    if solids or case.interfaces:  # the solids' and the links' modules for cases with them
+        from substruct.builder.solids import tie_and_reduce
+
+        subs, interface_ties = tie_and_reduce(case, subs, positions, prebuilt)
     by_name = {s.name: s for s in subs}
     points: dict[str, PointRef] = {}
     for use in uses:
@@ -115,7 +118,11 @@ def assemble_case(case: Case, prebuilt: Mapping[str, Substructure] | None = None
         except (PointError, ValueError) as err:
             raise case.error(use.loc, str(err), use.shown or use.text) from None
         points[use.text] = PointRef(sub, value)
-    subs, link_rows = case_links(case, subs, points)  # rows of A after the user constraints
+    link_rows: list[LinearConstraint] = []
+    if case.links or nastran:
+        from substruct.builder.links import case_links
+
+        subs, link_rows = case_links(case, subs, points)  # rows of A after the constraints
     by_name = {s.name: s for s in subs}
 
     connections, chains = [], []
@@ -149,5 +156,9 @@ def assemble_case(case: Case, prebuilt: Mapping[str, Substructure] | None = None
                          dict(case.constraints[k].terms)) from None
     check_connections_consistent(case, asm, len(connections))
     warn_free_springs(case)
-    spiders = link_spiders(case, asm) + bulk_spiders(case, asm)
+    spiders: list[Drawing] = []
+    if case.links or nastran:
+        from substruct.builder.frame_drawing import bulk_spiders, link_spiders
+
+        spiders = link_spiders(case, asm) + bulk_spiders(case, asm)
     return Model(asm, active, layout_drawings(asm, chains) + spiders, points)

@@ -7,17 +7,10 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from substruct.builder.frames import frame_where
-from substruct.builder.links import link_point_texts
-from substruct.builder.solids import solid_where
-from substruct.builder.superelements import superelement_where
 from substruct.case.expressions import ExpressionError, scalar
+from substruct.case.kinds import is_frame, is_nastran, is_solid, is_superelement
 from substruct.case.loader import Case, DiscreteSpec, RodSpec
-from substruct.case.frames import FrameSpec
-from substruct.case.nastran import NastranSpec
-from substruct.case.solids import SolidSpec
 from substruct.case.substructures import MassSpec, SpringSpec
-from substruct.case.superelements import SuperelementSpec
 
 __all__ = ["PointUse", "point_uses", "rod_position", "resolve_point"]
 
@@ -80,7 +73,10 @@ def point_uses(case: Case) -> list[PointUse]:
                  for k, b in enumerate(bfr.bases) for i, p in enumerate(b.at)]
         uses += [PointUse(p, ("analysis", "base_frf", "outputs", i))
                  for i, p in enumerate(bfr.outputs)]
-    uses += [PointUse(text, loc, shown) for text, loc, shown in link_point_texts(case)]
+    if case.links:  # the links' module (and the solids' it uses) only for a case with links
+        from substruct.builder.links import link_point_texts
+
+        uses += [PointUse(text, loc, shown) for text, loc, shown in link_point_texts(case)]
     return uses
 
 
@@ -117,13 +113,19 @@ def resolve_point(case: Case, spec: Any, where: str | None, use: PointUse) -> An
             raise case.error(use.loc, f"spring {spec.name!r} has two ends: write "
                              f"{spec.name}@i or {spec.name}@j", use.text)
         return "i" if where is None else where
-    if isinstance(spec, SolidSpec):
+    if is_solid(spec):  # each kind's builder imported for a case that has it
+        from substruct.builder.solids import solid_where
+
         return solid_where(case, spec, where, use)
-    if isinstance(spec, FrameSpec):
+    if is_frame(spec):
+        from substruct.builder.frames import frame_where
+
         return frame_where(case, spec, where, use)
-    if isinstance(spec, SuperelementSpec):
+    if is_superelement(spec):
+        from substruct.builder.superelements import superelement_where
+
         return superelement_where(case, spec, where, use)
-    if isinstance(spec, NastranSpec):
+    if is_nastran(spec):
         if where is None or ":" not in where:
             raise case.error(use.loc, f"a point on Nastran model {spec.name!r} is a grid and a "
                              f"component 1-6, as in {spec.name}@{min(spec.bulk.grids)}:3",

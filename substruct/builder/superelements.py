@@ -5,13 +5,15 @@ where their positions are known."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import scipy.sparse as sp
 
-from substruct.case.superelements import SE_COMPONENTS, SuperelementSpec
 from substruct.substructure import Geometry, PointError, Substructure, as_csr
+
+if TYPE_CHECKING:
+    from substruct.case.superelements import SuperelementSpec
 
 __all__ = ["build_superelement", "superelement_where", "canonical_label", "RIGID_BODY_ATTR",
            "rigid_body_attrs", "rigid_body_lines"]
@@ -20,6 +22,8 @@ __all__ = ["build_superelement", "superelement_where", "canonical_label", "RIGID
 def canonical_label(where: Any) -> str | None:
     """``"100:uz"`` for ``"100:uz"``, ``"100:3"`` or ``"100:z"``; ``"mode:2"`` for
     ``"mode:2"``; ``None`` for anything else."""
+    from substruct.case.superelements import SE_COMPONENTS  # the schema's: for superelements
+
     if not isinstance(where, str) or ":" not in where:
         return None
     head, comp = (t.strip() for t in where.split(":", 1))
@@ -37,6 +41,8 @@ def canonical_label(where: Any) -> str | None:
 
 def _geometry(spec: SuperelementSpec, index: dict[str, int], n: int) -> Geometry | None:
     """The boundary grids as points, moved by their translations."""
+    from substruct.case.superelements import SE_COMPONENTS
+
     if spec.grids is None:
         return None
     ids = sorted(spec.grids)

@@ -7,7 +7,7 @@ one formulation and checked by others (:mod:`substruct.analysis.formulations.cou
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import TYPE_CHECKING, Annotated, Any, Literal, TypeAlias
 
 import numpy as np
 from pydantic import Field, model_validator
@@ -28,19 +28,8 @@ from substruct.case.fields import (
 from substruct.case.numbers import MAX_MAGNITUDE, RANGE
 from substruct.case.frequency_grid import Omega
 from substruct.case.modal_spec import AmlsSpec, ModalFrf
-from substruct.case.spec_analysis import (
-    BaseFrfAnalysis,
-    BasePsd,
-    LossFactorSpec,
-    ForcePsd,
-    NamedBasePsd,
-    PsdTable,
-    RandomAnalysis,
-    SrsAnalysis,
-    SrsFrequencies,
-)
-from substruct.case.testlab_analysis import SemmAnalysis, TpaAnalysis, check_against_frf
-from substruct.case.transient import TransientAnalysis
+from substruct.case.lazy_models import LazyType
+from substruct.lazy import lazy_getattr
 from substruct.vocabulary import (
     DEFAULT_TOLERANCE,
     GENERALIZED_INVERSE,
@@ -49,6 +38,44 @@ from substruct.vocabulary import (
     Quantity,
     Solver,
 )
+
+if TYPE_CHECKING:
+    from substruct.case.spec_analysis import (
+        BaseFrfAnalysis,
+        BasePsd,
+        ForcePsd,
+        LossFactorSpec,
+        NamedBasePsd,
+        PsdTable,
+        RandomAnalysis,
+        SrsAnalysis,
+        SrsFrequencies,
+    )
+    from substruct.case.testlab_analysis import SemmAnalysis, TpaAnalysis
+    from substruct.case.transient import TransientAnalysis
+
+    LossFactorBlock: TypeAlias = LossFactorSpec | None
+    TransientBlock: TypeAlias = TransientAnalysis | None
+    RandomBlock: TypeAlias = RandomAnalysis | None
+    BaseFrfBlock: TypeAlias = BaseFrfAnalysis | None
+    SrsBlock: TypeAlias = SrsAnalysis | None
+    TpaBlock: TypeAlias = TpaAnalysis | None
+    SemmBlock: TypeAlias = SemmAnalysis | None
+else:  # the blocks a case may leave out, their modules imported when a case has them
+    _SPEC, _LAB = "substruct.case.spec_analysis", "substruct.case.testlab_analysis"
+    LossFactorBlock = Annotated[Any, LazyType(_SPEC, "LossFactorSpec")]
+    TransientBlock = Annotated[Any, LazyType("substruct.case.transient", "TransientAnalysis")]
+    RandomBlock = Annotated[Any, LazyType(_SPEC, "RandomAnalysis")]
+    BaseFrfBlock = Annotated[Any, LazyType(_SPEC, "BaseFrfAnalysis")]
+    SrsBlock = Annotated[Any, LazyType(_SPEC, "SrsAnalysis")]
+    TpaBlock = Annotated[Any, LazyType(_LAB, "TpaAnalysis")]
+    SemmBlock = Annotated[Any, LazyType(_LAB, "SemmAnalysis")]
+
+#: The models of the analyses' blocks, importable from here as before (imported on first use).
+__getattr__ = lazy_getattr(__name__, {
+    name: "substruct.case.spec_analysis" for name in (
+        "LossFactorSpec", "PsdTable", "ForcePsd", "BasePsd", "NamedBasePsd", "RandomAnalysis",
+        "SrsFrequencies", "SrsAnalysis", "BaseFrfAnalysis")})
 
 __all__ = ["ConstraintSpec", "Variant", "ModesBand", "AmlsSpec", "ModesAnalysis", "Omega",
            "ModalFrf", "FrfAnalysis", "Analysis", "Output", "LossFactorSpec", "PsdTable",
@@ -146,7 +173,7 @@ class FrfAnalysis(StrictModel):
     #: largest max |H_check - H| / max |H| a check may have; a larger one fails the run
     tolerance: Positive = DEFAULT_TOLERANCE
     #: structural damping: one loss factor on all of K, or {substructure: eta}
-    loss_factor: LossFactorSpec | None = None
+    loss_factor: LossFactorBlock = None
 
     def omegas(self) -> np.ndarray:
         """The circular frequencies of the grid (rad/s), converted from Hz if ``units: Hz``."""
@@ -182,17 +209,17 @@ class Analysis(StrictModel):
     modes: ModesAnalysis | None = None
     frf: FrfAnalysis | None = None
     #: time histories (eqs 5, 10): substruct.case.transient
-    transient: TransientAnalysis | None = None
+    transient: TransientBlock = None
     #: response PSDs and RMS under force or base acceleration PSDs
-    random: "RandomAnalysis | None" = None
+    random: RandomBlock = None
     #: transmissibilities per base acceleration (substruct.case.spec_analysis)
-    base_frf: "BaseFrfAnalysis | None" = None
+    base_frf: BaseFrfBlock = None
     #: shock response spectra of the transient's output accelerations
-    srs: "SrsAnalysis | None" = None
+    srs: SrsBlock = None
     #: transfer path analysis and model mixing on the receptances of frf
     #: (substruct.case.testlab_analysis)
-    tpa: TpaAnalysis | None = None
-    semm: SemmAnalysis | None = None
+    tpa: TpaBlock = None
+    semm: SemmBlock = None
 
     @model_validator(mode="after")
     def _something(self) -> "Analysis":
@@ -207,7 +234,10 @@ class Analysis(StrictModel):
                 if p not in self.transient.outputs:
                     raise FieldError(("srs", "outputs", i), "not an output of "
                                      "analysis.transient", p)
-        check_against_frf(self.tpa, self.semm, self.frf)
+        if self.tpa is not None or self.semm is not None:
+            from substruct.case.testlab_analysis import check_against_frf
+
+            check_against_frf(self.tpa, self.semm, self.frf)
         return self
 
 
@@ -218,6 +248,3 @@ class Output(StrictModel):
     #: store the assembly's M, K, C (sparse) in the result file (``model/M``, ...)
     matrices: bool = False
 
-
-FrfAnalysis.model_rebuild()
-Analysis.model_rebuild()

@@ -29,6 +29,7 @@ import numpy as np
 from pydantic import BaseModel, ValidationError
 
 from substruct.case.fields import NAME_PATTERN
+from substruct.case.lazy_models import lazy_model
 from substruct.case.numbers import MAX_DIGITS, BigNumber
 from substruct.case.text import printable
 
@@ -234,16 +235,19 @@ def field_path(loc: Sequence[str | int], raw: Any) -> str:
 # ------------------------------------------------------------- "unknown key" suggestions
 
 
-def _unwrap(tp: Any) -> Any:
+def _unwrap(tp: Any, data: Any = None) -> Any:
+    """``tp`` without ``Annotated``; a block imported when used is its model (the member that
+    ``data`` names, for a union: :mod:`substruct.case.lazy_models`)."""
     while get_origin(tp) is Annotated:
-        tp = get_args(tp)[0]
+        lazy = lazy_model(tp, data=data)
+        tp = lazy if lazy is not None else get_args(tp)[0]
     return tp
 
 
-def _members(tp: Any) -> list[Any]:
-    tp = _unwrap(tp)
+def _members(tp: Any, data: Any = None) -> list[Any]:
+    tp = _unwrap(tp, data)
     if get_origin(tp) in (Union, types.UnionType):
-        return [_unwrap(a) for a in get_args(tp) if a is not type(None)]
+        return [_unwrap(a, data) for a in get_args(tp) if a is not type(None)]
     return [tp]
 
 
@@ -261,16 +265,20 @@ def _selected_by_tag(models: list[type[BaseModel]], tag: str) -> type[BaseModel]
     return None
 
 
-def _allowed_keys(root: type[BaseModel], loc: Sequence[str | int]) -> list[str] | None:
-    """Field names of the model at ``loc`` below ``root`` (for "unknown key" messages)."""
+def _allowed_keys(root: type[BaseModel], loc: Sequence[str | int],
+                  raw: Any = None) -> list[str] | None:
+    """Field names of the model at ``loc`` below ``root`` (for "unknown key" messages); ``raw``,
+    the data validated, tells the member of a union imported when used."""
     tp: Any = root
+    node = raw
     for el in loc:
-        members = _members(tp)
+        members = _members(tp, node)
         models = [m for m in members if _is_model(m)]
         nxt = None
         for m in models:
             if isinstance(el, str) and el in m.model_fields:
-                nxt = m.model_fields[el].annotation
+                field = m.model_fields[el]
+                nxt = lazy_model(field.annotation, field.metadata) or field.annotation
                 break
         if nxt is None and isinstance(el, str):
             nxt = _selected_by_tag(models, el)
@@ -284,7 +292,11 @@ def _allowed_keys(root: type[BaseModel], loc: Sequence[str | int]) -> list[str] 
         if nxt is None:
             return None
         tp = nxt
-    models = [m for m in _members(tp) if _is_model(m)]
+        if isinstance(node, dict) and el in node:
+            node = node[el]  # (a union tag in the location is no key: the node stays)
+        elif isinstance(node, list) and isinstance(el, int) and 0 <= el < len(node):
+            node = node[el]
+    models = [m for m in _members(tp, node) if _is_model(m)]
     return list(models[0].model_fields) if len(models) == 1 else None
 
 
@@ -310,7 +322,7 @@ _TAGS = {"type": "rod, fixed-free, free-free, matrices, spring, mass, solid",
          "method": "assumed-modes, fe"}
 
 
-def _problem(err: Mapping[str, Any], loc: tuple, root: type[BaseModel]
+def _problem(err: Mapping[str, Any], loc: tuple, root: type[BaseModel], raw: Any = None
              ) -> tuple[str, tuple, Any]:
     """``(problem, loc, value)`` for one pydantic error."""
     typ, msg, ctx = err["type"], err["msg"], err.get("ctx") or {}
@@ -321,7 +333,7 @@ def _problem(err: Mapping[str, Any], loc: tuple, root: type[BaseModel]
     if typ == "missing":
         return "required field is missing", loc, MISSING
     if typ == "extra_forbidden":
-        allowed = [k for k in _allowed_keys(root, loc[:-1]) or [] if k != "values"]
+        allowed = [k for k in _allowed_keys(root, loc[:-1], raw) or [] if k != "values"]
         extra = f" (allowed: {', '.join(allowed)})" if allowed else ""
         close = difflib.get_close_matches(str(loc[-1]), allowed, n=1) if loc else []
         hint = f"; did you mean {close[0]!r}?" if close else ""
@@ -369,7 +381,7 @@ def translate(exc: ValidationError, raw: Any, source: str, root: type[BaseModel]
         parent = tuple(err["loc"][:-1])
         err = next((e for e in errors if e["type"] == "extra_forbidden"
                     and tuple(e["loc"][:-1]) == parent), err)
-    problem, loc, value = _problem(err, tuple(err["loc"]), root)
+    problem, loc, value = _problem(err, tuple(err["loc"]), root, raw)
     path = field_path(loc, raw)
     if any(path == p or path.startswith(p + ".") or path.startswith(p + "[")
            for p in set_paths):

@@ -120,3 +120,4 @@ class FrfSpec(StrictModel):
     def n_dof(self) -> Any:
         """``None``: an FRF substructure adds no coordinates to the assembled model."""
         return None
+

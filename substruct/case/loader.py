@@ -31,7 +31,7 @@ import os
 import re
 import stat
 from pathlib import Path
-from typing import Annotated, Any, Sequence, Union
+from typing import TYPE_CHECKING, Annotated, Any, Sequence, TypeAlias, Union
 
 import yaml
 from pydantic import (
@@ -66,15 +66,10 @@ from substruct.case.fields import (
     StrictModel,
     parse_point,
 )
-from substruct.case.frf_substructure import FrfSpec
-from substruct.case.matrices import MatrixSpec
+from substruct.case.kinds import SUBSTRUCTURE_KINDS
+from substruct.case.lazy_models import LazyType, LazyUnion
 from substruct.case.numbers import find_problem
-from substruct.case.frames import FrameSpec
-from substruct.case.links import LinkSpec
-from substruct.case.nastran import BDF_SUFFIXES, NastranSpec, bdf_case
-from substruct.case.solids import InterfaceSpec, SolidSpec
-from substruct.case.study import StudySpec
-from substruct.case.superelements import SuperelementSpec
+from substruct.case.nastran import BDF_SUFFIXES, bdf_case
 from substruct.case.substructures import (
     AssumedModes,
     DiscreteSpec,
@@ -86,6 +81,17 @@ from substruct.case.substructures import (
     SpringSpec,
 )
 from substruct.case.yaml_io import apply_overrides, load_yaml
+from substruct.lazy import lazy_getattr
+
+if TYPE_CHECKING:
+    from substruct.case.frames import FrameSpec
+    from substruct.case.frf_substructure import FrfSpec
+    from substruct.case.links import LinkSpec
+    from substruct.case.matrices import MatrixSpec
+    from substruct.case.nastran import NastranSpec
+    from substruct.case.solids import InterfaceSpec, SolidSpec
+    from substruct.case.study import StudySpec
+    from substruct.case.superelements import SuperelementSpec
 
 __all__ = [
     "CaseError",
@@ -124,10 +130,22 @@ __all__ = [
 #: (matrices belong in ``.npz``/``.mtx`` files).
 MAX_CASE_FILE = 200_000
 
-SubstructureSpec = Annotated[Union[RodSpec, DiscreteSpec, SpringSpec, MassSpec, MatrixSpec,
-                                   SolidSpec, FrfSpec, FrameSpec, SuperelementSpec,
-                                   NastranSpec],
-                             Field(discriminator="type")]
+if TYPE_CHECKING:
+    SubstructureSpec: TypeAlias = Annotated[
+        Union[RodSpec, DiscreteSpec, SpringSpec, MassSpec, MatrixSpec, SolidSpec, FrfSpec,
+              FrameSpec, SuperelementSpec, NastranSpec], Field(discriminator="type")]
+    Interface: TypeAlias = InterfaceSpec
+    Link: TypeAlias = LinkSpec
+    Study: TypeAlias = StudySpec | None
+else:  # each kind's model, the interfaces', the links' and the study's imported when used
+    SubstructureSpec = Annotated[Any, LazyUnion("type", SUBSTRUCTURE_KINDS)]
+    Interface = Annotated[Any, LazyType("substruct.case.solids", "InterfaceSpec")]
+    Link = Annotated[Any, LazyType("substruct.case.links", "LinkSpec")]
+    Study = Annotated[Any, LazyType("substruct.case.study", "StudySpec")]
+
+#: The models of the kinds of substructure, importable from here as before (on first use).
+__getattr__ = lazy_getattr(__name__, {"MatrixSpec": "substruct.case.matrices",
+                                      "FrfSpec": "substruct.case.frf_substructure"})
 
 
 def _parameter_names(value: dict[str, float]) -> dict[str, float]:
@@ -150,11 +168,11 @@ class Case(StrictModel):
     substructures: Annotated[list[SubstructureSpec], Field(min_length=1)]
     connections: list[Annotated[list[Point], Field(min_length=2)]] = Field(default_factory=list)
     constraints: list[ConstraintSpec] = Field(default_factory=list)
-    interfaces: list[InterfaceSpec] = Field(default_factory=list)
-    links: list[LinkSpec] = Field(default_factory=list)
+    interfaces: list[Interface] = Field(default_factory=list)
+    links: list[Link] = Field(default_factory=list)
     analysis: Analysis
     output: Output = Field(default_factory=Output)
-    study: StudySpec | None = None
+    study: Study = None
 
     _source: str = PrivateAttr(default="<string>")
     _text: str = PrivateAttr(default="")

@@ -41,6 +41,17 @@ import os
 # cases/two_rods_spring.yaml 8x slower (50 s vs 6.5 s) and a 1600 x 1600 eig 1.25x slower.
 for _var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
     os.environ.setdefault(_var, "1")
+# ... and MKL (PARDISO) then without a threading layer: on one thread its OpenMP layer only
+# costs its start (0.006 s at the first factorization), and which layer MKL takes would
+# otherwise depend on whether another library had loaded GNU OpenMP before (scikit-sparse
+# does), and its results' last digits with it.  Sequential MKL gives the same digits as its
+# default (Intel) layer.
+if os.environ["OMP_NUM_THREADS"] == "1" and os.environ["MKL_NUM_THREADS"] == "1":
+    os.environ.setdefault("MKL_THREADING_LAYER", "SEQUENTIAL")
+# The case schema's validation without pydantic's plugins (observability hooks, found by
+# scanning the entry points of every installed distribution at the first validation: 0.006 s
+# of each start); a value the user sets is kept.
+os.environ.setdefault("PYDANTIC_DISABLE_PLUGINS", "__all__")
 
 import sys  # noqa: E402
 

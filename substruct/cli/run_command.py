@@ -33,7 +33,6 @@ from substruct.cli.files import (check_out_dir, check_targets, collector_paused,
 from substruct.cli.errors import InputError
 from substruct.cli.isolated import call_isolated
 from substruct.cli.progress import PhaseLog, ProgressBar, phases_wanted
-from substruct.cli.summary import print_summary, summary_json
 
 if TYPE_CHECKING:
     from substruct.run.result import Result
@@ -209,8 +208,11 @@ def stage_set(case: Any, args: argparse.Namespace, staging: Path, out: Path,
 
 
 def _report(args: argparse.Namespace, case: Any, result: Result, files: list[Path]) -> str:
-    """What the run prints (the table, ``--json`` or nothing), as text."""
+    """What the run prints (the table, ``--json`` or nothing), as text (the tables' module is
+    imported only for a report that is printed)."""
     text = io.StringIO()
+    if args.json or not args.quiet:
+        from substruct.cli.summary import print_summary, summary_json
     if args.json:
         print(json.dumps(summary_json(result, files), indent=1), file=text)
     elif not args.quiet:

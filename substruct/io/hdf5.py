@@ -47,17 +47,16 @@ from substruct.analysis.results import Modes, Receptance
 from substruct.io.blocks import BLOCK_BYTES, CHUNK_BYTES, DatasetSink, write_blocks
 from substruct.io.file_set import TEMP_PREFIX
 from substruct.io.paths import write_errors
-from substruct.io.channels_hdf5 import write_channel_geometry
-from substruct.io.recovery_hdf5 import write_recovery
-from substruct.io.spec_hdf5 import write_base_frf, write_random, write_srs
-from substruct.io.tpa_hdf5 import write_semm, write_tpa
-from substruct.io.vp_hdf5 import write_monte_carlo, write_virtual_points
-from substruct.io.transient_hdf5 import write_transient
-from substruct.io.result_reader import FORMAT, FORMAT_VERSION, RESERVED_ATTRS, load
+from substruct.io.result_format import FORMAT, FORMAT_VERSION, RESERVED_ATTRS
+from substruct.lazy import lazy_getattr
 from substruct.run.result import ModelInfo, Result
 
 __all__ = ["save", "load", "atomic_path", "listed_pictures", "result_file", "ResultFile",
            "FORMAT", "FORMAT_VERSION"]
+
+#: :func:`load` is the reader's (imported on first use: a run that only writes does not load
+#: the readers of every part of the layout).
+__getattr__ = lazy_getattr(__name__, {"load": "substruct.io.result_reader"})
 
 _RESERVED = RESERVED_ATTRS
 #: Root attributes :func:`save` always writes itself (never taken from ``Result.attrs``).
@@ -112,7 +111,8 @@ class ResultFile:
         self.saved = False
 
     def save(self, result: Result) -> None:
-        """Write ``result`` into the file (once)."""
+        """Write ``result`` into the file (once); the writers of the optional parts are
+        imported when the result has them."""
         if self.saved:
             raise RuntimeError("the result file is already written")
         f = self.file
@@ -135,30 +135,48 @@ class ResultFile:
         if _STREAMED_FRF in f:  # a sweep streamed here whose result was not kept
             del f[_STREAMED_FRF]
         if result.transient is not None:
+            from substruct.io.transient_hdf5 import write_transient
+
             write_transient(f.create_group("transient", track_order=True),
                             result.transient, streamed=self.field_sink, **self.options)
         if _STREAMED_FIELDS in f:  # a run streamed here whose result was not kept
             del f[_STREAMED_FIELDS]
         if result.recovery:
+            from substruct.io.recovery_hdf5 import write_recovery
+
             write_recovery(f.create_group("recovery", track_order=True), result.recovery)
         if result.random is not None:
+            from substruct.io.spec_hdf5 import write_random
+
             write_random(f.create_group("random", track_order=True), result.random)
         if result.base_frf is not None:
+            from substruct.io.spec_hdf5 import write_base_frf
+
             write_base_frf(f.create_group("base_frf", track_order=True), result.base_frf)
         if result.srs is not None:
+            from substruct.io.spec_hdf5 import write_srs
+
             write_srs(f.create_group("srs", track_order=True), result.srs)
         if result.virtual_points:
+            from substruct.io.vp_hdf5 import write_monte_carlo, write_virtual_points
+
             vg = f.create_group("virtual_points", track_order=True)
             write_virtual_points(vg, result.virtual_points)
             if result.monte_carlo is not None:
                 write_monte_carlo(vg.create_group("monte_carlo", track_order=True),
                                   result.monte_carlo)
         if result.channels:
+            from substruct.io.channels_hdf5 import write_channel_geometry
+
             write_channel_geometry(f.create_group("channels", track_order=True),
                                    result.channels)
         if result.tpa is not None:
+            from substruct.io.tpa_hdf5 import write_tpa
+
             write_tpa(f.create_group("tpa", track_order=True), result.tpa)
         if result.semm is not None:
+            from substruct.io.tpa_hdf5 import write_semm
+
             write_semm(f.create_group("semm", track_order=True), result.semm)
         self.saved = True
 

@@ -32,6 +32,7 @@ from substruct.analysis.results import DEFAULT_TOLERANCE, Modes, Receptance
 from substruct.builder.drawing import Drawing
 from substruct.io.channels_hdf5 import read_channel_geometry
 from substruct.io.recovery_hdf5 import read_recovery
+from substruct.io.result_format import FORMAT, FORMAT_VERSION, RESERVED_ATTRS
 from substruct.io.tpa_hdf5 import read_semm, read_tpa
 from substruct.io.transient_hdf5 import read_transient
 from substruct.io.vp_hdf5 import read_monte_carlo, read_virtual_points
@@ -41,12 +42,6 @@ from substruct.run.spec_results import BaseFrf
 __all__ = ["load", "FORMAT", "FORMAT_VERSION", "RESERVED_ATTRS", "MAX_RESULT_BYTES",
            "MAX_MEMBERS", "CELL_NODES"]
 
-#: Value of the root attribute ``format`` that marks a substruct result file.
-FORMAT = "substruct-result"
-#: Layout version; bumped when the layout changes incompatibly.
-FORMAT_VERSION = 1
-#: Root attributes that :func:`load` turns into fields (not into ``Result.attrs``).
-RESERVED_ATTRS = ("format", "format_version", "case_name", "case_yaml")
 #: Bytes all datasets of a result may declare together (checked before reading any).
 MAX_RESULT_BYTES = 1_000_000_000
 #: Members a group of the layout may have (variants, drawings, cell blocks).

@@ -180,8 +180,13 @@ def available_backends(kind: str) -> list[str]:
 
 
 def auto_backend(kind: str) -> str:
-    """The backend :func:`auto_factorizer` tries first for the matrix ``kind``."""
-    return available_backends(kind)[0]
+    """The backend :func:`auto_factorizer` tries first for the matrix ``kind``: the first of
+    :data:`AUTO_ORDER` that loads (the ones after it are not imported)."""
+    for name in AUTO_ORDER[_check_kind(kind)]:
+        if backend_status(name) is None:
+            return name
+    raise RuntimeError(f"no factorization backend can be loaded for {_DESCRIBED[kind]} "
+                       f"matrices")
 
 
 def _check_kind(kind: str) -> str:

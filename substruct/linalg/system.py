@@ -181,7 +181,7 @@ class ConstrainedSystem:
 def _labels(kind: str, labels: Sequence[str] | None, count: int) -> tuple[str, ...]:
     if labels is None:
         return tuple(str(i + 1) for i in range(count))
-    out = tuple(str(x) for x in labels)
+    out = tuple(map(str, labels))
     if len(out) != count:
         raise ValueError(f"{count} {kind} labels needed, got {len(out)}")
     return out

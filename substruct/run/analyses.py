@@ -25,6 +25,7 @@ as bad input.
 from __future__ import annotations
 
 import dataclasses
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.sparse as sp
@@ -40,17 +41,17 @@ from substruct.analysis.api import (
 from substruct.analysis.errors import INPUT_ERRORS, CheckError
 from substruct.analysis.events import Phase
 from substruct.analysis.frf.quantity import as_quantity, quantity_factor
-from substruct.analysis.frf.modal import ModalOptions
 from substruct.analysis.frf.stream import FrequencySink, SweepTap
-from substruct.analysis.modes.amls import AmlsOptions
 from substruct.analysis.results import Modes, Receptance
-from substruct.linalg.amls_block import TaskMap
-from substruct.run.modal_options import modal_options
 from substruct.assembly.stack import Assembly
 from substruct.builder.model import Model
 from substruct.case.fields import gigabytes
 from substruct.case.loader import Case, FiniteElements
 from substruct.run.result import ModelInfo
+
+if TYPE_CHECKING:  # the modal and AMLS routes' modules are imported by the cases that use them
+    from substruct.analysis.frf.modal import ModalOptions
+    from substruct.linalg.amls_block import TaskMap
 
 __all__ = ["Progress", "modes_result", "frf_result", "rows_receptance", "in_place_quantity",
            "model_info",
@@ -98,6 +99,8 @@ def _amls(case: Case, system: ConstrainedSystem, options: ModesOptions,
     """``solver: amls``: with a band that has a ``max``, every mode below it by one AMLS run,
     then those in the band, ``count`` at most; otherwise the lowest ``count`` (a band's
     ``min`` by :func:`_in_band`)."""
+    from substruct.analysis.modes.amls import AmlsOptions
+
     spec = case.analysis.modes
     assert spec is not None
     block = spec.amls
@@ -224,6 +227,8 @@ def frf_result(case: Case, model: Model, progress: Progress | None,
 
 
 def _modal_options(case: Case, tasks: TaskMap | None) -> ModalOptions:
+    from substruct.run.modal_options import modal_options
+
     spec = case.analysis.frf
     assert spec is not None
     return modal_options(spec.modal, tasks)

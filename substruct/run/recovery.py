@@ -22,7 +22,7 @@ import scipy.sparse as sp
 
 from substruct.analysis.results import Modes
 from substruct.analysis.transient.results import Transient
-from substruct.case.superelements import SuperelementSpec
+from substruct.case.kinds import is_superelement
 from substruct.run.recovered import Recovered
 from substruct.vocabulary import DERIVATIVE_ORDER
 
@@ -51,7 +51,7 @@ def recovery_plan(case: Any, asm: Any) -> RecoveryPlan:
     """The recovery matrices of the superelements of ``case`` on the assembly ``asm``."""
     entries = []
     for spec in case.substructures:
-        if isinstance(spec, SuperelementSpec):
+        if is_superelement(spec):
             block = asm.block(spec.name)
             for rec in spec.recovery:
                 entries.append((spec.name, block, rec))

@@ -16,12 +16,12 @@ import numpy as np
 import scipy.sparse as sp
 
 from substruct.analysis.results import Modes, Receptance
-from substruct.analysis.transient.results import Transient
 from substruct.builder.drawing import Drawing
-from substruct.run.recovered import Recovered
-from substruct.run.spec_results import BaseFrf, RandomResponse, ShockSpectra
 
-if TYPE_CHECKING:  # the test-lab analysis (and its case layer) only where it is used
+if TYPE_CHECKING:  # the results of the other analyses (and their layers) only where used
+    from substruct.analysis.transient.results import Transient
+    from substruct.run.recovered import Recovered
+    from substruct.run.spec_results import BaseFrf, RandomResponse, ShockSpectra
     from substruct.analysis.frf.virtual_point import VptResult
     from substruct.case.channel_geometry import PartChannels
     from substruct.analysis.frf.vp_noise import MonteCarloResult

@@ -9,7 +9,7 @@ constraint rows dropped) and the receptances (:mod:`substruct.run.analyses`).
 from __future__ import annotations
 
 from datetime import datetime, timezone
-from typing import Mapping
+from typing import TYPE_CHECKING, Mapping
 
 import numpy as np
 import scipy.sparse as sp
@@ -19,11 +19,10 @@ from substruct.analysis.events import Phase
 from substruct.analysis.frf.stream import FrequencySink
 from substruct.analysis.transient.fields import FieldSink
 from substruct.analysis.results import Modes
-from substruct.linalg.amls_block import TaskMap
-from substruct.builder.frf_parts import assemble_frf_case, has_frf_parts
 from substruct.builder.model import Model, assemble_case
 from substruct.builder.superelements import rigid_body_attrs
 from substruct.case.errors import CaseError
+from substruct.case.kinds import has_frf_parts
 from substruct.case.loader import Case
 from substruct.run.analyses import (
     Progress,
@@ -45,6 +44,9 @@ from substruct.run.recovery import (
 from substruct.run.result import Result
 from substruct.substructure import Substructure
 
+if TYPE_CHECKING:
+    from substruct.linalg.amls_block import TaskMap
+
 __all__ = ["Model", "build_model", "run_case", "Progress", "Phase"]
 
 
@@ -65,8 +67,12 @@ def build_model(case: Case, events: Phase | None = None,
         events("assembly", f"assembling {case.name}: {len(case.substructures)} "
                f"substructure(s) ({names})", min_size(case))
     # FRF substructures are coupled after the model is built (substruct.run.frf_route)
-    model = assemble_frf_case(case, prebuilt) if has_frf_parts(case) else \
-        assemble_case(case, prebuilt)
+    if has_frf_parts(case):
+        from substruct.builder.frf_parts import assemble_frf_case
+
+        model = assemble_frf_case(case, prebuilt)
+    else:
+        model = assemble_case(case, prebuilt)
     spec = case.analysis.modes
     if spec is not None and spec.band is None and spec.count > model.assembly.n_dof:
         raise case.error(("analysis", "modes", "count"), f"more modes than the "

@@ -49,7 +49,7 @@ from substruct.analysis.transient.results import Transient
 from substruct.analysis.transient.srs import MAX_FN_DT, srs
 from substruct.builder.frf_parts import has_frf_parts
 from substruct.builder.model import Model
-from substruct.case.analysis import LossFactorSpec
+from substruct.case.spec_analysis import LossFactorSpec
 from substruct.case.loader import Case
 from substruct.case.random_cross import cross_matrix
 from substruct.linalg.amls_block import TaskMap

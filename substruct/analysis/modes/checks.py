@@ -123,8 +123,12 @@ def _stiffness_scale(K: sp.csr_array, w: np.ndarray) -> float:
 
 def _rigid_scale(K: sp.csr_array, w: np.ndarray, size: np.ndarray, lam: np.ndarray
                  ) -> np.ndarray:
-    """``|W K W|_inf * size_j`` for a rigid-body mode (``lam_j == 0``), 0 for the others."""
-    return np.where(np.asarray(lam) == 0.0, _stiffness_scale(K, w) * size, 0.0) + 1e-300
+    """``|W K W|_inf * size_j`` for a rigid-body mode (``lam_j == 0``), 0 for the others (the
+    scale computed only if there is one)."""
+    rigid = np.asarray(lam) == 0.0
+    if not rigid.any():
+        return np.zeros(np.shape(size)) + 1e-300
+    return np.where(rigid, _stiffness_scale(K, w) * size, 0.0) + 1e-300
 
 
 def _roots_and_shapes(eigenvalues: np.ndarray, U: np.ndarray,
@@ -258,15 +262,17 @@ def generalized_inverse_residual(K: sp.csr_array, M: sp.csr_array, Ak: sp.csr_ar
         dinv = 1.0 / Md.diagonal()
         a = rhs * dinv[:, None]
         Y = sp.csr_array(sp.diags_array(dinv) @ Ak.T)
-        correction = Y @ _jacobi(Ak @ Y).solve(Ak @ a) if m else 0.0
+        S = _jacobi(Ak @ Y) if m else None  # S = A M_d^-1 A^T, once for both projections
+        correction = Y @ S.solve(Ak @ a) if S is not None else 0.0
     else:
         solve = factorizer("auto", spd=True)(sp.csc_array(Md))
         a = _solve_real(solve, rhs)
         if m:
             Yd = np.asarray(solve(Ak.T.toarray()))
-            correction = Yd @ _jacobi(Ak @ Yd).solve(Ak @ a)
+            S = _jacobi(Ak @ Yd)
+            correction = Yd @ S.solve(Ak @ a)
         else:
-            correction = 0.0
+            S, correction = None, 0.0
     Pa = a - correction
     R = Pa - U * l2
 
@@ -281,8 +287,8 @@ def generalized_inverse_residual(K: sp.csr_array, M: sp.csr_array, Ak: sp.csr_ar
     F = _roundoff(K, M, C, U, lam, l2) * signs
     if _is_diagonal(Md):
         aF = F * dinv[:, None]
-        PaF = aF - (Y @ _jacobi(Ak @ Y).solve(Ak @ aF) if m else 0.0)
+        PaF = aF - (Y @ S.solve(Ak @ aF) if S is not None else 0.0)
     else:
         aF = np.asarray(solve(F))
-        PaF = aF - (Yd @ _jacobi(Ak @ Yd).solve(Ak @ aF) if m else 0.0)
+        PaF = aF - (Yd @ S.solve(Ak @ aF) if S is not None else 0.0)
     return float(np.max(_net(norm(R), norm(PaF)) / denom))

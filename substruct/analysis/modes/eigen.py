@@ -42,7 +42,6 @@ from substruct.analysis.checks import (
     modes_agreement,
     require_agreement,
 )
-from substruct.analysis.modes.amls import AmlsOptions, amls_coupled_modes
 from substruct.analysis.modes.dense import FORMULATIONS, coupled_modes
 from substruct.analysis.errors import INPUT_ERRORS, AnalysisInputError
 from substruct.analysis.events import Phase
@@ -147,6 +146,8 @@ def _sparse(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
 
 def _amls(system: ConstrainedSystem, count: int | None, opts: ModesOptions) -> Modes:
     """The ``"amls"`` strategy: modes, residual check (held to the tolerance) and label."""
+    from substruct.analysis.modes.amls import AmlsOptions, amls_coupled_modes  # when used
+
     amls = opts.amls if opts.amls is not None else AmlsOptions()
     checks = check_methods(opts.method, opts.checks) if opts.checks else []
     try:
