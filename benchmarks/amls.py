@@ -122,7 +122,7 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--modes", type=int, nargs="+", default=[50, 200, 500])
     p.add_argument("--cutoff", type=float, default=2.0)
     p.add_argument("--iterations", type=int, default=2)
-    p.add_argument("--ritz-ratio", type=float, default=1.5)
+    p.add_argument("--ritz-ratio", type=float, default=1.2)
     p.add_argument("--leaf-size", type=int, default=1000)
     p.add_argument("--quick", action="store_true", help="30000 coordinates only")
     p.add_argument("--workers", type=int, default=0,

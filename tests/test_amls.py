@@ -27,6 +27,7 @@ from substruct.analysis.modes.krylov import eliminate
 from substruct.assembly.interfaces import tie_nodes
 from substruct.assembly.stack import assemble
 from substruct.linalg.amls import amls_modes, relative_residuals
+from substruct.linalg.amls_block import separator_condensation
 from substruct.linalg.amls_tree import dissection_tree
 from substruct.linalg.constraints import independent_rows
 from substruct.models.solid import BoxGrid, solid_box
@@ -220,3 +221,22 @@ def test_bad_arguments(clamped):
         amls_modes(K, M, 100.0, cutoff=0.5)
     with pytest.raises(ValueError, match="leaf_size"):
         dissection_tree(K, 0)
+
+
+def test_separator_condensation_equals_the_general_form():
+    """The separator's constraint modes and condensation by Cholesky and symmetric rank
+    updates equal the general products (Psi = -K_bb^-1 K_bB, K_BB + K_Bb Psi,
+    M_BB + M_Bb Psi + Psi^T (M_bB + M_bb Psi)) to round-off, exactly symmetric; sizes across
+    the mirroring's row blocks."""
+    rng = np.random.default_rng(3)
+    ns, nb = 300, 1100
+    n = ns + nb
+    A, B = rng.standard_normal((2, n, n)) / np.sqrt(n)
+    Kl, Ml = A @ A.T + np.eye(n), B @ B.T + np.eye(n)
+    Psi, CK, CM, MsBt = separator_condensation(Kl, Ml, ns)
+    P = -np.linalg.solve(Kl[:ns, :ns], Kl[:ns, ns:])
+    M_t = Ml[:ns, ns:] + Ml[:ns, :ns] @ P
+    ref = (P, Kl[ns:, ns:] + Kl[ns:, :ns] @ P, Ml[ns:, ns:] + Ml[ns:, :ns] @ P + P.T @ M_t, M_t)
+    for got, want in zip((Psi, CK, CM, MsBt), ref):
+        assert np.abs(got - want).max() <= 1e-12 * np.abs(want).max()
+    assert np.array_equal(CK, CK.T) and np.array_equal(CM, CM.T)

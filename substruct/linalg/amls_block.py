@@ -34,12 +34,13 @@ from typing import Any, Callable, Sequence
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
+from scipy.linalg import blas
 
 from substruct.linalg.factorize import Solve, factorizer
 from substruct.linalg.lanczos import shift_invert_lanczos
 
 __all__ = ["DENSE_LEAF", "TaskMap", "serial_map", "BlockJob", "BlockResult", "LeafExpansion",
-           "block_modes", "reduce_block", "expand_leaf"]
+           "block_modes", "separator_condensation", "reduce_block", "expand_leaf"]
 
 #: Subdomains up to this many coordinates get their fixed-interface modes by a dense ``eigh``;
 #: larger ones by shift-invert Lanczos on their sparse factorization.
@@ -135,6 +136,54 @@ def _sym(A: np.ndarray) -> np.ndarray:
     return (A + A.T) / 2
 
 
+#: Rows of a symmetric matrix's triangle mirrored at once.
+MIRROR_ROWS = 512
+
+
+def _mirror_upper(C: np.ndarray) -> np.ndarray:
+    """``C`` made symmetric from its upper triangle, in place, by blocks of rows."""
+    n = C.shape[0]
+    for i in range(0, n, MIRROR_ROWS):
+        e = min(i + MIRROR_ROWS, n)
+        D = C[i:e, i:e]
+        D[:] = np.triu(D) + np.triu(D, 1).T
+        C[e:, i:e] = C[i:e, e:].T
+    return C
+
+
+def separator_condensation(Kl: np.ndarray, Ml: np.ndarray, ns: int
+                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    r"""The constraint modes and static condensation of a separator's dense local pencil
+    (its ``ns`` own coordinates first, then its boundary :math:`B`), by the Cholesky factor
+    :math:`\hat K_{bb} = L L^T` and symmetric rank updates:
+
+    .. math::  X = L^{-1} \hat K_{bB}, \quad \Psi_b = -L^{-T} X, \quad
+               \tilde K_{BB} = \hat K_{BB} - X^T X, \\
+               T = \hat M_{bB} + \tfrac12 \hat M_{bb} \Psi_b, \quad
+               \tilde M_{BB} = \hat M_{BB} + \Psi_b^T T + T^T \Psi_b,
+
+    (the last is the module's :math:`\tilde M_{BB}`: :math:`\Psi^T T + T^T \Psi` holds both
+    cross terms and :math:`\Psi^T \hat M_{bb} \Psi`), the triangles by BLAS ``syrk`` and
+    ``syr2k``, half the products of the general form, symmetric by construction.
+
+    Returns:
+        ``(Psi, CK, CM, MsBt)`` with ``MsBt`` :math:`= \hat M_{bB} + \hat M_{bb} \Psi_b`.
+    """
+    L = sla.cholesky(Kl[:ns, :ns], lower=True)
+    X = sla.solve_triangular(L, Kl[:ns, ns:], lower=True)
+    # the operands' transposes are Fortran-ordered views, passed to BLAS without a copy; the
+    # output starts as a row-by-row copy of the boundary block, whose transpose (the same
+    # symmetric matrix) is Fortran-ordered too
+    CK = blas.dsyrk(-1.0, X.T, beta=1.0, c=np.array(Kl[ns:, ns:]).T, overwrite_c=1)
+    Psi = -sla.solve_triangular(L, X, lower=True, trans="T")
+    del X
+    MP = Ml[:ns, :ns] @ Psi
+    T = Ml[:ns, ns:] + 0.5 * MP
+    CM = blas.dsyr2k(1.0, Psi.T, T.T, beta=1.0, c=np.array(Ml[ns:, ns:]).T, overwrite_c=1)
+    T += 0.5 * MP
+    return Psi, _mirror_upper(np.asarray(CK)), _mirror_upper(np.asarray(CM)), T
+
+
 def reduce_block(job: BlockJob) -> BlockResult:
     """The reduction of one block (module docstring); a pure function of ``job``."""
     if job.leaf:
@@ -151,20 +200,18 @@ def reduce_block(job: BlockJob) -> BlockResult:
     Kl, Ml, ns = np.asarray(job.K), np.asarray(job.M), job.ns
     nb = Kl.shape[0] - ns
     Kss, Mss = Kl[:ns, :ns], Ml[:ns, :ns]
-    if nb and ns:
-        Psi = -sla.cho_solve(sla.cho_factor(Kss), Kl[:ns, ns:])
-    else:
-        Psi = np.zeros((ns, nb))
     lam, Phi = block_modes(Kss, Mss, job.lam_cut)
-    MsBt = Ml[:ns, ns:] + Mss @ Psi
-    CK = Kl[ns:, ns:] + Kl[ns:, :ns] @ Psi
-    CM = Ml[ns:, ns:] + Ml[ns:, :ns] @ Psi + Psi.T @ MsBt
+    if nb and ns:
+        Psi, CK, CM, MsBt = separator_condensation(Kl, Ml, ns)
+    else:
+        Psi, MsBt = np.zeros((ns, nb)), Ml[:ns, ns:]
+        CK, CM = Kl[ns:, ns:].copy(), Ml[ns:, ns:].copy()
     G = [Phi.T @ MsBt]
     cross = []
     for Gf in job.children:
         cross.append(Gf[:, :ns] @ Phi)
         G.append(Gf[:, :ns] @ Psi + Gf[:, ns:])
-    return BlockResult(lam, Phi, Psi, _sym(CK), _sym(CM), np.vstack(G), cross)
+    return BlockResult(lam, Phi, Psi, CK, CM, np.vstack(G), cross)
 
 
 @dataclass
