@@ -1,7 +1,8 @@
 """AMLS against shift-invert Lanczos: the lowest k modes of a clamped solid box.
 
     OMP_NUM_THREADS=1 python benchmarks/amls.py [--sizes 30000 300000 1000000 2000000]
-        [--modes 50 200 500 2000] [--cutoff 2] [--iterations 2] [--leaf-size 1000]
+        [--modes 50 200 500 2000] [--cutoff 2] [--iterations 2] [--ritz-ratio 1.2]
+        [--leaf-size 1000]
         [--workers N] [--lanczos-dir DIR] [--quick] [--accuracy]
 
 The model: a steel box ``4 x 1 x 1`` of Q1 hexahedra clamped at ``x = 0`` (the monolithic mesh
