@@ -44,7 +44,12 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
 from substruct.linalg.amls_block import TaskMap
-from substruct.linalg.amls_improve import SOLVE_COLUMNS, subspace_iteration
+from substruct.linalg.amls_improve import (
+    SOLVE_COLUMNS,
+    chebyshev_shifts,
+    filter_steps,
+    ritz_pairs,
+)
 from substruct.linalg.amls_reduce import ReducedModel, amls_reduce
 from substruct.linalg.amls_tree import DissectionNode, dissection_tree
 from substruct.linalg.factorize import factorizer
@@ -211,9 +216,10 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
     if iterations and U.shape[1]:
         sigma = SHIFT_FRACTION * lam_w
         solve = factorizer(AUTO)(sp.csc_array(K - sigma * M))
-        lam, U = subspace_iteration(K, M, U, solve, iterations, lam_w, say, sigma,
-                                    np.sqrt(bound * lam_c))
-        del solve
+        filter_steps(M, U, solve, chebyshev_shifts(iterations, sigma, np.sqrt(bound * lam_c)),
+                     say)
+        del solve    # freed before the n x k modes are made: the peak is one of the two
+        lam, U = ritz_pairs(K, M, U, lam_w)
     times["improve"] = time.perf_counter() - t
     keep = lam <= lam_w
     if not keep.all():

@@ -54,7 +54,8 @@ import scipy.sparse as sp
 
 from substruct.linalg.factorize import Solve
 
-__all__ = ["SOLVE_COLUMNS", "ROWS", "chebyshev_shifts", "projection", "subspace_iteration"]
+__all__ = ["SOLVE_COLUMNS", "ROWS", "chebyshev_shifts", "filter_steps", "projection",
+           "ritz_pairs", "subspace_iteration"]
 
 #: Columns of an ``n x p`` block of vectors handled at once (solves, sparse products,
 #: residuals): the temporaries are ``n x SOLVE_COLUMNS``, not ``n x p``.
@@ -107,32 +108,47 @@ def chebyshev_shifts(iterations: int, sigma: float, lam_unwanted: float | None
     return 0.5 * a * (1.0 + np.cos((2 * i - 1) * np.pi / (2 * iterations)))
 
 
+def filter_steps(M: sp.csr_array, W: np.ndarray, solve: Solve, shifts: np.ndarray,
+                 say: Callable[[str], None] | None = None) -> None:
+    r"""The steps of the subspace iteration on the ``n x p`` vectors ``W``, in place: step
+    ``i`` is :math:`W \leftarrow (K - \sigma M)^{-1} M W - x_i W` (``solve``:
+    :math:`(K - \sigma M)^{-1}`; ``shifts``: the :math:`x_i`, :func:`chebyshev_shifts`), the
+    steps kept apart by a Cholesky QR; the span is what counts."""
+    p = W.shape[1]
+    for it, x in enumerate(shifts):
+        if it:
+            _orthonormalize(M, W)
+        for j in range(0, p, SOLVE_COLUMNS):
+            Wj = np.ascontiguousarray(W[:, j:j + SOLVE_COLUMNS])
+            Y = np.asarray(solve(M @ Wj)).reshape(Wj.shape)
+            if x:
+                Y -= x * Wj
+            W[:, j:j + SOLVE_COLUMNS] = Y
+        if say is not None:
+            say(f"AMLS subspace iteration {it + 1}: {p} vectors")
+
+
 def subspace_iteration(K: sp.csr_array, M: sp.csr_array, U: np.ndarray, solve: Solve,
                        iterations: int, lam_max: float,
                        say: Callable[[str], None] | None = None,
                        sigma: float = 0.0, lam_unwanted: float | None = None
                        ) -> tuple[np.ndarray, np.ndarray]:
     r"""``iterations`` (>= 1) steps of subspace iteration on the ``n x p`` vectors ``U``
-    (module docstring; ``solve``: :math:`(K - \sigma M)^{-1}`), then the Rayleigh-Ritz
-    eigenpairs with :math:`\lambda \le` ``lam_max``, ascending, ``M``-orthonormal.  ``U`` is
-    overwritten; the memory is ``U``, the ``n x k`` result and ``n x SOLVE_COLUMNS`` temporaries.
+    (module docstring; :func:`filter_steps`; ``solve``: :math:`(K - \sigma M)^{-1}`), then the
+    Rayleigh-Ritz eigenpairs with :math:`\lambda \le` ``lam_max`` (:func:`ritz_pairs`).  ``U``
+    is overwritten.  With ``lam_unwanted`` (:math:`\lambda_u`; ``sigma``: the shift ``solve``
+    was factorized with) the steps are Chebyshev-shifted (:func:`chebyshev_shifts`).  (A caller
+    that can free the factorization between the two calls them one after the other.)"""
+    filter_steps(M, U, solve, chebyshev_shifts(iterations, sigma, lam_unwanted), say)
+    return ritz_pairs(K, M, U, lam_max)
 
-    With ``lam_unwanted`` (:math:`\lambda_u`; ``sigma``: the shift ``solve`` was factorized
-    with) the steps are Chebyshev-shifted (:func:`chebyshev_shifts`)."""
-    n, p = U.shape
-    W = U
-    shifts = chebyshev_shifts(iterations, sigma, lam_unwanted)
-    for it in range(iterations):
-        if it:
-            _orthonormalize(M, W)
-        for j in range(0, p, SOLVE_COLUMNS):
-            Wj = np.ascontiguousarray(W[:, j:j + SOLVE_COLUMNS])
-            Y = np.asarray(solve(M @ Wj)).reshape(Wj.shape)
-            if shifts[it]:
-                Y -= shifts[it] * Wj
-            W[:, j:j + SOLVE_COLUMNS] = Y
-        if say is not None:
-            say(f"AMLS subspace iteration {it + 1}: {p} vectors")
+
+def ritz_pairs(K: sp.csr_array, M: sp.csr_array, W: np.ndarray, lam_max: float
+               ) -> tuple[np.ndarray, np.ndarray]:
+    r"""The Rayleigh-Ritz eigenpairs of ``(K, M)`` on the span of ``W`` with
+    :math:`\lambda \le` ``lam_max``, ascending, ``M``-orthonormal; the memory is ``W``, the
+    ``n x k`` result and ``n x SOLVE_COLUMNS`` temporaries."""
+    n = W.shape[0]
     Mp = projection(M, W)
     s = 1.0 / np.sqrt(np.diag(Mp))    # unit columns: W's scale by about 1 / lambda_j
     lam, rot = sla.eigh(projection(K, W) * s[:, None] * s[None, :],
