@@ -1,5 +1,7 @@
 """Running the substruct command in-process, and what a bad-input answer must look like."""
 
+import signal
+
 from substruct import cli
 
 
@@ -17,3 +19,10 @@ def assert_one_line_error(code, out, err, *fragments):
     assert "Traceback" not in err and out == ""
     for fragment in fragments:
         assert fragment in err, err
+
+
+def default_ctrl_c() -> None:
+    """Ctrl-C back to its default in a child process (``preexec_fn``): a test session started
+    in the background by a shell without job control (``make test &`` in a script) ignores
+    SIGINT, and a child would inherit that."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)

@@ -16,6 +16,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from cli_helpers import default_ctrl_c
 
 ROOT = Path(__file__).resolve().parents[1]
 DRIVER = ROOT / "tests" / "interrupt_driver.py"
@@ -27,11 +28,9 @@ pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
 def _start(module: str, *args: str, pause: float = 60.0) -> tuple[subprocess.Popen, str]:
     env = dict(os.environ, PYTHONPATH=str(ROOT), OMP_NUM_THREADS="1", MPLBACKEND="Agg",
                PAUSE_SECONDS=str(pause))
-    # Ctrl-C back to its default in the child: a test session started in the background by a
-    # shell without job control (``make test &``) ignores SIGINT, and a child inherits that
     proc = subprocess.Popen([sys.executable, str(DRIVER), module, *args], env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+                            preexec_fn=default_ctrl_c)
     assert proc.stderr is not None
     first = proc.stderr.readline()
     return proc, first

@@ -20,6 +20,7 @@ from pathlib import Path
 import h5py
 import pytest
 
+from cli_helpers import default_ctrl_c
 from substruct import cli
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -58,13 +59,6 @@ def fresh(tmp_path: Path, files: dict[str, bytes]) -> Path:
     for name, data in files.items():
         (out / name).write_bytes(data)
     return out
-
-
-def default_ctrl_c() -> None:
-    """Ctrl-C back to its default in the driver: a test session started in the background by
-    a shell without job control (``make test &`` in a script) ignores SIGINT, and a child
-    would inherit that."""
-    signal.signal(signal.SIGINT, signal.SIG_DFL)
 
 
 def start(point: str, out: Path, *extra: str) -> tuple[subprocess.Popen, int]:

@@ -345,12 +345,12 @@ def test_an_internal_error_after_the_result_was_written_leaves_no_result(tmp_pat
     """The report fails after the result file was written into the staging folder: exit 1
     (an internal error), and no result, because the set is committed only after the report
     is ready."""
-    from substruct.cli import run_command
+    from substruct.cli import summary   # run_command imports it when the report is made
 
     def broken(*args, **kwargs):
         raise ZeroDivisionError("a bug in the table")
 
-    monkeypatch.setattr(run_command, "print_summary", broken)
+    monkeypatch.setattr(summary, "print_summary", broken)
     code, out, err = run(capsys, "run", FRF, "--out", tmp_path / "o", "--no-pictures")
     assert code == 1 and "internal error: ZeroDivisionError: a bug in the table" in err
     assert tree(tmp_path) == []

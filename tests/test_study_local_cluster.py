@@ -15,6 +15,7 @@ from pathlib import Path
 
 import psutil
 import pytest
+from cli_helpers import default_ctrl_c
 
 ROOT = Path(__file__).resolve().parent.parent
 TUNING = ROOT / "cases" / "tapered_rod_tuning.yaml"
@@ -61,7 +62,8 @@ def _worker_logs(tmp: Path) -> list[Path]:
 def test_an_interrupted_study_prints_one_line_and_leaves_nothing(how, tmp_path):
     args, env, tmp = command(tmp_path, LONG)
     proc = subprocess.Popen(args, env=env, cwd=tmp_path / "cwd", stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+                            stderr=subprocess.PIPE, text=True, start_new_session=True,
+                            preexec_fn=default_ctrl_c)
     try:
         deadline = time.monotonic() + 300
         while len(_worker_logs(tmp)) < 2 and time.monotonic() < deadline:
