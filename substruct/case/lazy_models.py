@@ -37,10 +37,11 @@ def _import(module: str, name: str) -> Any:
 
 class LazyType:
     """The optional block ``module.name`` (a model or an annotated type), imported when a
-    value is validated."""
+    value is validated; ``optional=False`` (a list's items): ``None`` is validated too (and
+    refused by the model, as any value that is not a mapping)."""
 
-    def __init__(self, module: str, name: str) -> None:
-        self.module, self.name = module, name
+    def __init__(self, module: str, name: str, optional: bool = True) -> None:
+        self.module, self.name, self.optional = module, name, optional
         self._adapter: TypeAdapter[Any] | None = None
 
     def target(self) -> Any:
@@ -52,7 +53,7 @@ class LazyType:
         return core_schema.with_info_plain_validator_function(self._validate)
 
     def _validate(self, value: Any, info: ValidationInfo) -> Any:
-        if value is None:
+        if value is None and self.optional:
             return None
         target = self.target()
         if isinstance(target, type) and issubclass(target, BaseModel):

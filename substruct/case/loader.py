@@ -139,8 +139,10 @@ if TYPE_CHECKING:
     Study: TypeAlias = StudySpec | None
 else:  # each kind's model, the interfaces', the links' and the study's imported when used
     SubstructureSpec = Annotated[Any, LazyUnion("type", SUBSTRUCTURE_KINDS)]
-    Interface = Annotated[Any, LazyType("substruct.case.solids", "InterfaceSpec")]
-    Link = Annotated[Any, LazyType("substruct.case.links", "LinkSpec")]
+    # list items: a null item is refused by the model, as any item that is not a mapping
+    Interface = Annotated[Any, LazyType("substruct.case.solids", "InterfaceSpec",
+                                        optional=False)]
+    Link = Annotated[Any, LazyType("substruct.case.links", "LinkSpec", optional=False)]
     Study = Annotated[Any, LazyType("substruct.case.study", "StudySpec")]
 
 #: The models of the kinds of substructure, importable from here as before (on first use).
