@@ -165,8 +165,9 @@ def test_missing_fields():
         "cases/x.yaml: name: required field is missing"
     assert error_of(changed(TABLE1, (*ROD, "length"), delete=True)) == \
         "cases/x.yaml: substructures.rod.length: required field is missing"
-    assert "substructures.a.type: needs type: one of rod, fixed-free, free-free, matrices" in \
-        error_of(changed(TABLE1, ("substructures", 1, "type"), delete=True))
+    assert ("substructures.a.type: needs type: one of rod, fixed-free, free-free, spring, "
+            "mass, matrices") in error_of(changed(TABLE1, ("substructures", 1, "type"),
+                                                  delete=True))
 
 
 def test_yaml_errors_name_the_line():

@@ -44,6 +44,13 @@ def test_the_kinds_table_names_every_model_by_its_own_tags():
         assert (table[tag].__module__, table[tag].__name__) == (module, name)
 
 
+def test_the_link_types_are_the_links_models_tags():
+    from substruct.case.links import LinkSpec
+    union, _ = get_args(LinkSpec)
+    assert sorted(t for model in get_args(union) for t in _tags(model)) == \
+        sorted(kinds.LINK_TYPES)
+
+
 @pytest.mark.parametrize("check, name", [
     (kinds.is_solid, "SolidSpec"), (kinds.is_frame, "FrameSpec"),
     (kinds.is_superelement, "SuperelementSpec"), (kinds.is_nastran, "NastranSpec"),

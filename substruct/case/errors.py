@@ -29,6 +29,7 @@ import numpy as np
 from pydantic import BaseModel, ValidationError
 
 from substruct.case.fields import NAME_PATTERN
+from substruct.case.kinds import LINK_TYPES, SUBSTRUCTURE_KINDS
 from substruct.case.lazy_models import lazy_model
 from substruct.case.numbers import MAX_DIGITS, BigNumber
 from substruct.case.text import printable
@@ -318,8 +319,20 @@ _SIMPLE = {
     "model_attributes_type": "must be a mapping (key: value)",
     "tuple_type": "must be a list",
 }
-_TAGS = {"type": "rod, fixed-free, free-free, matrices, spring, mass, solid",
-         "method": "assumed-modes, fe"}
+_TAGS = {"method": "assumed-modes, fe"}
+
+
+def _expected_tags(disc: str, loc: tuple, ctx: Mapping[str, Any]) -> str:
+    """The tags a discriminated field takes, for "expected one of": pydantic's own list when
+    it gives one, else those of the list the item is in (substructures, links)."""
+    expected = ctx.get("expected_tags")
+    if expected:
+        return ", ".join(t.strip().strip("'") for t in str(expected).split(","))
+    if disc == "type" and loc and loc[0] == "substructures":
+        return ", ".join(SUBSTRUCTURE_KINDS)
+    if disc == "type" and loc and loc[0] == "links":
+        return ", ".join(LINK_TYPES)
+    return _TAGS.get(disc, "")
 
 
 def _problem(err: Mapping[str, Any], loc: tuple, root: type[BaseModel], raw: Any = None
@@ -340,12 +353,14 @@ def _problem(err: Mapping[str, Any], loc: tuple, root: type[BaseModel], raw: Any
         return f"unknown key{hint}{extra}", loc, value
     if typ in ("union_tag_invalid", "union_tag_not_found"):
         disc = str(ctx.get("discriminator", "")).strip("'")
-        tags = _TAGS.get(disc, ctx.get("expected_tags", ""))
+        tags = _expected_tags(disc, loc, ctx)
         if typ == "union_tag_not_found" and isinstance(value, dict):
-            return f"needs {disc}: one of {tags}", loc + (disc,), MISSING
+            return (f"needs {disc}: one of {tags}" if tags else f"needs {disc}"), \
+                loc + (disc,), MISSING
         if typ == "union_tag_not_found":
             return "must be a mapping (key: value)", loc, value
-        return f"unknown {disc} (expected one of {tags})", loc + (disc,), ctx.get("tag")
+        expected = f" (expected one of {tags})" if tags else ""
+        return f"unknown {disc}{expected}", loc + (disc,), ctx.get("tag")
     bounds = {
         "greater_than": f"must be > {ctx.get('gt')}",
         "greater_than_equal": f"must be >= {ctx.get('ge')}",

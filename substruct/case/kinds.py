@@ -20,7 +20,7 @@ if TYPE_CHECKING:
     from substruct.case.solids import SolidSpec
     from substruct.case.superelements import SuperelementSpec
 
-__all__ = ["SUBSTRUCTURE_KINDS", "is_solid", "is_frame", "is_superelement", "is_nastran",
+__all__ = ["SUBSTRUCTURE_KINDS", "LINK_TYPES", "is_solid", "is_frame", "is_superelement", "is_nastran",
            "is_matrices", "is_frf", "has_frf_parts"]
 
 _SUBS = "substruct.case.substructures"
@@ -39,6 +39,9 @@ SUBSTRUCTURE_KINDS: dict[str, tuple[str, str]] = {
     "superelement": ("substruct.case.superelements", "SuperelementSpec"),
     "nastran": ("substruct.case.nastran", "NastranSpec"),
 }
+
+#: The ``type`` tags of the links (:mod:`substruct.case.links`), for the case's error lines.
+LINK_TYPES = ("rigid", "interpolation", "mpc")
 
 
 def _tag(spec: Any) -> Any:
