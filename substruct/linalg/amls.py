@@ -126,9 +126,9 @@ def reduced_eigenpairs(red: ReducedModel, lam_max: float) -> tuple[np.ndarray, n
     .. math::  \hat M z = \mu z, \qquad \hat M = \Lambda^{-1/2} M_r \Lambda^{-1/2}, \qquad
                \mu = 1/\lambda, \quad y = \Lambda^{-1/2} z / \sqrt{\mu},
 
-    solved by a dense ``eigh`` (MRRR, subset by value: a third of the generalized solver's
-    time at 2,821 reduced coordinates) up to :data:`DENSE_REDUCED` coordinates; above, its
-    largest eigenvalues by Lanczos (``eigsh``, ``which="LA"``) with sparse products only (the
+    solved by a dense ``eigh`` (MRRR, subset by value; the generalized solver would first
+    factorize :math:`M_r` and reduce the pencil) up to :data:`DENSE_REDUCED` coordinates;
+    above, its largest eigenvalues by Lanczos (``eigsh``, ``which="LA"``) with sparse products only (the
     inverse iteration is free: :math:`K_r` is diagonal), the number asked for growing until one
     found is beyond ``lam_max``.
     """

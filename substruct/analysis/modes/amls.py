@@ -122,12 +122,13 @@ def _solve(K: sp.csr_array, M: sp.csr_array, count: int | None, opts: AmlsOption
 
     tree = dissection_tree(K, opts.leaf_size)     # one dissection for every pass
 
+    ritz = min(opts.cutoff, RITZ_RATIO if opts.ritz_ratio is None else opts.ritz_ratio)
+
     def run(w: float) -> AMLSModes:
         if say is not None:
             say("sparse-eigen", f"modes: AMLS up to {w:.4g} rad/s (cut-off {opts.cutoff:g})", K.shape[0])
         return amls_modes(K, M, w, cutoff=opts.cutoff, leaf_size=opts.leaf_size,
-                          iterations=opts.iterations, ritz_ratio=min(opts.cutoff, RITZ_RATIO if opts.ritz_ratio is None
-                                                         else opts.ritz_ratio),
+                          iterations=opts.iterations, ritz_ratio=ritz,
                           progress=line, map=opts.tasks, tree=tree)
 
     if opts.omega_max is not None:
