@@ -360,7 +360,9 @@ def _problem(err: Mapping[str, Any], loc: tuple, root: type[BaseModel], raw: Any
         if typ == "union_tag_not_found":
             return "must be a mapping (key: value)", loc, value
         expected = f" (expected one of {tags})" if tags else ""
-        return f"unknown {disc}{expected}", loc + (disc,), ctx.get("tag")
+        # the tag as written (null, 5, a list), not as pydantic's message text makes it
+        tag = value[disc] if isinstance(value, dict) and disc in value else ctx.get("tag")
+        return f"unknown {disc}{expected}", loc + (disc,), tag
     bounds = {
         "greater_than": f"must be > {ctx.get('gt')}",
         "greater_than_equal": f"must be >= {ctx.get('ge')}",
