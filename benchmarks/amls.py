@@ -77,7 +77,7 @@ def worker(args: argparse.Namespace) -> dict:
             with Session(Backend(workers=args.workers)) as session:
                 _reset_peak()
                 t0, c0 = time.perf_counter(), time.process_time()
-                r = amls_modes(K, M, args.omega_max, map=session.map, **kw)
+                r = amls_modes(K, M, args.omega_max, tasks=session, **kw)
         else:
             r = amls_modes(K, M, args.omega_max, **kw)
         out = {"lam": r.lam.tolist(), "residual": float(r.residual.max(initial=0)),

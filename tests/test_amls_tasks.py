@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from counting_tasks import COUNTING
 from two_boxes import two_boxes_case
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -26,6 +27,7 @@ import sys
 import numpy as np
 import scipy.sparse as sp
 from substruct.linalg.amls import amls_modes
+from substruct.linalg.amls_tree import dissection_tree
 from substruct.models.solid import BoxGrid, solid_box
 from substruct.studies.study_backend import Backend, Session
 b = solid_box("b", BoxGrid((4.0, 1.0, 1.0), (16, 4, 4)), 2.1e11, 0.3, 7850.0,
@@ -33,14 +35,15 @@ b = solid_box("b", BoxGrid((4.0, 1.0, 1.0), (16, 4, 4)), 2.1e11, 0.3, 7850.0,
 K, M = sp.csr_array(b.K), sp.csr_array(b.M)
 kw = dict(cutoff=3.0, leaf_size=100, iterations=1, ritz_ratio=2.0)
 serial = amls_modes(K, M, 3000.0, **kw)
-calls = []
+tree = dissection_tree(K, 100).postorder()
+""" + COUNTING + """
 with Session(Backend(workers=2)) as s:
-    def where(f, jobs):
-        calls.append(len(jobs))
-        return s.map(f, jobs)
-    dask = amls_modes(K, M, 3000.0, map=where, **kw)
+    where = Counting(s)
+    dask = amls_modes(K, M, 3000.0, tasks=where, **kw)
 np.savez(sys.argv[1], lam_s=serial.lam, U_s=serial.U, res_s=serial.residual,
-         lam_d=dask.lam, U_d=dask.U, res_d=dask.residual, calls=np.array(calls))
+         lam_d=dask.lam, U_d=dask.U, res_d=dask.residual,
+         calls=np.array(where.counts()),
+         blocks=np.array([len(tree), sum(not b.is_leaf for b in tree)]))
 """
 
 
@@ -54,9 +57,14 @@ def test_dask_local_cluster_gives_the_same_bits(tmp_path):
     assert np.array_equal(r["lam_s"], r["lam_d"])
     assert np.array_equal(r["U_s"], r["U_d"])
     assert np.array_equal(r["res_s"], r["res_d"])
-    # one map per tree level (5 for this tree) and one for the subdomains' expansion
-    calls = r["calls"]
-    assert calls.size >= 4 and calls.max() >= 4
+    # every block a submitted task, split into its kept part and (but the root's) its
+    # condensation, both tasks given the block's future; every separator's task given its
+    # children's condensations as futures; one map for the subdomains' expansion
+    maps, submits, chained = r["calls"]
+    blocks, separators = r["blocks"]
+    assert separators >= 3
+    assert maps == 1 and submits == 3 * blocks - 1
+    assert chained == separators + 2 * blocks - 1
 
 
 CASE = two_boxes_case("tied", """\

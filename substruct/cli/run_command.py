@@ -67,7 +67,7 @@ def compute(case: Any, quiet: bool, frf_sink: Any = None, backend: Any = None,
                 what = "Monte Carlo samples" if monte_carlo_case(case) else "AMLS tasks"
                 events("amls", f"{what} on {backend.describe()}", 0)
             return runner.run_case(case, progress=bar, model=model, events=events,
-                                   frf_sink=frf_sink, tasks=session.map,
+                                   frf_sink=frf_sink, tasks=session,
                                    field_sink=field_sink)
     except BackendError as err:
         raise InputError(str(err)) from None

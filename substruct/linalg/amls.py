@@ -43,7 +43,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from substruct.linalg.amls_block import TaskMap
+from substruct.linalg.task_runner import TaskRunner
 from substruct.linalg.amls_improve import (
     SOLVE_COLUMNS,
     chebyshev_shifts,
@@ -161,7 +161,7 @@ def reduced_eigenpairs(red: ReducedModel, lam_max: float) -> tuple[np.ndarray, n
 def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_max: float,
                cutoff: float = 5.0, leaf_size: int = 1000, iterations: int = 0,
                ritz_ratio: float = 1.5, progress: Callable[[str], None] | None = None,
-               map: TaskMap | None = None, tree: DissectionNode | None = None) -> AMLSModes:
+               tasks: TaskRunner | None = None, tree: DissectionNode | None = None) -> AMLSModes:
     r"""The eigenpairs of :math:`K u = \omega^2 M u` with :math:`\omega \le` ``omega_max`` by
     AMLS (module docstring).
 
@@ -175,9 +175,9 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
         ritz_ratio: with iterations, the Ritz vectors iterated are those up to
             ``ritz_ratio * omega_max`` (capped by the cut-off).
         progress: receives one line per stage and tree level.
-        map: runs the independent blocks of each tree level, and the subdomains'
-            expansions, as tasks (:data:`~substruct.linalg.amls_block.TaskMap`, e.g. a Dask
-            client's map); default: in this process.  The results do not depend on it.
+        tasks: where the blocks of the reduction and the subdomains' expansions run
+            (:class:`~substruct.linalg.task_runner.TaskRunner`, e.g. a Dask session);
+            default: in this process.  The results do not depend on it.
         tree: the dissection of ``K`` (:func:`~substruct.linalg.amls_tree.dissection_tree`
             with ``leaf_size``), if already made (another wanted frequency of the same model).
     """
@@ -199,7 +199,7 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
     times["tree"] = time.perf_counter() - t
     say(f"AMLS tree: {n_blocks} blocks, {max(b.level for b in root.postorder()) + 1} levels")
     t = time.perf_counter()
-    red = amls_reduce(K, M, root, lam_c, AUTO, say, map)
+    red = amls_reduce(K, M, root, lam_c, AUTO, say, tasks)
     times["reduce"] = time.perf_counter() - t
     say(f"AMLS reduced: {red.size} coordinates from {red.n}")
     t = time.perf_counter()
@@ -207,7 +207,7 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
     lam, Y = reduced_eigenpairs(red, bound)
     times["reduced"] = time.perf_counter() - t
     t = time.perf_counter()
-    U = red.expand(Y, map) if Y.shape[1] else np.zeros((red.n, 0))
+    U = red.expand(Y, tasks) if Y.shape[1] else np.zeros((red.n, 0))
     times["expand"] = time.perf_counter() - t
     n_reduced = red.size
     levels = np.bincount(red.level, minlength=int(red.level.max(initial=0)) + 1)

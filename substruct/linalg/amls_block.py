@@ -1,7 +1,11 @@
 r"""One block of the AMLS reduction as a task: a pure function of picklable data, so that the
-blocks of one tree level (independent of each other once their children are reduced) run
-through any ``map`` (in this process, or as Dask tasks on other workers) and give the same
-numbers bit for bit.
+blocks run anywhere (in this process, or as Dask tasks on other workers,
+:mod:`substruct.linalg.task_runner`) and give the same numbers bit for bit.  A subdomain's
+task (:func:`reduce_leaf`) needs only its own rows; a separator's (:func:`reduce_separator`)
+its own rows and its children's condensations, taken from their tasks' handles, so that on a
+cluster they go from worker to worker, and it builds its dense local pencil itself
+(:func:`separator_pencil`).  Each task returns what the reduced model keeps
+(:class:`BlockModes`) apart from what its parent needs (:class:`Condensation`).
 
 A block ``b`` with boundary :math:`B` (the separators above it that its subtree touches) is one
 Craig-Bampton step on the local pencil :math:`(\hat K, \hat M)` of the coordinates
@@ -28,8 +32,9 @@ of its eigen solve).  Peak memory of a task: its subdomain's factor, its modes a
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Any, Callable, Sequence
+import time
+from dataclasses import dataclass
+from typing import Sequence
 
 import numpy as np
 import scipy.linalg as sla
@@ -39,71 +44,75 @@ from scipy.linalg import blas
 from substruct.linalg.factorize import Solve, factorizer
 from substruct.linalg.lanczos import shift_invert_lanczos
 
-__all__ = ["DENSE_LEAF", "TaskMap", "serial_map", "BlockJob", "BlockResult", "LeafExpansion",
-           "block_modes", "separator_condensation", "reduce_block", "expand_leaf"]
+__all__ = ["DENSE_LEAF", "LeafJob", "SeparatorJob", "Condensation", "BlockModes",
+           "LeafExpansion", "block_modes", "separator_condensation", "separator_pencil",
+           "reduce_leaf", "reduce_separator", "expand_leaf"]
 
 #: Subdomains up to this many coordinates get their fixed-interface modes by a dense ``eigh``;
 #: larger ones by shift-invert Lanczos on their sparse factorization.
 DENSE_LEAF = 2000
 
-#: ``map(function, jobs) -> [function(job) for job in jobs]``, in the order of ``jobs``: how the
-#: independent blocks of a level run (:func:`serial_map`, or a Dask client's map).
-TaskMap = Callable[[Callable[[Any], Any], Sequence[Any]], Sequence[Any]]
-
-
-def serial_map(function: Callable[[Any], Any], jobs: Sequence[Any]) -> list[Any]:
-    """``[function(job) for job in jobs]``: the tasks one after the other, in this process."""
-    return [function(job) for job in jobs]
-
 
 @dataclass
-class BlockJob:
-    """The data of one block's task.
+class LeafJob:
+    """The data of a subdomain's task: its sparse ``K_bb``, ``M_bb`` and their coupling
+    ``K_bB``, ``M_bB`` to its boundary, the cut-off eigenvalue and a factorization's registry
+    name (:mod:`substruct.linalg.factorize`)."""
 
-    Attributes:
-        leaf: a subdomain (sparse ``K``, ``M`` rows) or a separator (dense local pencil).
-        K, M: a subdomain's ``K_bb``, ``M_bb`` (sparse); a separator's local
-            :math:`\\hat K`, :math:`\\hat M` on :math:`b \\cup B` (dense, ``b`` first).
-        K_bB, M_bB: a subdomain's coupling to its boundary (sparse; ``None`` for a separator).
-        ns: the number of the block's own coordinates (the first ``ns`` of the local pencil).
-        children: each child's mass coupling :math:`G_c` scattered onto the columns of
-            :math:`b \\cup B` (separators only).
-        lam_cut: the cut-off eigenvalue.
-        factorization: a registry name (:mod:`substruct.linalg.factorize`).
-    """
-
-    leaf: bool
-    K: Any
-    M: Any
-    ns: int
+    K: sp.csr_array
+    M: sp.csr_array
+    K_bB: sp.csr_array
+    M_bB: sp.csr_array
     lam_cut: float
     factorization: str = "auto"
-    K_bB: sp.csr_array | None = None
-    M_bB: sp.csr_array | None = None
-    children: list[np.ndarray] = field(default_factory=list)
 
 
 @dataclass
-class BlockResult:
-    """What a block's task returns.
+class SeparatorJob:
+    r"""The data of a separator's task, without its children's condensations (which come
+    from their own tasks): the separator's rows of ``K``, ``M`` on :math:`I = b \cup B`
+    (sparse, ``b`` first), the number ``ns`` of its own coordinates, each child's boundary as
+    positions in :math:`I`, and the cut-off eigenvalue."""
+
+    K_rows: sp.csr_array
+    M_rows: sp.csr_array
+    ns: int
+    positions: list[np.ndarray]
+    lam_cut: float
+
+
+@dataclass
+class Condensation:
+    """What a block passes up to its parent.
+
+    Attributes:
+        CK, CM: the static condensation onto its boundary (symmetric, ``|B| x |B|``).
+        G: the mass coupling of its subtree's modes onto its boundary: its own modes first,
+            then each child's subtree in order.
+    """
+
+    CK: np.ndarray
+    CM: np.ndarray
+    G: np.ndarray
+
+
+@dataclass
+class BlockModes:
+    """What a block keeps for the reduced model.
 
     Attributes:
         lam, Phi: its fixed-interface eigenpairs up to the cut-off, ``M``-normalized.
         Psi: a separator's constraint modes (``ns x |B|``); ``None`` for a subdomain.
-        CK, CM: the static condensation onto its boundary (symmetric, ``|B| x |B|``).
-        G: the mass coupling of its subtree's modes onto its boundary: its own modes first,
-            then each child's subtree in order.
         cross: per child, the reduced mass block of the child's subtree's modes against this
             block's modes.
+        seconds: the task's time.
     """
 
     lam: np.ndarray
     Phi: np.ndarray
     Psi: np.ndarray | None
-    CK: np.ndarray
-    CM: np.ndarray
-    G: np.ndarray
     cross: list[np.ndarray]
+    seconds: float = 0.0
 
 
 def block_modes(Kb: np.ndarray | sp.sparray, Mb: np.ndarray | sp.sparray, lam_cut: float,
@@ -184,34 +193,67 @@ def separator_condensation(Kl: np.ndarray, Ml: np.ndarray, ns: int
     return Psi, _mirror_upper(np.asarray(CK)), _mirror_upper(np.asarray(CM)), T
 
 
-def reduce_block(job: BlockJob) -> BlockResult:
-    """The reduction of one block (module docstring); a pure function of ``job``."""
-    if job.leaf:
-        assert job.K_bB is not None and job.M_bB is not None
-        Kdd, Mdd = sp.csr_array(job.K), sp.csr_array(job.M)
-        nd, nb = Kdd.shape[0], job.K_bB.shape[1]
-        solve = factorizer(job.factorization)(sp.csc_array(Kdd))
-        Psi = -np.asarray(solve(job.K_bB.toarray())).reshape(nd, nb)
-        lam, Phi = block_modes(Kdd, Mdd, job.lam_cut, solve)
-        MdBt = job.M_bB.toarray() + Mdd @ Psi
-        CK = job.K_bB.T @ Psi
-        CM = job.M_bB.T @ Psi + Psi.T @ MdBt
-        return BlockResult(lam, Phi, None, _sym(CK), _sym(CM), Phi.T @ MdBt, [])
-    Kl, Ml, ns = np.asarray(job.K), np.asarray(job.M), job.ns
+def reduce_leaf(job: LeafJob) -> tuple[BlockModes, Condensation]:
+    """The reduction of a subdomain (module docstring); a pure function of ``job``."""
+    t = time.perf_counter()
+    Kdd, Mdd = job.K, job.M
+    nd, nb = Kdd.shape[0], job.K_bB.shape[1]
+    solve = factorizer(job.factorization)(sp.csc_array(Kdd))
+    Psi = -np.asarray(solve(job.K_bB.toarray())).reshape(nd, nb)
+    lam, Phi = block_modes(Kdd, Mdd, job.lam_cut, solve)
+    MdBt = job.M_bB.toarray() + Mdd @ Psi
+    CK = job.K_bB.T @ Psi
+    CM = job.M_bB.T @ Psi + Psi.T @ MdBt
+    up = Condensation(_sym(CK), _sym(CM), Phi.T @ MdBt)
+    return BlockModes(lam, Phi, None, [], time.perf_counter() - t), up
+
+
+def separator_pencil(job: SeparatorJob, children: Sequence[Condensation]
+                     ) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+    r"""A separator's dense local pencil :math:`(\hat K, \hat M)` on :math:`b \cup B`: its
+    own rows (mirrored onto its columns) plus every child's condensation :math:`\tilde K_{BB}`,
+    :math:`\tilde M_{BB}` added at the child's boundary; and each child's mass coupling
+    :math:`G_c` scattered onto the columns of :math:`b \cup B`."""
+    ns = job.ns
+    Ks, Ms = job.K_rows.toarray(), job.M_rows.toarray()
+    nI = Ks.shape[1]
+    Kl = np.zeros((nI, nI))
+    Ml = np.zeros((nI, nI))
+    Kl[:ns], Ml[:ns] = Ks, Ms
+    Kl[ns:, :ns], Ml[ns:, :ns] = Ks[:, ns:].T, Ms[:, ns:].T
+    Gfs = []
+    for p, c in zip(job.positions, children):
+        for r, row in enumerate(p):      # row by row: 16x faster than Kl[np.ix_(p, p)] +=
+            Kl[row, p] += c.CK[r]
+            Ml[row, p] += c.CM[r]
+        Gf = np.zeros((c.G.shape[0], nI))
+        Gf[:, p] = c.G
+        Gfs.append(Gf)
+    return Kl, Ml, Gfs
+
+
+def reduce_separator(job: SeparatorJob, *children: Condensation
+                     ) -> tuple[BlockModes, Condensation]:
+    """The reduction of a separator (module docstring), given its children's condensations in
+    the order of ``job.positions``; a pure function of its arguments."""
+    t = time.perf_counter()
+    Kl, Ml, Gfs = separator_pencil(job, children)
+    ns = job.ns
     nb = Kl.shape[0] - ns
-    Kss, Mss = Kl[:ns, :ns], Ml[:ns, :ns]
-    lam, Phi = block_modes(Kss, Mss, job.lam_cut)
+    lam, Phi = block_modes(Kl[:ns, :ns], Ml[:ns, :ns], job.lam_cut)
     if nb and ns:
         Psi, CK, CM, MsBt = separator_condensation(Kl, Ml, ns)
     else:
         Psi, MsBt = np.zeros((ns, nb)), Ml[:ns, ns:]
         CK, CM = Kl[ns:, ns:].copy(), Ml[ns:, ns:].copy()
+    del Kl, Ml
     G = [Phi.T @ MsBt]
     cross = []
-    for Gf in job.children:
+    for Gf in Gfs:
         cross.append(Gf[:, :ns] @ Phi)
         G.append(Gf[:, :ns] @ Psi + Gf[:, ns:])
-    return BlockResult(lam, Phi, Psi, CK, CM, np.vstack(G), cross)
+    up = Condensation(CK, CM, np.vstack(G))
+    return BlockModes(lam, Phi, Psi, cross, time.perf_counter() - t), up
 
 
 @dataclass

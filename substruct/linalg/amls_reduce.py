@@ -37,34 +37,38 @@ are nested).  Subdomains (sparse) use a factorization from :mod:`substruct.linal
 for their constraint modes; separators (dense after their children's condensation) a dense
 Cholesky.
 
-The blocks of one tree level are independent once the level below is reduced: each is one task
-(:func:`substruct.linalg.amls_block.reduce_block`) of a ``map`` given by the caller (a Dask
-client's map runs them on its workers), the levels bottom-up.  In this process (no ``map``)
-the blocks run one at a time in post-order instead, so that only the condensations still
-waiting for their parent are held (at most two per level), not a whole level's.  The
-tasks are pure functions of their data and the numbering of the reduced coordinates is made
-here afterwards, so the reduced model does not depend on where the tasks ran.
+Every block is one task (:mod:`substruct.linalg.amls_block`) of a
+:class:`~substruct.linalg.task_runner.TaskRunner`, submitted in post-order: a separator's task
+takes its children's condensations as handles of their tasks, so that on a Dask cluster they
+pass from worker to worker (a block starts as soon as its children are done, not level by
+level) and only what the reduced model keeps comes back here, as each block is done.  In this
+process each task runs at once, depth first, so that only the condensations still waiting for
+their parent are held (at most two per level).  The tasks are pure functions of their data and
+the numbering of the reduced coordinates is made here afterwards, so the reduced model does
+not depend on where the tasks ran.
 """
 
 from __future__ import annotations
 
+import operator
 import time
 from dataclasses import dataclass, field
-from typing import Callable
+from typing import Any, Callable
 
 import numpy as np
 import scipy.sparse as sp
 
 from substruct.linalg.amls_block import (
-    BlockJob,
-    BlockResult,
+    BlockModes,
     LeafExpansion,
-    TaskMap,
+    LeafJob,
+    SeparatorJob,
     expand_leaf,
-    reduce_block,
-    serial_map,
+    reduce_leaf,
+    reduce_separator,
 )
 from substruct.linalg.amls_tree import DissectionNode
+from substruct.linalg.task_runner import IN_PROCESS, TaskRunner
 
 __all__ = ["ReducedModel", "amls_reduce"]
 
@@ -107,10 +111,11 @@ class ReducedModel:
         """Number of reduced coordinates."""
         return int(self.lam.size)
 
-    def expand(self, Y: np.ndarray, map: TaskMap | None = None) -> np.ndarray:
+    def expand(self, Y: np.ndarray, tasks: TaskRunner | None = None) -> np.ndarray:
         r"""Physical coordinates :math:`X = Z Y` of reduced ones (``size x k``), top-down:
         :math:`x_b = \Phi_b y_b + \Psi_b x_B` for the separators, root first, then every
-        subdomain as one task of ``map`` (:func:`substruct.linalg.amls_block.expand_leaf`)."""
+        subdomain as one task of a map of ``tasks``
+        (:func:`substruct.linalg.amls_block.expand_leaf`)."""
         Y = np.asarray(Y, dtype=float).reshape(self.size, -1)
         X = np.zeros((self.n, Y.shape[1]))
         leaves = []
@@ -127,15 +132,9 @@ class ReducedModel:
             assert b.K is not None and b.K_dB is not None
             jobs.append(LeafExpansion(b.K, b.K_dB, b.Phi, Y[b.modes], X[b.boundary],
                                       self.factorization))
-        for b, xb in zip(leaves, (map or serial_map)(expand_leaf, jobs)):
+        for b, xb in zip(leaves, (tasks or IN_PROCESS).map(expand_leaf, jobs)):
             X[b.dofs] = xb
         return X
-
-
-def _positions(I: np.ndarray, sub: np.ndarray) -> np.ndarray:
-    """Where the entries of ``sub`` sit in ``I`` (every one is there)."""
-    order = np.argsort(I)
-    return order[np.searchsorted(I, sub, sorter=order)]
 
 
 def _boundaries(P: sp.csr_array, order: list[DissectionNode]) -> list[np.ndarray]:
@@ -156,116 +155,87 @@ def _boundaries(P: sp.csr_array, order: list[DissectionNode]) -> list[np.ndarray
     return out
 
 
-def _job(K: sp.csr_array, M: sp.csr_array, b: DissectionNode, B: np.ndarray, lam_cut: float,
-         factorization: str, below: list[tuple[np.ndarray, BlockResult]]) -> BlockJob:
-    r"""The task of block ``b``: a subdomain's sparse rows, or a separator's dense local pencil
-    on :math:`b \cup B` with its children's condensations added (``below``: each child's
-    boundary and result)."""
-    d = b.dofs
-    if b.is_leaf:
-        Kd, Md = K[d], M[d]
-        return BlockJob(True, Kd[:, d], Md[:, d], d.size, lam_cut, factorization,
-                        K_bB=sp.csr_array(Kd[:, B]), M_bB=sp.csr_array(Md[:, B]))
-    ns = d.size
+def _leaf_job(K: sp.csr_array, M: sp.csr_array, d: np.ndarray, B: np.ndarray, lam_cut: float,
+              factorization: str) -> LeafJob:
+    """The task of the subdomain ``d`` with boundary ``B``: its sparse rows."""
+    Kd, Md = K[d], M[d]
+    return LeafJob(sp.csr_array(Kd[:, d]), sp.csr_array(Md[:, d]), sp.csr_array(Kd[:, B]),
+                   sp.csr_array(Md[:, B]), lam_cut, factorization)
+
+
+def _separator_job(K: sp.csr_array, M: sp.csr_array, d: np.ndarray, B: np.ndarray,
+                   lam_cut: float, child_bounds: list[np.ndarray]) -> SeparatorJob:
+    r"""The task of the separator ``d`` with boundary ``B``: its rows on :math:`d \cup B` and
+    where each child's boundary sits there."""
     I = np.concatenate([d, B])
-    Kl = np.zeros((I.size, I.size))
-    Ml = np.zeros((I.size, I.size))
-    Ks, Ms = K[d][:, I].toarray(), M[d][:, I].toarray()
-    Kl[:ns], Ml[:ns] = Ks, Ms
-    Kl[ns:, :ns], Ml[ns:, :ns] = Ks[:, ns:].T, Ms[:, ns:].T
-    children = []
-    for Bc, rc in below:
-        p = _positions(I, Bc)
-        for r, row in enumerate(p):      # row by row: 16x faster than Kl[np.ix_(p, p)] +=
-            Kl[row, p] += rc.CK[r]
-            Ml[row, p] += rc.CM[r]
-        Gf = np.zeros((rc.G.shape[0], I.size))
-        Gf[:, p] = rc.G
-        children.append(Gf)
-    return BlockJob(False, Kl, Ml, ns, lam_cut, factorization, children=children)
+    order = np.argsort(I)
+    positions = [order[np.searchsorted(I, Bc, sorter=order)] for Bc in child_bounds]
+    return SeparatorJob(sp.csr_array(K[d][:, I]), sp.csr_array(M[d][:, I]), d.size, positions,
+                        lam_cut)
 
 
 def amls_reduce(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, root: DissectionNode,
                 lam_cut: float, factorization: str = "auto",
                 progress: Callable[[str], None] | None = None,
-                map: TaskMap | None = None) -> ReducedModel:
+                tasks: TaskRunner | None = None) -> ReducedModel:
     r"""The AMLS reduction of the symmetric pencil ``(K, M)`` over the tree ``root``, keeping in
     every block the fixed-interface modes with eigenvalue at most ``lam_cut`` (see the module
     docstring).  ``K`` restricted to every subdomain must be positive definite (true when the
     subdomains are held by separators, or ``K`` is); the root separator may be singular
     (a free body's rigid modes).
 
-    The blocks of each level, deepest first, are the tasks of one call of ``map``
-    (:data:`~substruct.linalg.amls_block.TaskMap`); without it they run in this process, one
-    at a time in post-order (the same numbers); ``progress`` receives one line as each level
-    is done."""
+    Every block is a task of ``tasks`` (default: in this process, the same numbers);
+    ``progress`` receives one line as each level is done, with the seconds its tasks took."""
     K = sp.csr_array(K, dtype=float)
     M = sp.csr_array(M, dtype=float)
-    run = map or serial_map
+    run = tasks or IN_PROCESS
     n = K.shape[0]
     order = root.postorder()
     bounds = _boundaries(sp.csr_array(abs(K) + abs(M)), order)
     index = {id(b): i for i, b in enumerate(order)}
     depth = max(b.level for b in order)
-    results: list[BlockResult | None] = [None] * len(order)
-
-    def job(i: int) -> BlockJob:
-        below = []
-        for c in order[i].children:
-            j = index[id(c)]
-            rc = results[j]
-            assert rc is not None
-            below.append((bounds[j], rc))
-        return _job(K, M, order[i], bounds[i], lam_cut, factorization, below)
-
-    def report(lev: int, here: list[int], seconds: float) -> None:
-        if progress is not None:
-            kept = sum(int(r.lam.size) for r in (results[i] for i in here) if r is not None)
-            coords = sum(int(order[i].dofs.size) for i in here)
-            progress(f"AMLS level {lev} ({depth - lev + 1} of {depth + 1}): {len(here)} "
-                     f"block(s) of {coords} coordinates, {kept} modes kept ({seconds:.1f} s)")
-
     levels = {lev: [i for i, b in enumerate(order) if b.level == lev]
               for lev in range(depth, -1, -1)}
-    if map is None:
-        # in this process: one block at a time in post-order, each child's condensation
-        # freed once its parent is reduced, so at most two per level are alive (level by
-        # level, a whole level's would be)
-        left = {lev: len(here) for lev, here in levels.items()}
-        spent = dict.fromkeys(levels, 0.0)
-        for i, b in enumerate(order):
-            t = time.perf_counter()
-            results[i] = reduce_block(job(i))
-            _release(results, b, index)
-            spent[b.level] += time.perf_counter() - t
-            left[b.level] -= 1
-            if not left[b.level]:
-                report(b.level, levels[b.level], spent[b.level])
-    else:
-        for lev, here in levels.items():
-            t = time.perf_counter()
-            out = list(run(reduce_block, [job(i) for i in here]))
-            for i, r in zip(here, out):
-                results[i] = r
-                _release(results, order[i], index)
-            report(lev, here, time.perf_counter() - t)
+    left = {lev: len(here) for lev, here in levels.items()}
+    results: list[BlockModes | None] = [None] * len(order)
+    up: dict[int, Any] = {}      # the condensation's handle of each block not yet used
+    kept: dict[int, Any] = {}    # the kept part's handle of each block not yet brought here
+
+    def collect(positions: list[int]) -> None:
+        for k, value in run.completed([kept[i] for i in positions]):
+            i = positions[k]
+            del kept[i]
+            results[i] = value
+            lev = order[i].level
+            left[lev] -= 1
+            if not left[lev] and progress is not None:
+                here = levels[lev]
+                modes = sum(int(r.lam.size) for r in (results[j] for j in here) if r is not None)
+                coords = sum(int(order[j].dofs.size) for j in here)
+                spent = sum(r.seconds for r in (results[j] for j in here) if r is not None)
+                progress(f"AMLS level {lev} ({depth - lev + 1} of {depth + 1}): {len(here)} "
+                         f"block(s) of {coords} coordinates, {modes} modes kept "
+                         f"({spent:.1f} s)")
+
+    for i, b in enumerate(order):
+        if b.is_leaf:
+            both = run.submit(reduce_leaf, _leaf_job(K, M, b.dofs, bounds[i], lam_cut,
+                                                     factorization))
+        else:
+            kids = [index[id(c)] for c in b.children]
+            job = _separator_job(K, M, b.dofs, bounds[i], lam_cut, [bounds[j] for j in kids])
+            both = run.submit(reduce_separator, job, *[up.pop(j) for j in kids])
+        kept[i] = run.submit(operator.getitem, both, 0)
+        if b is not root:
+            up[i] = run.submit(operator.getitem, both, 1)
+        del both
+        collect([j for j in kept if run.done(kept[j])])
+    collect(list(kept))
     return _assemble(K, order, bounds, results, n, factorization)
 
 
-def _release(results: list[BlockResult | None], b: DissectionNode, index: dict[int, int]
-             ) -> None:
-    """Once block ``b`` is reduced, its children's condensation and boundary coupling are no
-    longer needed (their modes, constraint modes and cross blocks are)."""
-    for c in b.children:
-        rc = results[index[id(c)]]
-        assert rc is not None
-        rc.G = np.zeros((0, rc.G.shape[1]))   # new arrays: a view would keep the data
-        rc.CK = np.zeros((0, 0))
-        rc.CM = np.zeros((0, 0))
-
-
 def _assemble(K: sp.csr_array, order: list[DissectionNode], bounds: list[np.ndarray],
-              results: list[BlockResult | None], n: int, factorization: str) -> ReducedModel:
+              results: list[BlockModes | None], n: int, factorization: str) -> ReducedModel:
     """The reduced pencil: the reduced coordinates numbered block by block in post-order,
     :math:`M_r` from the identity blocks and every separator's cross blocks."""
     index = {id(b): i for i, b in enumerate(order)}

@@ -51,7 +51,7 @@ from substruct.run.result import ModelInfo
 
 if TYPE_CHECKING:  # the modal and AMLS routes' modules are imported by the cases that use them
     from substruct.analysis.frf.modal import ModalOptions
-    from substruct.linalg.amls_block import TaskMap
+    from substruct.linalg.task_runner import TaskRunner
 
 __all__ = ["Progress", "modes_result", "frf_result", "rows_receptance", "in_place_quantity",
            "model_info",
@@ -66,7 +66,7 @@ DENSE_FRF_LIMIT = 4000
 
 def modes_result(case: Case, asm: Assembly, A: sp.csr_array, loc: tuple,
                  what: str = "modes", events: Phase | None = None,
-                 tasks: TaskMap | None = None) -> Modes:
+                 tasks: TaskRunner | None = None) -> Modes:
     """The coupled modes of ``asm`` under the rows ``A`` as ``case.analysis.modes`` asks
     (:func:`substruct.analysis.api.modes`); ``events`` is told as each eigen solve starts;
     ``tasks`` runs the blocks of an AMLS reduction (``None``: in this process).
@@ -95,7 +95,7 @@ def modes_result(case: Case, asm: Assembly, A: sp.csr_array, loc: tuple,
 
 
 def _amls(case: Case, system: ConstrainedSystem, options: ModesOptions,
-          tasks: TaskMap | None = None) -> Modes:
+          tasks: TaskRunner | None = None) -> Modes:
     """``solver: amls``: with a band that has a ``max``, every mode below it by one AMLS run,
     then those in the band, ``count`` at most; otherwise the lowest ``count`` (a band's
     ``min`` by :func:`_in_band`)."""
@@ -183,7 +183,7 @@ def check_dense_modes(case: Case, asm: Assembly) -> None:
 
 
 def frf_result(case: Case, model: Model, progress: Progress | None,
-               sink: FrequencySink | None = None, tasks: TaskMap | None = None
+               sink: FrequencySink | None = None, tasks: TaskRunner | None = None
                ) -> Receptance:
     """The receptances ``case.analysis.frf`` asks for, at its points
     (:func:`substruct.analysis.api.receptance_sweep`).
@@ -193,7 +193,7 @@ def frf_result(case: Case, model: Model, progress: Progress | None,
     :class:`~substruct.analysis.frf.stream.SweepTap` converts each block after keeping the
     checked frequencies), and the result's ``H`` is their summary and selections.  The tree
     levels of an AMLS basis (``modal.solver: amls``) run through ``tasks``
-    (:data:`~substruct.linalg.amls_block.TaskMap`; ``None``: in this process).
+    (:class:`~substruct.linalg.task_runner.TaskRunner`; ``None``: in this process).
 
     Raises:
         CaseError: at ``analysis.frf``, for input the solver cannot take (an inconsistent
@@ -226,7 +226,7 @@ def frf_result(case: Case, model: Model, progress: Progress | None,
         raise CheckError(f"{err}; to accept it, raise analysis.frf.tolerance") from None
 
 
-def _modal_options(case: Case, tasks: TaskMap | None) -> ModalOptions:
+def _modal_options(case: Case, tasks: TaskRunner | None) -> ModalOptions:
     from substruct.run.modal_options import modal_options
 
     spec = case.analysis.frf
@@ -235,7 +235,7 @@ def _modal_options(case: Case, tasks: TaskMap | None) -> ModalOptions:
 
 
 def rows_receptance(case: Case, model: Model, rows: sp.csr_array,
-                    omegas: np.ndarray, tasks: TaskMap | None = None) -> np.ndarray:
+                    omegas: np.ndarray, tasks: TaskRunner | None = None) -> np.ndarray:
     r"""The receptances of the output rows ``rows`` (``m x n``, on the coupled coordinates)
     to the inputs of ``case.analysis.frf`` at ``omegas``, by its method and without checks:
 

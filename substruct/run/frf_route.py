@@ -49,7 +49,7 @@ from substruct.builder.frf_parts import MODEL_PART, FrfPart, split_frf_case
 from substruct.builder.model import Model
 from substruct.case.fields import parse_point
 from substruct.case.loader import Case
-from substruct.linalg.amls_block import TaskMap
+from substruct.linalg.task_runner import TaskRunner
 from substruct.run.analyses import frf_result
 from substruct.vocabulary import GENERALIZED_INVERSE
 
@@ -94,7 +94,7 @@ def singular_interface(parts: list[FrfPart], pairs: list[tuple[str, str]]) -> fl
 
 
 def coupled_frf_result(case: Case, model: Model, progress: Progress | None = None,
-                       sink: FrequencySink | None = None, tasks: TaskMap | None = None
+                       sink: FrequencySink | None = None, tasks: TaskRunner | None = None
                        ) -> Receptance:
     """The receptances ``case.analysis.frf`` asks for, of the model coupled with the case's
     FRF substructures (``model`` is the finite-element part, built from

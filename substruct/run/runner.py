@@ -45,7 +45,7 @@ from substruct.run.result import Result
 from substruct.substructure import Substructure
 
 if TYPE_CHECKING:
-    from substruct.linalg.amls_block import TaskMap
+    from substruct.linalg.task_runner import TaskRunner
 
 __all__ = ["Model", "build_model", "run_case", "Progress", "Phase"]
 
@@ -82,7 +82,7 @@ def build_model(case: Case, events: Phase | None = None,
 
 def run_case(case: Case, progress: Progress | None = None, model: Model | None = None,
              events: Phase | None = None, frf_sink: FrequencySink | None = None,
-             tasks: TaskMap | None = None, field_sink: FieldSink | None = None) -> Result:
+             tasks: TaskRunner | None = None, field_sink: FieldSink | None = None) -> Result:
     """Run the analyses of a case.
 
     Args:
@@ -99,8 +99,8 @@ def run_case(case: Case, progress: Progress | None = None, model: Model | None =
         field_sink: where the fields a transient run stores (``field_every``) go as they
             are recorded, a block of instants at a time (the result file of
             ``substruct run``); ``None``: kept whole.
-        tasks: where the blocks of an AMLS reduction run (:data:`substruct.linalg.
-            amls_block.TaskMap`; ``None``: in this process): the modes' (``analysis.modes.
+        tasks: where the blocks of an AMLS reduction run (:class:`substruct.linalg.
+            task_runner.TaskRunner`; ``None``: in this process): the modes' (``analysis.modes.
             solver: amls``) and the AMLS bases of the modal receptance, the random response
             and the modal transient (``modal.solver: amls``), and a virtual-point Monte
             Carlo study's samples.

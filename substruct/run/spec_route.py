@@ -52,7 +52,7 @@ from substruct.builder.model import Model
 from substruct.case.spec_analysis import LossFactorSpec
 from substruct.case.loader import Case
 from substruct.case.random_cross import cross_matrix
-from substruct.linalg.amls_block import TaskMap
+from substruct.linalg.task_runner import TaskRunner
 from substruct.run.modal_options import modal_options
 from substruct.run.spec_results import RandomResponse, ShockSpectra
 from substruct.vocabulary import DERIVATIVE_ORDER
@@ -197,11 +197,11 @@ def base_columns(case: Case, model: Model, supports: Sequence[Sequence[str]], lo
     return E
 
 
-def random_result(case: Case, model: Model, tasks: TaskMap | None = None
+def random_result(case: Case, model: Model, tasks: TaskRunner | None = None
                   ) -> RandomResponse:
     """The response PSDs and RMS values of ``analysis.random`` (module docstring); with
     ``method: modal`` and ``modal.solver: amls``, the AMLS basis's tree levels run through
-    ``tasks`` (:data:`~substruct.linalg.amls_block.TaskMap`; ``None``: in this process).
+    ``tasks`` (:class:`~substruct.linalg.task_runner.TaskRunner`; ``None``: in this process).
 
     Raises:
         CaseError: an unknown substructure of ``loss_factor``, a base point not grounded,

@@ -44,7 +44,7 @@ from substruct.case.modal_spec import TransientModal
 from substruct.case.transient import load_values
 from substruct.case.transient_files import npz_vector
 from substruct.case.transient_signals import waveform
-from substruct.linalg.amls_block import TaskMap
+from substruct.linalg.task_runner import TaskRunner
 from substruct.run.modal_options import amls_options
 
 __all__ = ["transient_result"]
@@ -208,7 +208,7 @@ def _initial(case: Case, model: Model) -> tuple[np.ndarray | None, np.ndarray | 
     return d0, v0
 
 
-def _modal(block: TransientModal | None, tasks: TaskMap | None) -> dict[str, Any]:
+def _modal(block: TransientModal | None, tasks: TaskRunner | None) -> dict[str, Any]:
     """The modal form's options of ``analysis.transient.modal`` (none if not given); an
     AMLS basis's tree levels run through ``tasks`` (``None``: in this process)."""
     if block is None:
@@ -221,14 +221,14 @@ def _modal(block: TransientModal | None, tasks: TaskMap | None) -> dict[str, Any
 def transient_result(case: Case, model: Model, extra: sp.csr_array | None = None,
                      extra_names: list[str] | None = None,
                      field_sink: FieldSink | None = None,
-                     tasks: TaskMap | None = None) -> Transient:
+                     tasks: TaskRunner | None = None) -> Transient:
     """The time histories ``case.analysis.transient`` asks for; ``extra`` output rows (named
     ``extra_names``) are recorded after the case's outputs (the recovery of superelements'
     interiors, :mod:`substruct.run.recovery`).  The fields stored every ``field_every`` steps
     go to ``field_sink`` a block at a time as they are recorded, if given (the result file of
     ``substruct run``); else they are kept whole, and refused beyond the memory limit.  The
     tree levels of an AMLS basis (``modal.solver: amls``) run through ``tasks``
-    (:data:`~substruct.linalg.amls_block.TaskMap`; ``None``: in this process).
+    (:class:`~substruct.linalg.task_runner.TaskRunner`; ``None``: in this process).
 
     Raises:
         CaseError: at ``analysis.transient``, for input the analysis cannot take.

@@ -34,8 +34,9 @@ from substruct.analysis.frf.vp_coupling import (Regularisation, VpPart,
                                                 couple_virtual_points)
 from substruct.analysis.frf.vp_reduction import InterfaceReduction
 from substruct.analysis.frf.vp_noise import (MeasuredPart, MonteCarloResult, NoiseStudy,
-                                             TaskMap, monte_carlo_coupling)
+                                             monte_carlo_coupling)
 from substruct.analysis.results import Receptance
+from substruct.linalg.task_runner import TaskRunner
 from substruct.builder.frf_parts import MODEL_PART, FrfPart, split_frf_case
 from substruct.builder.model import Model
 from substruct.case.fields import parse_point
@@ -181,7 +182,7 @@ def _keep_at_most(case: Case, reduction: InterfaceReduction | None, rows: int) -
 
 
 def vp_frf_result(case: Case, model: Model, progress: Progress | None = None,
-                  tasks: TaskMap | None = None
+                  tasks: TaskRunner | None = None
                   ) -> tuple[Receptance, dict[str, VptResult], MonteCarloResult | None]:
     """The receptances ``case.analysis.frf`` asks for, of the parts coupled at their virtual
     points (module docstring), the consistency indicators per transformed part, and the
@@ -297,7 +298,7 @@ def vp_frf_result(case: Case, model: Model, progress: Progress | None = None,
 
 def _monte_carlo(case: Case, measured: list[MeasuredPart], pairs: list[tuple[str, str]],
                  drop: list[str], reg: Regularisation, length: float,
-                 stacked: Callable[[str], str], tasks: TaskMap | None,
+                 stacked: Callable[[str], str], tasks: TaskRunner | None,
                  reduction: InterfaceReduction | None = None) -> MonteCarloResult | None:
     """The study of the one ``monte_carlo:`` block of the case (refused in a second part)."""
     found = [(k, s) for k, s in enumerate(case.substructures) if isinstance(s, FrfSpec)
@@ -328,6 +329,7 @@ def _monte_carlo(case: Case, measured: list[MeasuredPart], pairs: list[tuple[str
     study = NoiseStudy(tuple(measured), tuple(pairs), tuple(stacked(p) for p in picked[0]),
                        tuple(stacked(p) for p in picked[1]), mc.level, reg, tuple(drop),
                        tuple(drop), length, reduction)
-    res = monte_carlo_coupling(study, mc.samples, mc.seed, mc.percentiles, map=tasks)
+    res = monte_carlo_coupling(study, mc.samples, mc.seed, mc.percentiles,
+                               map=None if tasks is None else tasks.map)
     return MonteCarloResult(res.omega, picked[0], picked[1], res.level, res.samples, res.seed,
                             res.nominal, res.mean, res.std, res.percentiles, res.bands)

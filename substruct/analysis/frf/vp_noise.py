@@ -32,16 +32,13 @@ import numpy as np
 from substruct.analysis.frf.virtual_point import VirtualPointTransform
 from substruct.analysis.frf.vp_coupling import Regularisation, VpPart, couple_virtual_points
 from substruct.analysis.frf.vp_reduction import InterfaceReduction
+from substruct.linalg.task_runner import TaskMap
 
-__all__ = ["TaskMap", "sample_task", "MeasuredPart", "NoiseStudy", "MonteCarloResult", "add_relative_noise",
+__all__ = ["sample_task", "MeasuredPart", "NoiseStudy", "MonteCarloResult", "add_relative_noise",
            "coupled_sample", "monte_carlo_coupling", "MAX_SAMPLES"]
 
 #: The largest number of samples a study may ask for.
 MAX_SAMPLES = 100_000
-
-
-#: ``map(function, items) -> results`` in order (the Dask study backend's ``Session.map``)
-TaskMap = Callable[[Callable[[Any], Any], Sequence[Any]], Sequence[Any]]
 
 
 def _in_process(function: Callable[[Any], Any], items: Sequence[Any]) -> list[Any]:

@@ -47,7 +47,7 @@ from substruct.analysis.modes.roots import normalize_shapes
 from substruct.analysis.modes.sparse import has_damping
 from substruct.analysis.results import Modes
 from substruct.linalg.amls import AMLSModes, amls_modes
-from substruct.linalg.amls_block import TaskMap
+from substruct.linalg.task_runner import TaskRunner
 from substruct.linalg.amls_tree import dissection_tree
 from substruct.linalg.scaling import massless_coordinates
 from substruct.linalg.system import Matrix
@@ -87,8 +87,8 @@ class AmlsOptions:
             :data:`RITZ_RATIO`.
         omega_max: the wanted circular frequency (every mode below it); ``None``: found from
             the count.
-        tasks: runs the independent blocks of each tree level as tasks
-            (:data:`~substruct.linalg.amls_block.TaskMap`: a Dask client's map from
+        tasks: where the blocks of the reduction run as tasks
+            (:class:`~substruct.linalg.task_runner.TaskRunner`: the Dask session of
             ``substruct run --workers N``); ``None``: in this process.  The modes are the
             same bit for bit.
     """
@@ -98,7 +98,7 @@ class AmlsOptions:
     iterations: int = 0
     ritz_ratio: float | None = None
     omega_max: float | None = None
-    tasks: TaskMap | None = field(default=None, compare=False, repr=False)
+    tasks: TaskRunner | None = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.cutoff) and self.cutoff > 1):
@@ -129,7 +129,7 @@ def _solve(K: sp.csr_array, M: sp.csr_array, count: int | None, opts: AmlsOption
             say("sparse-eigen", f"modes: AMLS up to {w:.4g} rad/s (cut-off {opts.cutoff:g})", K.shape[0])
         return amls_modes(K, M, w, cutoff=opts.cutoff, leaf_size=opts.leaf_size,
                           iterations=opts.iterations, ritz_ratio=ritz,
-                          progress=line, map=opts.tasks, tree=tree)
+                          progress=line, tasks=opts.tasks, tree=tree)
 
     if opts.omega_max is not None:
         return run(opts.omega_max), opts.omega_max
