@@ -22,7 +22,7 @@ several sizes or numbers of modes, the exponents of the fitted growth ``t ~ n^a`
 and ``t ~ k^b`` (for each n) follow.  ``--lanczos-dir DIR``: each Lanczos measurement is
 written to ``DIR/lanczos_<size>_<k>.json`` and read from there when present, so that AMLS
 settings or versions are compared against one Lanczos run (its seconds and peak are those of
-that run, on the same machine).  ``--workers N``: the AMLS side runs its tree levels as
+that run, on the same machine).  ``--workers N``: the AMLS side runs its tree's blocks as
 tasks on a Dask LocalCluster of N worker processes (``substruct run --workers N``); its
 reduction time ("A: red s") against the single-process run's is the parallel speed-up.
 
@@ -127,7 +127,7 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--leaf-size", type=int, default=1000)
     p.add_argument("--quick", action="store_true", help="30000 coordinates only")
     p.add_argument("--workers", type=int, default=0,
-                   help="AMLS: the tree levels as tasks on a LocalCluster of N workers")
+                   help="AMLS: the tree's blocks as tasks on a LocalCluster of N workers")
     p.add_argument("--accuracy", action="store_true",
                    help="the cut-off against accuracy table (small box, dense reference)")
     p.add_argument("--lanczos-dir", default=None,
