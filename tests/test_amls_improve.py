@@ -153,3 +153,44 @@ def test_chebyshev_steps_improve_the_amls_ritz_values(pencil):
     # measured: largest error 3.9e-4 against 8.6e-4, residual 1.5e-2 against 2.4e-2
     assert e_cheb < 0.6 * e_plain, out
     assert r_cheb <= r_plain, out
+
+
+@pytest.mark.parametrize("wanted", [20, 60])
+def test_reduced_eigenpairs_by_lanczos_equal_the_dense_ones(pencil, monkeypatch, wanted):
+    """The reduced pencil's pairs below a bound by Lanczos on its standard form (forced: every
+    size, every fraction) and by the dense MRRR solver (the default at this size): the same
+    eigenvalues to 1e-10 and the same vectors up to sign (the wanted ones are simple)."""
+    from substruct.linalg import amls
+
+    K, M, lam = pencil
+    lam_w = 0.5 * (lam[wanted - 1] + lam[wanted])
+    red = amls_reduce(K, M, dissection_tree(K, 100), 9.0 * lam_w)
+    dense, Yd = reduced_eigenpairs(red, lam_w)
+    monkeypatch.setattr(amls, "DENSE_REDUCED", 0)
+    monkeypatch.setattr(amls, "LANCZOS_FRACTION", np.inf)
+    lanczos, Yl = reduced_eigenpairs(red, lam_w)
+    assert dense.size == lanczos.size >= wanted - 2
+    assert np.allclose(lanczos, dense, rtol=1e-10, atol=0)
+    assert np.allclose(np.abs(np.sum(Yd * (red.M @ Yl), axis=0)), 1.0, atol=1e-8)
+
+
+def test_reduced_eigenpairs_choose_dense_when_many_pairs_are_wanted(pencil, monkeypatch):
+    """Above DENSE_REDUCED, a bound asking for a quarter of the reduced size or more goes to
+    the dense solver (Lanczos on it would be slower): eigsh is not called."""
+    from substruct.linalg import amls
+
+    K, M, lam = pencil
+    lam_w = 0.5 * (lam[59] + lam[60])
+    red = amls_reduce(K, M, dissection_tree(K, 100), 4.0 * lam_w)
+    assert 2 * np.sum(red.lam <= lam_w) >= 0.25 * red.size
+    monkeypatch.setattr(amls, "DENSE_REDUCED", 0)
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("Lanczos called")
+
+    monkeypatch.setattr(amls.spla, "eigsh", refuse)
+    got, _ = reduced_eigenpairs(red, lam_w)
+    # Rayleigh-Ritz values: upper bounds of the exact ones, within AMLS's error at cut-off 2
+    exact = lam[:got.size]
+    assert got.size >= 55 and np.all(got >= exact * (1 - 1e-12))
+    assert np.allclose(got, exact, rtol=0.1)
