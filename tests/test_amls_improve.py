@@ -175,14 +175,14 @@ def test_reduced_eigenpairs_by_lanczos_equal_the_dense_ones(pencil, monkeypatch,
 
 
 def test_reduced_eigenpairs_choose_dense_when_many_pairs_are_wanted(pencil, monkeypatch):
-    """Above DENSE_REDUCED, a bound asking for a quarter of the reduced size or more goes to
-    the dense solver (Lanczos on it would be slower): eigsh is not called."""
+    """Above DENSE_REDUCED, a bound asking for LANCZOS_FRACTION of the reduced size or more
+    goes to the dense solver (Lanczos on it would be slower): eigsh is not called."""
     from substruct.linalg import amls
 
     K, M, lam = pencil
     lam_w = 0.5 * (lam[59] + lam[60])
     red = amls_reduce(K, M, dissection_tree(K, 100), 4.0 * lam_w)
-    assert 2 * np.sum(red.lam <= lam_w) >= 0.25 * red.size
+    assert 2 * np.sum(red.lam <= lam_w) >= amls.LANCZOS_FRACTION * red.size
     monkeypatch.setattr(amls, "DENSE_REDUCED", 0)
 
     def refuse(*args, **kwargs):
