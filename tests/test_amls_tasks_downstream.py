@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from counting_tasks import COUNTING
-from two_boxes import two_boxes_case
+from two_boxes import AMLS_TRANSIENT, two_boxes_case
 
 ROOT = Path(__file__).resolve().parent.parent
 ENV = {**os.environ, "PYTHONPATH": str(ROOT), "OMP_NUM_THREADS": "1",
@@ -50,18 +50,7 @@ CASES = {
     tolerance: 1.0
     modal: {{solver: amls, cutoff: 3, {AMLS}}}
 """, rayleigh="[5.0, 2.0e-5]"),
-    "transient": two_boxes_case("boxes_transient", f"""\
-  transient:
-    t_end: 0.004
-    dt: 5.0e-5
-    method: modal
-    check: [generalized-inverse]
-    tolerance: 1e-2
-    loads:
-      - {{point: "right@4,0.5,0.5:z", shape: half-sine, duration: 0.002, amplitude: 1000}}
-    outputs: {POINTS}
-    modal: {{solver: amls, cutoff: 0.4, {AMLS}}}
-"""),
+    "transient": two_boxes_case("boxes_transient", AMLS_TRANSIENT),
 }
 
 # each case run in this process, then through a 2-worker LocalCluster (its tasks counted, so

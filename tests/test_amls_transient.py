@@ -39,7 +39,7 @@ from substruct.analysis.transient import (
 )
 from substruct.case.loader import parse_case
 from substruct.run.runner import run_case
-from two_boxes import tied_boxes, two_boxes_case
+from two_boxes import AMLS_TRANSIENT, tied_boxes, two_boxes_case
 
 E, NU, RHO = 2.1e11, 0.3, 7850.0
 ALPHA, BETA = 20.0, 2e-6
@@ -117,18 +117,7 @@ def test_a_truncated_amls_basis_converges_to_the_exact_modes(tied):
     assert rate > 4.0, (rate, errs)                    # measured 5.5
 
 
-CASE = two_boxes_case("two_boxes_transient", """\
-  transient:
-    t_end: 0.004
-    dt: 5.0e-5
-    method: modal
-    check: [generalized-inverse]
-    tolerance: 1e-2
-    loads:
-      - {point: "right@4,0.5,0.5:z", shape: half-sine, duration: 0.002, amplitude: 1000}
-    outputs: ["right@4,0.5,0.5:z", "left@1,0.5,0.5:y"]
-    modal: {solver: amls, cutoff: 0.4, amls: {cutoff: 5, leaf_size: 100}}
-""")
+CASE = two_boxes_case("two_boxes_transient", AMLS_TRANSIENT)
 
 
 def test_modal_transient_on_the_amls_basis_from_a_case_file():

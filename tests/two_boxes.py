@@ -5,6 +5,22 @@ through ``substruct.run``, each with its own ``analysis`` block."""
 from __future__ import annotations
 
 
+#: The lines under ``analysis:`` of a modal transient of the tied boxes on an AMLS basis: a
+#: half-sine load at the free end, two outputs, checked by the generalized inverse.
+AMLS_TRANSIENT = """\
+  transient:
+    t_end: 0.004
+    dt: 5.0e-5
+    method: modal
+    check: [generalized-inverse]
+    tolerance: 1e-2
+    loads:
+      - {point: "right@4,0.5,0.5:z", shape: half-sine, duration: 0.002, amplitude: 1000}
+    outputs: ["right@4,0.5,0.5:z", "left@1,0.5,0.5:y"]
+    modal: {solver: amls, cutoff: 0.4, amls: {cutoff: 5, leaf_size: 100}}
+"""
+
+
 def two_boxes_case(name: str, analysis: str, rayleigh: str | None = None) -> str:
     """The YAML of the tied boxes named ``name``, with ``analysis`` (the lines under
     ``analysis:``, indented by two spaces) and, if given, Rayleigh damping
