@@ -25,24 +25,20 @@ for bit as the loop in process.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Callable, Sequence
+from typing import Sequence
 
 import numpy as np
 
 from substruct.analysis.frf.virtual_point import VirtualPointTransform
 from substruct.analysis.frf.vp_coupling import Regularisation, VpPart, couple_virtual_points
 from substruct.analysis.frf.vp_reduction import InterfaceReduction
-from substruct.linalg.task_runner import TaskMap
+from substruct.linalg.task_runner import IN_PROCESS, TaskMap
 
 __all__ = ["sample_task", "MeasuredPart", "NoiseStudy", "MonteCarloResult", "add_relative_noise",
            "coupled_sample", "monte_carlo_coupling", "MAX_SAMPLES"]
 
 #: The largest number of samples a study may ask for.
 MAX_SAMPLES = 100_000
-
-
-def _in_process(function: Callable[[Any], Any], items: Sequence[Any]) -> list[Any]:
-    return [function(a) for a in items]
 
 
 @dataclass(frozen=True)
@@ -178,7 +174,7 @@ def monte_carlo_coupling(study: NoiseStudy, samples: int, seed: int,
     if any(not 0 <= p <= 100 for p in q):
         raise ValueError(f"percentiles must be in [0, 100], got {list(q)}")
     nominal = _coupled(study, [m.part(m.Y) for m in study.parts])
-    run = map if map is not None else _in_process
+    run = map if map is not None else IN_PROCESS.map
     draws = run(sample_task, [(study, seed, k) for k in range(samples)])
     stack = np.stack(draws)
     dev = stack - nominal  # about the nominal: exactly 0 without noise
