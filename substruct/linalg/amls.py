@@ -43,7 +43,6 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from substruct.linalg.task_runner import TaskRunner
 from substruct.linalg.amls_improve import (
     SOLVE_COLUMNS,
     chebyshev_shifts,
@@ -53,6 +52,7 @@ from substruct.linalg.amls_improve import (
 from substruct.linalg.amls_reduce import ReducedModel, amls_reduce
 from substruct.linalg.amls_tree import DissectionNode, dissection_tree
 from substruct.linalg.factorize import factorizer
+from substruct.linalg.task_runner import TaskRunner
 
 __all__ = ["AMLSModes", "amls_modes", "reduced_eigenpairs", "relative_residuals"]
 
