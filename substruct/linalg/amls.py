@@ -56,8 +56,9 @@ from substruct.linalg.task_runner import TaskRunner
 
 __all__ = ["AMLSModes", "amls_modes", "reduced_eigenpairs", "relative_residuals"]
 
-#: The shift of the subspace iteration, as a fraction of the wanted eigenvalue
-#: :math:`\omega_{max}^2` (negative: ``K - sigma M`` is positive definite for a free body).
+#: The shift of the subspace iteration and of the blocks with no boundary, as a fraction of
+#: the wanted eigenvalue :math:`\omega_{max}^2` (negative: ``K - sigma M`` is positive
+#: definite for a free body, whatever the rank of ``M``).
 SHIFT_FRACTION = -1e-3
 
 
@@ -94,14 +95,20 @@ class AMLSModes:
 
 def relative_residuals(K: sp.sparray, M: sp.sparray, lam: np.ndarray, U: np.ndarray
                        ) -> np.ndarray:
-    r""":math:`\|K u_j - \lambda_j M u_j\| / \|K u_j\|` per column (``inf`` where
-    :math:`K u_j = 0`)."""
+    r""":math:`\|K u_j - \lambda_j M u_j\| / \|K u_j\|` per column; for a rigid-body mode
+    (:math:`\lambda_j = 0`, where :math:`K u_j` is round-off and the ratio 0/0)
+    :math:`\|K u_j\| / \|\,|K|\,|u_j|\,\|`, the force left against the largest one its
+    entries could make (``inf`` where the denominator is 0)."""
     out = np.empty(U.shape[1])
+    absK = abs(K) if np.any(lam == 0.0) else None
     for j in range(0, U.shape[1], SOLVE_COLUMNS):
         Uj = np.ascontiguousarray(U[:, j:j + SOLVE_COLUMNS])
         KU = K @ Uj
         num = np.linalg.norm(KU - (M @ Uj) * lam[j:j + SOLVE_COLUMNS], axis=0)
         den = np.linalg.norm(KU, axis=0)
+        rigid = lam[j:j + SOLVE_COLUMNS] == 0.0
+        if absK is not None and rigid.any():
+            den[rigid] = np.linalg.norm(absK @ np.abs(Uj[:, rigid]), axis=0)
         with np.errstate(divide="ignore", invalid="ignore"):
             out[j:j + SOLVE_COLUMNS] = np.where(den > 0, num / np.where(den > 0, den, 1.0), np.inf)
     return out
@@ -127,8 +134,10 @@ def reduced_eigenpairs(red: ReducedModel, lam_max: float) -> tuple[np.ndarray, n
     r"""Every eigenpair of :math:`\operatorname{diag}(\Lambda) y = \lambda M_r y` with
     :math:`\lambda \le` ``lam_max``, ``M_r``-normalized.
 
-    A singular :math:`\Lambda` (a free body's rigid modes): dense generalized ``eigh`` subset by
-    value.  Otherwise, with :math:`\Lambda > 0` diagonal, the pencil is the standard symmetric
+    A singular :math:`\Lambda` (a free body's rigid modes): dense, in the inverse form
+    :math:`M_r y = \mu (\Lambda - \sigma M_r) y`, :math:`\lambda = \sigma + 1/\mu`,
+    :math:`\sigma` = :data:`SHIFT_FRACTION` ``lam_max`` (positive
+    definite on the right whatever the rank of :math:`M_r`).  Otherwise, with :math:`\Lambda > 0` diagonal, the pencil is the standard symmetric
     problem
 
     .. math::  \hat M z = \mu z, \qquad \hat M = \Lambda^{-1/2} M_r \Lambda^{-1/2}, \qquad
@@ -144,11 +153,13 @@ def reduced_eigenpairs(red: ReducedModel, lam_max: float) -> tuple[np.ndarray, n
     if red.size == 0:
         return np.zeros(0), np.zeros((0, 0))
     if red.lam.min() <= 0:
-        Kr = np.zeros((red.size, red.size), order="F")
-        np.fill_diagonal(Kr, red.lam)
-        return sla.eigh(Kr, red.M.toarray(order="F"),
-                        subset_by_value=(-np.inf, lam_max), driver="gvx", overwrite_a=True,
-                        overwrite_b=True)
+        sigma = SHIFT_FRACTION * lam_max
+        Mr = red.M.toarray(order="F")
+        Ks = -sigma * Mr
+        Ks[np.diag_indices(red.size)] += red.lam
+        mu, Y = sla.eigh(Mr, Ks, subset_by_value=(1.0 / (lam_max - sigma), np.inf),
+                         driver="gvx", overwrite_b=True)
+        return sigma + 1.0 / mu[::-1], Y[:, ::-1] / np.sqrt(mu[::-1])
     d = 1.0 / np.sqrt(red.lam)
     D = sp.diags_array(d)
     Mh = sp.csr_array(D @ red.M @ D)
@@ -175,13 +186,16 @@ def reduced_eigenpairs(red: ReducedModel, lam_max: float) -> tuple[np.ndarray, n
 def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_max: float,
                cutoff: float = 5.0, leaf_size: int = 1000, iterations: int = 0,
                ritz_ratio: float = 1.5, progress: Callable[[str], None] | None = None,
-               tasks: TaskRunner | None = None, tree: DissectionNode | None = None) -> AMLSModes:
+               tasks: TaskRunner | None = None, tree: DissectionNode | None = None,
+               rigid_below: float = 0.0) -> AMLSModes:
     r"""The eigenpairs of :math:`K u = \omega^2 M u` with :math:`\omega \le` ``omega_max`` by
     AMLS (module docstring).
 
     Args:
         K, M: ``n x n`` sparse symmetric stiffness (positive semi-definite; positive definite on
-            every subdomain the dissection makes) and mass (positive definite).
+            every subdomain the dissection makes that has a boundary) and mass (positive
+            semi-definite: massless coordinates held by a stiffness have no finite eigenvalue
+            in any block, and none is kept).
         omega_max: the highest wanted circular frequency.
         cutoff: ``r``: every block keeps its modes up to ``r * omega_max``.
         leaf_size: subdomains are split until they have at most this many coordinates.
@@ -194,6 +208,9 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
             default: in this process.  The results do not depend on it.
         tree: the dissection of ``K`` (:func:`~substruct.linalg.amls_tree.dissection_tree`
             with ``leaf_size``), if already made (another wanted frequency of the same model).
+        rigid_below: eigenvalues with :math:`|\lambda| \le` this are a free body's rigid-body
+            modes (round-off): set to 0, their residual measured by
+            :func:`relative_residuals` against :math:`|K|\,|u|`.
     """
     if not (np.isfinite(omega_max) and omega_max > 0):
         raise ValueError(f"omega_max must be positive and finite, got {omega_max!r}")
@@ -213,7 +230,7 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
     times["tree"] = time.perf_counter() - t
     say(f"AMLS tree: {n_blocks} blocks, {max(b.level for b in root.postorder()) + 1} levels")
     t = time.perf_counter()
-    red = amls_reduce(K, M, root, lam_c, AUTO, say, tasks)
+    red = amls_reduce(K, M, root, lam_c, AUTO, say, tasks, SHIFT_FRACTION * lam_w)
     times["reduce"] = time.perf_counter() - t
     say(f"AMLS reduced: {red.size} coordinates from {red.n}")
     t = time.perf_counter()
@@ -238,6 +255,7 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
     keep = lam <= lam_w
     if not keep.all():
         lam, U = lam[keep], U[:, keep]
+    lam = np.where(np.abs(lam) <= rigid_below, 0.0, lam)
     t = time.perf_counter()
     res = relative_residuals(K, M, lam, U)
     times["residual"] = time.perf_counter() - t

@@ -56,8 +56,9 @@ DENSE_LEAF = 2000
 @dataclass
 class LeafJob:
     """The data of a subdomain's task: its sparse ``K_bb``, ``M_bb`` and their coupling
-    ``K_bB``, ``M_bB`` to its boundary, the cut-off eigenvalue and a factorization's registry
-    name (:mod:`substruct.linalg.factorize`)."""
+    ``K_bB``, ``M_bB`` to its boundary, the cut-off eigenvalue, a factorization's registry
+    name (:mod:`substruct.linalg.factorize`) and the shift of a block with no boundary
+    (:func:`block_modes`: negative, so that a free part's pencil is definite)."""
 
     K: sp.csr_array
     M: sp.csr_array
@@ -65,6 +66,7 @@ class LeafJob:
     M_bB: sp.csr_array
     lam_cut: float
     factorization: str = "auto"
+    free_shift: float = 0.0
 
 
 @dataclass
@@ -72,13 +74,15 @@ class SeparatorJob:
     r"""The data of a separator's task, without its children's condensations (which come
     from their own tasks): the separator's rows of ``K``, ``M`` on :math:`I = b \cup B`
     (sparse, ``b`` first), the number ``ns`` of its own coordinates, each child's boundary as
-    positions in :math:`I`, and the cut-off eigenvalue."""
+    positions in :math:`I`, the cut-off eigenvalue and the shift of a block with no boundary
+    (the root separator)."""
 
     K_rows: sp.csr_array
     M_rows: sp.csr_array
     ns: int
     positions: list[np.ndarray]
     lam_cut: float
+    free_shift: float = 0.0
 
 
 @dataclass
@@ -116,11 +120,25 @@ class BlockModes:
 
 
 def block_modes(Kb: np.ndarray | sp.sparray, Mb: np.ndarray | sp.sparray, lam_cut: float,
-                solve: Solve | None = None) -> tuple[np.ndarray, np.ndarray]:
+                solve: Solve | None = None, shift: float = 0.0
+                ) -> tuple[np.ndarray, np.ndarray]:
     r"""The eigenpairs :math:`K_b \phi = \lambda M_b \phi` with :math:`\lambda \le` ``lam_cut``,
-    ``M``-normalized: dense ``eigh`` (subset by value) for small or dense blocks, else
-    shift-invert Lanczos with ``solve`` (:math:`K_b^{-1}`), doubling the number of pairs until
-    one exceeds the cut-off (or the block is small enough for ``eigh``)."""
+    ``M``-normalized, for :math:`K_b - \sigma M_b` positive definite (:math:`\sigma` =
+    ``shift``); :math:`M_b` may be singular (massless rotations of lumped-mass shells and
+    beams, a mass with an offset): its infinite eigenvalues are never kept.
+
+    Dense blocks are solved in the inverse form, positive definite on the right whatever the
+    mass,
+
+    .. math::  M_b \phi = \mu\, (K_b - \sigma M_b)\, \phi, \qquad
+               \lambda = \sigma + 1/\mu, \qquad \phi \leftarrow \phi / \sqrt{\mu},
+
+    by ``eigh`` (subset by value, :math:`\mu \ge 1/(\lambda_c - \sigma)`: the largest
+    :math:`\mu` are the lowest :math:`\lambda`, to a relative accuracy that does not depend on
+    how ill-conditioned :math:`M_b` is).  Large sparse blocks with a factorization ``solve``
+    of :math:`K_b - \sigma M_b`: shift-invert Lanczos (ARPACK's mode 3, valid for a singular
+    :math:`M_b`), doubling the number of pairs until one exceeds the cut-off (or the block is
+    small enough for the dense form)."""
     n = Kb.shape[0]
     if n == 0:
         return np.zeros(0), np.zeros((0, 0))
@@ -128,7 +146,7 @@ def block_modes(Kb: np.ndarray | sp.sparray, Mb: np.ndarray | sp.sparray, lam_cu
         k = min(32, n // 4)
         v0 = np.asarray(np.random.default_rng(0).standard_normal(n))
         while k < n // 4:
-            lam, V = shift_invert_lanczos(sp.csr_array(Kb), sp.csr_array(Mb), k, 0.0, solve,
+            lam, V = shift_invert_lanczos(sp.csr_array(Kb), sp.csr_array(Mb), k, shift, solve,
                                           v0=v0)
             if lam.max() > lam_cut:
                 order = np.argsort(lam)
@@ -137,8 +155,11 @@ def block_modes(Kb: np.ndarray | sp.sparray, Mb: np.ndarray | sp.sparray, lam_cu
             k *= 2
     Kd = sp.csr_array(Kb).toarray() if sp.issparse(Kb) else np.asarray(Kb)
     Md = sp.csr_array(Mb).toarray() if sp.issparse(Mb) else np.asarray(Mb)
-    lam, V = sla.eigh(Kd, Md, subset_by_value=(-np.inf, lam_cut), driver="gvx")
-    return lam, V
+    if shift:
+        Kd = Kd - shift * Md
+    mu, V = sla.eigh(Md, Kd, subset_by_value=(1.0 / (lam_cut - shift), np.inf), driver="gvx")
+    mu, V = mu[::-1], V[:, ::-1]
+    return shift + 1.0 / mu, V / np.sqrt(mu)
 
 
 def _sym(A: np.ndarray) -> np.ndarray:
@@ -198,9 +219,12 @@ def reduce_leaf(job: LeafJob) -> tuple[BlockModes, Condensation]:
     t = time.perf_counter()
     Kdd, Mdd = job.K, job.M
     nd, nb = Kdd.shape[0], job.K_bB.shape[1]
-    solve = factorizer(job.factorization)(sp.csc_array(Kdd))
+    # with no boundary (a whole disconnected part, perhaps free) no constraint modes: the
+    # eigenproblem is shifted instead
+    shift = 0.0 if nb else job.free_shift
+    solve = factorizer(job.factorization)(sp.csc_array(Kdd - shift * Mdd if shift else Kdd))
     Psi = -np.asarray(solve(job.K_bB.toarray())).reshape(nd, nb)
-    lam, Phi = block_modes(Kdd, Mdd, job.lam_cut, solve)
+    lam, Phi = block_modes(Kdd, Mdd, job.lam_cut, solve, shift)
     MdBt = job.M_bB.toarray() + Mdd @ Psi
     CK = job.K_bB.T @ Psi
     CM = job.M_bB.T @ Psi + Psi.T @ MdBt
@@ -240,7 +264,8 @@ def reduce_separator(job: SeparatorJob, *children: Condensation
     Kl, Ml, Gfs = separator_pencil(job, children)
     ns = job.ns
     nb = Kl.shape[0] - ns
-    lam, Phi = block_modes(Kl[:ns, :ns], Ml[:ns, :ns], job.lam_cut)
+    lam, Phi = block_modes(Kl[:ns, :ns], Ml[:ns, :ns], job.lam_cut,
+                           shift=0.0 if nb else job.free_shift)
     if nb and ns:
         Psi, CK, CM, MsBt = separator_condensation(Kl, Ml, ns)
     else:

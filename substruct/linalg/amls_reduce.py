@@ -156,33 +156,37 @@ def _boundaries(P: sp.csr_array, order: list[DissectionNode]) -> list[np.ndarray
 
 
 def _leaf_job(K: sp.csr_array, M: sp.csr_array, d: np.ndarray, B: np.ndarray, lam_cut: float,
-              factorization: str) -> LeafJob:
+              factorization: str, free_shift: float) -> LeafJob:
     """The task of the subdomain ``d`` with boundary ``B``: its sparse rows."""
     Kd, Md = K[d], M[d]
     return LeafJob(sp.csr_array(Kd[:, d]), sp.csr_array(Md[:, d]), sp.csr_array(Kd[:, B]),
-                   sp.csr_array(Md[:, B]), lam_cut, factorization)
+                   sp.csr_array(Md[:, B]), lam_cut, factorization, free_shift)
 
 
 def _separator_job(K: sp.csr_array, M: sp.csr_array, d: np.ndarray, B: np.ndarray,
-                   lam_cut: float, child_bounds: list[np.ndarray]) -> SeparatorJob:
+                   lam_cut: float, child_bounds: list[np.ndarray], free_shift: float
+                   ) -> SeparatorJob:
     r"""The task of the separator ``d`` with boundary ``B``: its rows on :math:`d \cup B` and
     where each child's boundary sits there."""
     I = np.concatenate([d, B])
     order = np.argsort(I)
     positions = [order[np.searchsorted(I, Bc, sorter=order)] for Bc in child_bounds]
     return SeparatorJob(sp.csr_array(K[d][:, I]), sp.csr_array(M[d][:, I]), d.size, positions,
-                        lam_cut)
+                        lam_cut, free_shift)
 
 
 def amls_reduce(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, root: DissectionNode,
                 lam_cut: float, factorization: str = "auto",
                 progress: Callable[[str], None] | None = None,
-                tasks: TaskRunner | None = None) -> ReducedModel:
+                tasks: TaskRunner | None = None, free_shift: float = 0.0) -> ReducedModel:
     r"""The AMLS reduction of the symmetric pencil ``(K, M)`` over the tree ``root``, keeping in
     every block the fixed-interface modes with eigenvalue at most ``lam_cut`` (see the module
-    docstring).  ``K`` restricted to every subdomain must be positive definite (true when the
-    subdomains are held by separators, or ``K`` is); the root separator may be singular
-    (a free body's rigid modes).
+    docstring).  ``K`` restricted to every block with a boundary must be positive definite
+    (true when the subdomains are held by separators, or ``K`` is); a block with none (the
+    root separator, a subdomain that is a whole disconnected part) solves its eigenproblem
+    shifted by ``free_shift`` (negative, :func:`~substruct.linalg.amls_block.block_modes`),
+    so that a free body's rigid modes and massless coordinates (a singular ``M``) are both
+    allowed.
 
     Every block is a task of ``tasks`` (default: in this process, the same numbers);
     ``progress`` receives one line as each level is done, with the seconds its tasks took."""
@@ -220,10 +224,11 @@ def amls_reduce(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, root: 
     for i, b in enumerate(order):
         if b.is_leaf:
             both = run.submit(reduce_leaf, _leaf_job(K, M, b.dofs, bounds[i], lam_cut,
-                                                     factorization))
+                                                     factorization, free_shift))
         else:
             kids = [index[id(c)] for c in b.children]
-            job = _separator_job(K, M, b.dofs, bounds[i], lam_cut, [bounds[j] for j in kids])
+            job = _separator_job(K, M, b.dofs, bounds[i], lam_cut, [bounds[j] for j in kids],
+                                 free_shift)
             both = run.submit(reduce_separator, job, *[up.pop(j) for j in kids])
         kept[i] = run.submit(operator.getitem, both, 0)
         if b is not root:

@@ -57,6 +57,11 @@ def _boundary(sub: Substructure, boundary_dofs: Any) -> np.ndarray:
     return b
 
 
+#: A fixed-interface eigenvalue :math:`\mu = 1/\omega^2` of the inverse pencil at most this
+#: fraction of the largest is a massless direction's (:math:`\omega = \infty`, round-off).
+MASSLESS_MU = 1e-12
+
+
 def fixed_interface_modes(name: str, K: sp.csr_array, M: sp.csr_array, interior: np.ndarray,
                           n_modes: int, *, factorization: str | Factorize = "auto",
                           dense_limit: int = 1500, ncv: int | None = None
@@ -66,24 +71,23 @@ def fixed_interface_modes(name: str, K: sp.csr_array, M: sp.csr_array, interior:
     .. math::  K_{ii} \Phi_i = M_{ii} \Phi_i \Omega^2, \qquad \Phi_i^T M_{ii} \Phi_i = I,
 
     each column's largest entry positive.  Interiors up to ``dense_limit`` coordinates are
-    solved densely (Cholesky, ``eigh``), larger ones by the registry's factorization and the
-    shift-invert Lanczos (shift 0) with a Rayleigh-Ritz step.
+    solved densely (Cholesky, ``eigh`` of the inverse pencil :math:`M_{ii} \phi = \mu K_{ii}
+    \phi`, :math:`\omega^2 = 1/\mu`), larger ones by the registry's factorization and the
+    shift-invert Lanczos (shift 0) with a Rayleigh-Ritz step; both allow massless interior
+    coordinates (lumped-mass beams and shells), which have no finite mode.
 
     Returns:
         ``(solve, lam, Phi)``: ``b -> K_ii^{-1} b`` (for the constraint modes), the eigenvalues
         :math:`\omega^2` ascending and the ``n_i x n_modes`` mass-normalized modes.
 
     Raises:
-        ValueError: massless interior coordinates, singular ``K_ii`` or a zero-frequency mode
-            (the boundary and the supports do not hold the interior).
+        ValueError: more modes asked than the interior has masses, singular ``K_ii`` or a
+            zero-frequency mode (the boundary and the supports do not hold the interior).
     """
     g = int(n_modes)
     ni = interior.size
     Kii = sp.csc_array(K[interior][:, interior])
     Mii = sp.csc_array(M[interior][:, interior])
-    if np.any(np.asarray(abs(Mii).sum(axis=1)).ravel() == 0):
-        raise ValueError(f"{name}: Craig-Bampton needs mass on every interior coordinate; "
-                         "put massless coordinates on the boundary")
     solve: Solve
     if ni <= dense_limit:
         Kd, Md = Kii.toarray(), Mii.toarray()
@@ -96,8 +100,16 @@ def fixed_interface_modes(name: str, K: sp.csr_array, M: sp.csr_array, interior:
         def solve(rhs: np.ndarray) -> np.ndarray:
             return np.asarray(sla.cho_solve(cho, rhs))
 
-        lam, Phi = (sla.eigh(Kd, Md, subset_by_index=[0, g - 1]) if g else
-                    (np.zeros(0), np.zeros((ni, 0))))
+        if g:
+            # the inverse pencil, definite on the right whatever the mass: the g largest mu
+            mu, V = sla.eigh(Md, Kd, subset_by_index=[ni - g, ni - 1])
+            if mu[0] <= MASSLESS_MU * mu[-1]:
+                raise ValueError(f"{name}: {g} fixed-interface modes asked of an interior "
+                                 f"with {int(np.sum(mu > MASSLESS_MU * mu[-1]))} of them "
+                                 "(its other coordinates have no mass)")
+            lam, Phi = 1.0 / mu[::-1], V[:, ::-1]
+        else:
+            lam, Phi = np.zeros(0), np.zeros((ni, 0))
     else:
         try:
             solve = factorizer(factorization, spd=True)(Kii)
@@ -105,8 +117,14 @@ def fixed_interface_modes(name: str, K: sp.csr_array, M: sp.csr_array, interior:
             raise ValueError(f"{name}: K_ii cannot be factorized ({exc}): the boundary "
                              "coordinates and the supports do not hold the interior") from None
         if g:
+            # the operator K_ii^-1 M_ii spans only the coordinates with mass: so can the basis
+            massive = int(np.count_nonzero(np.asarray(abs(Mii).sum(axis=1)).ravel()))
+            if g >= massive:
+                raise ValueError(f"{name}: {g} fixed-interface modes asked of an interior "
+                                 f"with {massive} coordinates with mass")
+            size = min(ncv or max(2 * g + 1, 20), massive)
             v0 = np.random.default_rng(0).standard_normal(ni)
-            _, vecs = shift_invert_lanczos(Kii, Mii, g, 0.0, solve, v0, ncv)
+            _, vecs = shift_invert_lanczos(Kii, Mii, g, 0.0, solve, v0, size)
             lam, Phi = rayleigh_ritz(Kii, Mii, vecs)
         else:
             lam, Phi = np.zeros(0), np.zeros((ni, 0))

@@ -40,6 +40,7 @@ from substruct.analysis.modes.krylov import (
     check_inputs,
     constraint_residuals,
     eliminate,
+    rigid_eigenvalue,
     stiffness_over_mass,
 )
 from substruct.analysis.modes.production import production_modes
@@ -49,7 +50,6 @@ from substruct.analysis.results import Modes
 from substruct.linalg.amls import AMLSModes, amls_modes
 from substruct.linalg.task_runner import TaskRunner
 from substruct.linalg.amls_tree import dissection_tree
-from substruct.linalg.scaling import massless_coordinates
 from substruct.linalg.system import Matrix
 
 __all__ = ["AMLS_CHECK", "AmlsOptions", "CHECKED_MODES", "amls_coupled_modes",
@@ -129,7 +129,8 @@ def _solve(K: sp.csr_array, M: sp.csr_array, count: int | None, opts: AmlsOption
             say("sparse-eigen", f"modes: AMLS up to {w:.4g} rad/s (cut-off {opts.cutoff:g})", K.shape[0])
         return amls_modes(K, M, w, cutoff=opts.cutoff, leaf_size=opts.leaf_size,
                           iterations=opts.iterations, ritz_ratio=ritz,
-                          progress=line, tasks=opts.tasks, tree=tree)
+                          progress=line, tasks=opts.tasks, tree=tree,
+                          rigid_below=rigid_eigenvalue(K, M))
 
     if opts.omega_max is not None:
         return run(opts.omega_max), opts.omega_max
@@ -167,8 +168,8 @@ def amls_coupled_modes(M: Matrix, C: Matrix | None, K: Matrix, A: Matrix | None,
         reduced coordinates, iterations).
 
     Raises:
-        AnalysisInputError: a damped model, massless coordinates left free, no count and no
-            wanted frequency.
+        AnalysisInputError: a damped model, a motion with neither mass nor stiffness (a
+            singular pencil), no count and no wanted frequency.
     """
     if has_damping(C):
         raise AnalysisInputError("solver amls computes undamped modes; the model has damping "
@@ -180,10 +181,12 @@ def amls_coupled_modes(M: Matrix, C: Matrix | None, K: Matrix, A: Matrix | None,
     T = sp.csr_array(el.T)
     Kt = sp.csr_array(T.T @ Ks @ T)
     Mt = sp.csr_array(T.T @ Ms @ T)
-    if np.any(massless_coordinates(Mt)):
-        raise AnalysisInputError("solver amls needs mass on every free coordinate; the model "
-                                 "has massless ones (use solver: sparse)")
-    r, w = _solve(Kt, Mt, count, opts, events)
+    try:
+        r, w = _solve(Kt, Mt, count, opts, events)
+    except (RuntimeError, np.linalg.LinAlgError) as exc:   # a block's pencil not definite
+        raise AnalysisInputError("singular model: a motion with no mass, no stiffness and no "
+                                 "constraint (a massless coordinate or mechanism held by "
+                                 "nothing: a block's pencil is not definite)") from exc
     k = r.lam.size if count is None else min(count, r.lam.size)
     U = T @ r.U[:, :k]
     agreement = {AMLS_CHECK: float(r.residual[:k].max(initial=0.0))}
