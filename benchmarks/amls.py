@@ -3,7 +3,7 @@
     OMP_NUM_THREADS=1 python benchmarks/amls.py [--sizes 30000 300000 1000000 2000000]
         [--modes 50 200 500 2000] [--cutoff 2] [--iterations 2] [--ritz-ratio 1.2]
         [--leaf-size 1000]
-        [--workers N] [--lanczos-dir DIR] [--quick] [--accuracy]
+        [--workers N] [--lanczos-dir DIR] [--amls-only 1000000 ...] [--quick] [--accuracy]
 
 The model: a steel box ``4 x 1 x 1`` of Q1 hexahedra clamped at ``x = 0`` (the monolithic mesh
 of benchmarks/modes.py).  For each size and number of modes k, each in a fresh subprocess
@@ -25,6 +25,10 @@ settings or versions are compared against one Lanczos run (its seconds and peak 
 that run, on the same machine).  ``--workers N``: the AMLS side runs its tree's blocks as
 tasks on a Dask LocalCluster of N worker processes (``substruct run --workers N``); its
 reduction time ("A: red s") against the single-process run's is the parallel speed-up.
+``--amls-only SIZE ...``: sizes whose Lanczos reference would not fit in memory (about 28 GB
+at 10^6 coordinates), run by AMLS alone up to the wanted frequency of the largest ``--sizes``
+row (the same box's frequencies, converged with the mesh): the modes found, the residuals,
+the time and memory, and AMLS's own growth ``t ~ n^a`` over every size.
 
 ``--accuracy``: the cut-off against accuracy on a small clamped box (24 x 6 x 6 Q1, 3,528
 coordinates, the 30 lowest modes, leaves of at most 200 coordinates, no iteration), against a
@@ -132,6 +136,10 @@ def main(argv: list[str] | None = None) -> None:
                    help="the cut-off against accuracy table (small box, dense reference)")
     p.add_argument("--lanczos-dir", default=None,
                    help="reuse (or store) the Lanczos measurements in this directory")
+    p.add_argument("--amls-only", type=int, nargs="+", default=[],
+                   help="sizes too large for a Lanczos reference on this machine, run by AMLS "
+                        "alone up to the wanted frequency of the largest --sizes row (the "
+                        "same box, its frequencies converged): modes found, residuals, time")
     p.add_argument("--json", default=None, help="also write the raw measurements here")
     p.add_argument("--worker", choices=["lanczos", "amls"], help=argparse.SUPPRESS)
     p.add_argument("--size", type=int, help=argparse.SUPPRESS)
@@ -171,7 +179,20 @@ def main(argv: list[str] | None = None) -> None:
                   f"{b['peak'] / 2**20:>6.0f} {b['time'] / a['time']:>6.2f} "
                   f"{b['times']['reduce']:>8.1f} {b['n_reduced']:>6} {lb.size:>5} "
                   f"{err:>9.1e} {b['residual']:>8.1e}", flush=True)
+    alone = []
+    for size in args.amls_only:
+        for k in args.modes:
+            ref = [r for r in rows if r["k"] == k][-1]["lanczos"]
+            lam = np.array(ref["lam"])
+            wmax = float(np.sqrt(0.5 * (lam[k - 1] + lam[k])))
+            b = measure("amls", size, k, args, wmax)
+            alone.append({"amls": b, "k": k})
+            print(f"{b['n']:>7} {k:>4} {'-':>7} {'-':>7} {'-':>6} {b['time']:>7.1f} "
+                  f"{b['cpu']:>7.1f} {b['peak'] / 2**20:>6.0f} {'-':>6} "
+                  f"{b['times']['reduce']:>8.1f} {b['n_reduced']:>6} {len(b['lam']):>5} "
+                  f"{'-':>9} {b['residual']:>8.1e}", flush=True)
     growth(rows)
+    growth_alone(rows + alone)
     if args.json:
         with open(args.json, "w") as f:
             json.dump({"machine": machine(), "rows": rows, "args": vars(args)}, f, indent=1)
@@ -197,6 +218,20 @@ def growth(rows: list[dict]) -> None:
                   f"{', '.join(str(v) for v in x)}: Lanczos a = {fit['lanczos time']:.2f} "
                   f"(CPU {fit['lanczos cpu']:.2f}), AMLS a = {fit['amls time']:.2f} "
                   f"(CPU {fit['amls cpu']:.2f})")
+
+
+def growth_alone(rows: list[dict]) -> None:
+    """AMLS's own ``t ~ n^a`` (whole run and reduction) for each k over every size run,
+    those without a Lanczos reference included."""
+    for k in sorted({r["k"] for r in rows}):
+        rs = [r["amls"] for r in rows if r["k"] == k]
+        if len(rs) < 2:
+            continue
+        n = np.log([r["n"] for r in rs])
+        whole = float(np.polyfit(n, np.log([r["time"] for r in rs]), 1)[0])
+        red = float(np.polyfit(n, np.log([r["times"]["reduce"] for r in rs]), 1)[0])
+        print(f"AMLS growth at k = {k} over n = {', '.join(str(r['n']) for r in rs)}: "
+              f"t ~ n^{whole:.2f}, reduction ~ n^{red:.2f}")
 
 
 def accuracy() -> None:
