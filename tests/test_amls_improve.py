@@ -12,16 +12,23 @@ projection equals ``W.T @ (A @ W)`` to round-off of the products.
 The Chebyshev-shifted steps: their shifts are the roots of ``T_k`` (against NumPy's Chebyshev
 series), the blocked shifted form equals the whole-array one, and on AMLS's own Ritz vectors
 two shifted steps beat two plain ones in frequency error and residual.
+
+The memory of the rest of AMLS: the reduced eigenproblem dense when many pairs are wanted
+(Lanczos otherwise, the same pairs), and the separators' constraint modes kept on disk (the
+same modes bit for bit, the scratch directory removed with the reduced model).
 """
 
 from __future__ import annotations
+
+import gc
+import tempfile
 
 import numpy as np
 import pytest
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from substruct.linalg.amls import reduced_eigenpairs, relative_residuals
+from substruct.linalg.amls import amls_modes, reduced_eigenpairs, relative_residuals
 from substruct.linalg.amls_improve import (
     SOLVE_COLUMNS,
     chebyshev_shifts,
@@ -194,3 +201,32 @@ def test_reduced_eigenpairs_choose_dense_when_many_pairs_are_wanted(pencil, monk
     exact = lam[:got.size]
     assert got.size >= 55 and np.all(got >= exact * (1 - 1e-12))
     assert np.allclose(got, exact, rtol=0.1)
+
+
+def test_constraint_modes_kept_on_disk_give_the_same_modes(pencil, monkeypatch, tmp_path):
+    """Every separator's constraint modes written to a scratch file and read back as a memory
+    map (``SPILL_BYTES`` 0; a 10^6-coordinate solid keeps 13 GB of them): the same modes bit
+    for bit, and the scratch directory gone with the reduced model."""
+    import substruct.linalg.amls_reduce as reduce_module
+
+    K, M, lam = pencil
+    w = float(np.sqrt(0.5 * (lam[19] + lam[20])))
+    memory = amls_modes(K, M, w, cutoff=3.0, leaf_size=60, iterations=1)
+    monkeypatch.setattr(reduce_module, "SPILL_BYTES", 0)
+    monkeypatch.setenv("TMPDIR", str(tmp_path))
+    tempfile.tempdir = None                 # the temporary directory read again from TMPDIR
+    try:
+        disk = amls_modes(K, M, w, cutoff=3.0, leaf_size=60, iterations=1)
+        root = dissection_tree(K, 60)
+        red = reduce_module.amls_reduce(K, M, root, (3.0 * w) ** 2)
+        assert red.scratch is not None and red.scratch.count == sum(
+            1 for b in root.postorder() if not b.is_leaf and b.dofs.size)
+        assert any(isinstance(b.Psi, np.memmap) for b in red.blocks)
+        assert len(list(tmp_path.iterdir())) == 1
+        del red
+        gc.collect()
+        assert not list(tmp_path.iterdir())  # removed with the model
+    finally:
+        tempfile.tempdir = None
+    assert np.array_equal(memory.lam, disk.lam) and np.array_equal(memory.U, disk.U)
+    assert not list(tmp_path.iterdir())

@@ -45,7 +45,9 @@ level) and only what the reduced model keeps comes back here, as each block is d
 process each task runs at once, depth first, so that only the condensations still waiting for
 their parent are held (at most two per level).  The tasks are pure functions of their data and
 the numbering of the reduced coordinates is made here afterwards, so the reduced model does
-not depend on where the tasks ran.
+not depend on where the tasks ran.  The separators' constraint modes, the largest part of
+what is kept (:math:`\sum n_s n_B` entries) and used once by the expansion, are written to
+disk as they arrive when large (:data:`SPILL_BYTES`) and read back by the expansion.
 """
 
 from __future__ import annotations
@@ -68,9 +70,18 @@ from substruct.linalg.amls_block import (
     reduce_separator,
 )
 from substruct.linalg.amls_tree import DissectionNode
+from substruct.linalg.scratch_arrays import ScratchArrays
 from substruct.linalg.task_runner import IN_PROCESS, TaskRunner
 
-__all__ = ["ReducedModel", "amls_reduce"]
+__all__ = ["ReducedModel", "SPILL_BYTES", "amls_reduce"]
+
+#: A separator's constraint modes from this many bytes up are kept on disk until the
+#: expansion reads them (:class:`~substruct.linalg.scratch_arrays.ScratchArrays`): they sum
+#: to 0.56 GB at 98,400 coordinates of the solid box of docs/amls.md, 2.5 GB at 297,714 and
+#: about 13 GB at 10^6 (``sum ns nb``, growing as ``n^1.36``), more than the rest of the
+#: reduced model; the largest at 98,400 is 47 MB, so that a model of that size keeps every
+#: one in memory.
+SPILL_BYTES = 64 * 2**20
 
 
 @dataclass
@@ -97,6 +108,8 @@ class ReducedModel:
         n: number of physical coordinates.
         blocks: the data of :meth:`expand`, root first.
         factorization: the registry name the subdomains are factorized with.
+        scratch: where the large constraint modes are kept on disk (:data:`SPILL_BYTES`),
+            removed with the model.
     """
 
     lam: np.ndarray
@@ -105,6 +118,7 @@ class ReducedModel:
     n: int
     blocks: list[_Block] = field(repr=False)
     factorization: str = "auto"
+    scratch: ScratchArrays | None = field(default=None, repr=False)
 
     @property
     def size(self) -> int:
@@ -202,6 +216,7 @@ def amls_reduce(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, root: 
               for lev in range(depth, -1, -1)}
     left = {lev: len(here) for lev, here in levels.items()}
     results: list[BlockModes | None] = [None] * len(order)
+    scratch = ScratchArrays("substruct-amls-")
     up: dict[int, Any] = {}      # the condensation's handle of each block not yet used
     kept: dict[int, Any] = {}    # the kept part's handle of each block not yet brought here
 
@@ -209,6 +224,8 @@ def amls_reduce(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, root: 
         for k, value in run.completed([kept[i] for i in positions]):
             i = positions[k]
             del kept[i]
+            if value.Psi is not None and value.Psi.nbytes >= SPILL_BYTES:
+                value.Psi = scratch.keep(value.Psi)
             results[i] = value
             lev = order[i].level
             left[lev] -= 1
@@ -236,7 +253,9 @@ def amls_reduce(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, root: 
         del both
         collect([j for j in kept if run.done(kept[j])])
     collect(list(kept))
-    return _assemble(K, order, bounds, results, n, factorization)
+    red = _assemble(K, order, bounds, results, n, factorization)
+    red.scratch = scratch
+    return red
 
 
 def _assemble(K: sp.csr_array, order: list[DissectionNode], bounds: list[np.ndarray],

@@ -1,0 +1,50 @@
+"""Large arrays kept on disk instead of in memory: each written once to a ``.npy`` file of a
+private temporary directory and read back as a read-only memory map, whose pages the
+operating system reads on use and drops under memory pressure.  The directory is removed when
+the :class:`ScratchArrays` holding it is collected (or at :meth:`ScratchArrays.remove`); on a
+POSIX system a file removed while mapped stays readable until unmapped.
+
+Used for what a multilevel reduction must keep for its expansion but uses once
+(:mod:`substruct.linalg.amls_reduce`: the separators' constraint modes, 13 GB at 10^6
+coordinates of a solid).  The directory is made in the system's temporary directory
+(``TMPDIR``).
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+import weakref
+
+import numpy as np
+
+__all__ = ["ScratchArrays"]
+
+
+class ScratchArrays:
+    """A private temporary directory of arrays (made at the first :meth:`keep`)."""
+
+    def __init__(self, prefix: str = "substruct-") -> None:
+        self.prefix = prefix
+        self.path: str | None = None
+        self.count = 0
+        self.nbytes = 0
+        self._finalizer: weakref.finalize | None = None
+
+    def keep(self, array: np.ndarray) -> np.ndarray:
+        """``array`` written to a file of the directory, returned as a read-only memory map
+        of it (the same values, bit for bit)."""
+        if self.path is None:
+            self.path = tempfile.mkdtemp(prefix=self.prefix)
+            self._finalizer = weakref.finalize(self, shutil.rmtree, self.path, True)
+        name = os.path.join(self.path, f"{self.count}.npy")
+        self.count += 1
+        self.nbytes += int(array.nbytes)
+        np.save(name, np.asarray(array), allow_pickle=False)
+        return np.load(name, mmap_mode="r", allow_pickle=False)
+
+    def remove(self) -> None:
+        """Remove the directory now (the maps already made stay readable)."""
+        if self._finalizer is not None:
+            self._finalizer()
