@@ -52,6 +52,7 @@ from substruct.linalg.amls_improve import (
 from substruct.linalg.amls_reduce import ReducedModel, amls_reduce
 from substruct.linalg.amls_tree import DissectionNode, dissection_tree
 from substruct.linalg.factorize import factorizer
+from substruct.linalg.scaling import rigid_eigenvalue
 from substruct.linalg.task_runner import TaskRunner
 
 __all__ = ["AMLSModes", "amls_modes", "reduced_eigenpairs", "relative_residuals"]
@@ -186,8 +187,8 @@ def reduced_eigenpairs(red: ReducedModel, lam_max: float) -> tuple[np.ndarray, n
 def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_max: float,
                cutoff: float = 5.0, leaf_size: int = 1000, iterations: int = 0,
                ritz_ratio: float = 1.5, progress: Callable[[str], None] | None = None,
-               tasks: TaskRunner | None = None, tree: DissectionNode | None = None,
-               rigid_below: float = 0.0) -> AMLSModes:
+               tasks: TaskRunner | None = None, tree: DissectionNode | None = None
+               ) -> AMLSModes:
     r"""The eigenpairs of :math:`K u = \omega^2 M u` with :math:`\omega \le` ``omega_max`` by
     AMLS (module docstring).
 
@@ -208,9 +209,10 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
             default: in this process.  The results do not depend on it.
         tree: the dissection of ``K`` (:func:`~substruct.linalg.amls_tree.dissection_tree`
             with ``leaf_size``), if already made (another wanted frequency of the same model).
-        rigid_below: eigenvalues with :math:`|\lambda| \le` this are a free body's rigid-body
-            modes (round-off): set to 0, their residual measured by
-            :func:`relative_residuals` against :math:`|K|\,|u|`.
+
+    A free body's rigid-body modes (:math:`|\lambda| \le`
+    :func:`~substruct.linalg.scaling.rigid_eigenvalue`, round-off) come back at 0, their
+    residual measured by :func:`relative_residuals` against :math:`|K|\,|u|`.
     """
     if not (np.isfinite(omega_max) and omega_max > 0):
         raise ValueError(f"omega_max must be positive and finite, got {omega_max!r}")
@@ -255,7 +257,7 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
     keep = lam <= lam_w
     if not keep.all():
         lam, U = lam[keep], U[:, keep]
-    lam = np.where(np.abs(lam) <= rigid_below, 0.0, lam)
+    lam = np.where(np.abs(lam) <= rigid_eigenvalue(K, M), 0.0, lam)
     t = time.perf_counter()
     res = relative_residuals(K, M, lam, U)
     times["residual"] = time.perf_counter() - t

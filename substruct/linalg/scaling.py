@@ -16,6 +16,10 @@ nothing: it is refused (:class:`ZeroRowError`), never dropped in silence.
 Columns are scaled by the mass, :math:`c_j = (\bar m / m_{jj})^{1/2}` (:func:`mass_column_scale`),
 when the rank of the rows is decided: :math:`A C` is ``A`` in the metric of :math:`M^{-1}` in which
 the generalized inverse forms :math:`A M^{-1} A^T` (paper eq 5), made free of units.
+
+The eigenvalues' own scale is :math:`\operatorname{tr} K / \operatorname{tr} M`
+(:func:`stiffness_over_mass`), and a rigid-body mode's round-off eigenvalue is below a fixed
+fraction of it (:func:`rigid_eigenvalue`), whatever the units.
 """
 
 from __future__ import annotations
@@ -35,8 +39,10 @@ __all__ = [
     "mass_column_scale",
     "definite_mass",
     "massless_coordinates",
+    "rigid_eigenvalue",
     "row_scale",
     "spectral_norm",
+    "stiffness_over_mass",
 ]
 
 MatrixT = TypeVar("MatrixT", np.ndarray, sp.csr_array)
@@ -255,3 +261,16 @@ def definite_mass(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix) -> s
     fill = np.where(massless, np.where(k > 0, c * k, 0.0), 0.0)
     fill = np.where(massless & (fill <= 0), mean or 1.0, fill)
     return sp.csr_array(Mc + sp.diags_array(fill))
+
+
+def stiffness_over_mass(K: sp.sparray, M: sp.sparray) -> float:
+    r""":math:`\operatorname{tr} K / \operatorname{tr} M`, the scale of the eigenvalues."""
+    return max(abs(K.diagonal()).sum() / max(abs(M.diagonal()).sum(), 1e-300), 1e-300)
+
+
+def rigid_eigenvalue(K: sp.sparray, M: sp.sparray) -> float:
+    r"""The largest :math:`|\omega^2|` read as a rigid-body mode,
+    :math:`10^{-12} \operatorname{tr} K / \operatorname{tr} M`: round-off of the size
+    :math:`\epsilon |K| / |M|` (a free-free rod of 600 coordinates gave :math:`\omega` =
+    1e-5 rad/s)."""
+    return 1e-12 * stiffness_over_mass(K, M)

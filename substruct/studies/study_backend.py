@@ -26,7 +26,6 @@ from typing import Any, Callable, Iterator, Mapping, Sequence
 
 from substruct.builder import Substructure
 from substruct.case.errors import printable
-from substruct.linalg.task_runner import IN_PROCESS
 from substruct.studies.scheduler_probe import (
     BackendError,
     connect_timeout,
@@ -306,7 +305,7 @@ class Session:
         Dask future, whose value stays on its worker until a later task or
         :meth:`completed` needs it; in-process the value itself, computed now."""
         if self.client is None:
-            return IN_PROCESS.submit(function, *args)
+            return function(*args)
         with self.contained():
             return self.client.submit(function, *args, pure=False, retries=RETRIES)
 
@@ -318,7 +317,7 @@ class Session:
         """``(position, value)`` of every handle, as each task finishes; an exception of a
         task is raised here."""
         if self.client is None:
-            yield from IN_PROCESS.completed(handles)
+            yield from enumerate(handles)
             return
         from distributed import as_completed
 

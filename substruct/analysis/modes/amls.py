@@ -40,7 +40,6 @@ from substruct.analysis.modes.krylov import (
     check_inputs,
     constraint_residuals,
     eliminate,
-    rigid_eigenvalue,
     stiffness_over_mass,
 )
 from substruct.analysis.modes.production import production_modes
@@ -129,8 +128,7 @@ def _solve(K: sp.csr_array, M: sp.csr_array, count: int | None, opts: AmlsOption
             say("sparse-eigen", f"modes: AMLS up to {w:.4g} rad/s (cut-off {opts.cutoff:g})", K.shape[0])
         return amls_modes(K, M, w, cutoff=opts.cutoff, leaf_size=opts.leaf_size,
                           iterations=opts.iterations, ritz_ratio=ritz,
-                          progress=line, tasks=opts.tasks, tree=tree,
-                          rigid_below=rigid_eigenvalue(K, M))
+                          progress=line, tasks=opts.tasks, tree=tree)
 
     if opts.omega_max is not None:
         return run(opts.omega_max), opts.omega_max

@@ -24,7 +24,9 @@ from substruct.linalg.scaling import (
     equilibrate,
     mass_column_scale,
     massless_coordinates,
+    rigid_eigenvalue,
     spectral_norm,
+    stiffness_over_mass,
 )
 
 __all__ = [
@@ -69,19 +71,6 @@ def check_inputs(M: sp.sparray | np.ndarray, K: sp.sparray | np.ndarray,
     if k < 1:
         raise ValueError(f"n_modes must be >= 1, got {n_modes!r}")
     return Mc, Kc, Ac, k
-
-
-def stiffness_over_mass(K: sp.sparray, M: sp.sparray) -> float:
-    r""":math:`\operatorname{tr} K / \operatorname{tr} M`, the scale of the eigenvalues."""
-    return max(abs(K.diagonal()).sum() / max(abs(M.diagonal()).sum(), 1e-300), 1e-300)
-
-
-def rigid_eigenvalue(K: sp.sparray, M: sp.sparray) -> float:
-    r"""The largest :math:`|\omega^2|` read as a rigid-body mode,
-    :math:`10^{-12} \operatorname{tr} K / \operatorname{tr} M`: round-off of the size
-    :math:`\epsilon |K| / |M|` (a free-free rod of 600 coordinates gave :math:`\omega` =
-    1e-5 rad/s)."""
-    return 1e-12 * stiffness_over_mass(K, M)
 
 
 def default_shift(K: sp.sparray, M: sp.sparray) -> float:
