@@ -137,9 +137,9 @@ def reduced_eigenpairs(red: ReducedModel, lam_max: float) -> tuple[np.ndarray, n
 
     A singular :math:`\Lambda` (a free body's rigid modes): dense, in the inverse form
     :math:`M_r y = \mu (\Lambda - \sigma M_r) y`, :math:`\lambda = \sigma + 1/\mu`,
-    :math:`\sigma` = :data:`SHIFT_FRACTION` ``lam_max`` (positive
-    definite on the right whatever the rank of :math:`M_r`).  Otherwise, with :math:`\Lambda > 0` diagonal, the pencil is the standard symmetric
-    problem
+    :math:`\sigma` = :data:`SHIFT_FRACTION` ``lam_max`` (positive definite on the right
+    whatever the rank of :math:`M_r`).  Otherwise, with :math:`\Lambda > 0` diagonal, the
+    pencil is the standard symmetric problem
 
     .. math::  \hat M z = \mu z, \qquad \hat M = \Lambda^{-1/2} M_r \Lambda^{-1/2}, \qquad
                \mu = 1/\lambda, \quad y = \Lambda^{-1/2} z / \sqrt{\mu},

@@ -29,7 +29,6 @@ class ScratchArrays:
         self.prefix = prefix
         self.path: str | None = None
         self.count = 0
-        self.nbytes = 0
         self._finalizer: weakref.finalize | None = None
 
     def keep(self, array: np.ndarray) -> np.ndarray:
@@ -40,7 +39,6 @@ class ScratchArrays:
             self._finalizer = weakref.finalize(self, shutil.rmtree, self.path, True)
         name = os.path.join(self.path, f"{self.count}.npy")
         self.count += 1
-        self.nbytes += int(array.nbytes)
         np.save(name, np.asarray(array), allow_pickle=False)
         return np.load(name, mmap_mode="r", allow_pickle=False)
 
