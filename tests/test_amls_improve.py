@@ -204,9 +204,10 @@ def test_reduced_eigenpairs_choose_dense_when_many_pairs_are_wanted(pencil, monk
 
 
 def test_constraint_modes_kept_on_disk_give_the_same_modes(pencil, monkeypatch, tmp_path):
-    """Every separator's constraint modes written to a scratch file and read back as a memory
-    map (``SPILL_BYTES`` 0; a 10^6-coordinate solid keeps 13 GB of them): the same modes bit
-    for bit, and the scratch directory gone with the reduced model."""
+    """Every separator's constraint modes and every condensation written to a scratch file
+    and read back as a memory map (``SPILL_BYTES`` 0; a 10^6-coordinate solid keeps 13 GB of
+    constraint modes): the same modes bit for bit, each condensation's file removed once its
+    parent has read it, the scratch directory gone with the reduced model."""
     import substruct.linalg.amls_reduce as reduce_module
 
     K, M, lam = pencil
@@ -219,10 +220,13 @@ def test_constraint_modes_kept_on_disk_give_the_same_modes(pencil, monkeypatch, 
         disk = amls_modes(K, M, w, cutoff=3.0, leaf_size=60, iterations=1)
         root = dissection_tree(K, 60)
         red = reduce_module.amls_reduce(K, M, root, (3.0 * w) ** 2)
-        assert red.scratch is not None and red.scratch.count == sum(
-            1 for b in root.postorder() if not b.is_leaf and b.dofs.size)
+        blocks = root.postorder()
+        separators = sum(1 for b in blocks if not b.is_leaf and b.dofs.size)
+        # the constraint modes, and the two condensations of every block but the root
+        assert red.scratch is not None and red.scratch.count == separators + 2 * (len(blocks) - 1)
         assert any(isinstance(b.Psi, np.memmap) for b in red.blocks)
-        assert len(list(tmp_path.iterdir())) == 1
+        (directory,) = tmp_path.iterdir()
+        assert len(list(directory.iterdir())) == separators   # condensations read: removed
         del red
         gc.collect()
         assert not list(tmp_path.iterdir())  # removed with the model

@@ -62,6 +62,7 @@ import scipy.sparse as sp
 
 from substruct.linalg.amls_block import (
     BlockModes,
+    Condensation,
     LeafExpansion,
     LeafJob,
     SeparatorJob,
@@ -246,16 +247,32 @@ def amls_reduce(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, root: 
             kids = [index[id(c)] for c in b.children]
             job = _separator_job(K, M, b.dofs, bounds[i], lam_cut, [bounds[j] for j in kids],
                                  free_shift)
-            both = run.submit(reduce_separator, job, *[up.pop(j) for j in kids])
+            inputs = [up.pop(j) for j in kids]
+            both = run.submit(reduce_separator, job, *inputs)
+            for c in inputs:            # in this process: read, no longer needed
+                if isinstance(c, Condensation):
+                    scratch.discard(c.CK)
+                    scratch.discard(c.CM)
+            del inputs
         kept[i] = run.submit(operator.getitem, both, 0)
         if b is not root:
-            up[i] = run.submit(operator.getitem, both, 1)
+            up[i] = _on_disk_if_large(run.submit(operator.getitem, both, 1), scratch)
         del both
         collect([j for j in kept if run.done(kept[j])])
     collect(list(kept))
     red = _assemble(K, order, bounds, results, n, factorization)
     red.scratch = scratch
     return red
+
+
+def _on_disk_if_large(up: Any, scratch: ScratchArrays) -> Any:
+    """A condensation computed in this process (not a task's handle) with its dense blocks
+    written to ``scratch`` when large, until its parent has read them: depth first, what waits
+    for a parent is a condensation of every level above the block at work, ``2 nb^2`` entries
+    each (a task's handle stays on its worker, which spills by Dask's own memory limits)."""
+    if isinstance(up, Condensation) and up.CK.nbytes >= SPILL_BYTES:
+        return Condensation(scratch.keep(up.CK), scratch.keep(up.CM), up.G)
+    return up
 
 
 def _assemble(K: sp.csr_array, order: list[DissectionNode], bounds: list[np.ndarray],

@@ -42,6 +42,13 @@ class ScratchArrays:
         np.save(name, np.asarray(array), allow_pickle=False)
         return np.load(name, mmap_mode="r", allow_pickle=False)
 
+    def discard(self, array: np.ndarray) -> None:
+        """Remove the file behind ``array`` (a map from :meth:`keep`; anything else is left
+        alone): its pages stay readable until the map is collected."""
+        name = getattr(array, "filename", None)
+        if self.path is not None and name and os.path.dirname(name) == self.path:
+            os.remove(name)
+
     def remove(self) -> None:
         """Remove the directory now (the maps already made stay readable)."""
         if self._finalizer is not None:
