@@ -47,7 +47,8 @@ their parent are held (at most two per level).  The tasks are pure functions of 
 the numbering of the reduced coordinates is made here afterwards, so the reduced model does
 not depend on where the tasks ran.  The separators' constraint modes, the largest part of
 what is kept (:math:`\sum n_s n_B` entries) and used once by the expansion, are written to
-disk as they arrive when large (:data:`SPILL_BYTES`) and read back by the expansion.
+disk as they arrive when large (:data:`SPILL_BYTES`) and read back by the expansion; in this
+process so is a large condensation, until its parent has read it.
 """
 
 from __future__ import annotations
@@ -76,8 +77,8 @@ from substruct.linalg.task_runner import IN_PROCESS, TaskRunner
 
 __all__ = ["ReducedModel", "SPILL_BYTES", "amls_reduce"]
 
-#: A separator's constraint modes from this many bytes up are kept on disk until the
-#: expansion reads them (:class:`~substruct.linalg.scratch_arrays.ScratchArrays`): they sum
+#: A separator's constraint modes (and, in this process, a condensation's stiffness or mass)
+#: from this many bytes up are kept on disk until the expansion (its parent) reads them (:class:`~substruct.linalg.scratch_arrays.ScratchArrays`): they sum
 #: to 0.56 GB at 98,400 coordinates of the solid box of docs/amls.md, 2.5 GB at 297,714 and
 #: about 13 GB at 10^6 (``sum ns nb``, growing as ``n^1.36``), more than the rest of the
 #: reduced model; the largest at 98,400 is 47 MB, so that a model of that size keeps every

@@ -1,13 +1,13 @@
 """Large arrays kept on disk instead of in memory: each written once to a ``.npy`` file of a
 private temporary directory and read back as a read-only memory map, whose pages the
-operating system reads on use and drops under memory pressure.  The directory is removed when
-the :class:`ScratchArrays` holding it is collected (or at :meth:`ScratchArrays.remove`); on a
-POSIX system a file removed while mapped stays readable until unmapped.
+operating system reads on use and drops under memory pressure.  A file is removed at
+:meth:`ScratchArrays.discard`, the directory when the :class:`ScratchArrays` holding it is
+collected; on a POSIX system a file removed while mapped stays readable until unmapped.
 
-Used for what a multilevel reduction must keep for its expansion but uses once
+Used for what a multilevel reduction must keep but reads once
 (:mod:`substruct.linalg.amls_reduce`: the separators' constraint modes, 13 GB at 10^6
-coordinates of a solid).  The directory is made in the system's temporary directory
-(``TMPDIR``).
+coordinates of a solid, and the condensations waiting for their parents).  The directory is
+made in the system's temporary directory (``TMPDIR``).
 """
 
 from __future__ import annotations
@@ -48,8 +48,3 @@ class ScratchArrays:
         name = getattr(array, "filename", None)
         if self.path is not None and name and os.path.dirname(name) == self.path:
             os.remove(name)
-
-    def remove(self) -> None:
-        """Remove the directory now (the maps already made stay readable)."""
-        if self._finalizer is not None:
-            self._finalizer()
