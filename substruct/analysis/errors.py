@@ -20,7 +20,8 @@ from substruct.linalg.constraints import ConstraintError
 from substruct.linalg.memory import require_memory
 from substruct.linalg.scaling import ZeroRowError
 
-__all__ = ["AnalysisInputError", "CheckError", "INPUT_ERRORS", "require_analysis_memory"]
+__all__ = ["AnalysisInputError", "CheckError", "INPUT_ERRORS", "require_analysis_memory",
+           "singular_model"]
 
 
 class AnalysisInputError(ValueError):
@@ -58,3 +59,15 @@ def require_analysis_memory(need: float, what: str) -> None:
         require_memory(need, what)
     except ValueError as err:
         raise AnalysisInputError(str(err)) from None
+
+
+def singular_model(why: str) -> AnalysisInputError:
+    """The error of a pencil with a motion that has neither mass nor stiffness nor constraint
+    (a massless coordinate or a mechanism held by nothing): no eigenvalue is defined for it.
+
+    Args:
+        why: how it was found, in a few words (``"a block's pencil is not definite"``).
+    """
+    return AnalysisInputError(f"singular model: a motion with no mass, no stiffness and no "
+                              f"constraint (a massless coordinate or mechanism held by "
+                              f"nothing: {why})")

@@ -51,6 +51,7 @@ from substruct.linalg.amls_improve import (
 )
 from substruct.linalg.amls_reduce import ReducedModel, amls_reduce
 from substruct.linalg.amls_tree import DissectionNode, dissection_tree
+from substruct.linalg.definite import definite_factorization
 from substruct.linalg.factorize import factorizer
 from substruct.linalg.scaling import rigid_eigenvalue
 from substruct.linalg.task_runner import TaskRunner
@@ -248,7 +249,7 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
     t = time.perf_counter()
     if iterations and U.shape[1]:
         sigma = SHIFT_FRACTION * lam_w
-        solve = factorizer(AUTO)(sp.csc_array(K - sigma * M))
+        solve = definite_factorization(factorizer(AUTO), sp.csc_array(K - sigma * M))
         filter_steps(M, U, solve, chebyshev_shifts(iterations, sigma, np.sqrt(bound * lam_c)),
                      say)
         del solve    # freed before the n x k modes are made: the peak is one of the two

@@ -41,6 +41,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 from scipy.linalg import blas
 
+from substruct.linalg.definite import definite_factorization
 from substruct.linalg.factorize import Solve, factorizer
 from substruct.linalg.lanczos import shift_invert_lanczos
 
@@ -222,7 +223,8 @@ def reduce_leaf(job: LeafJob) -> tuple[BlockModes, Condensation]:
     # with no boundary (a whole disconnected part, perhaps free) no constraint modes: the
     # eigenproblem is shifted instead
     shift = 0.0 if nb else job.free_shift
-    solve = factorizer(job.factorization)(sp.csc_array(Kdd - shift * Mdd if shift else Kdd))
+    solve = definite_factorization(factorizer(job.factorization),
+                                   sp.csc_array(Kdd - shift * Mdd if shift else Kdd))
     Psi = -np.asarray(solve(job.K_bB.toarray())).reshape(nd, nb)
     lam, Phi = block_modes(Kdd, Mdd, job.lam_cut, solve, shift)
     MdBt = job.M_bB.toarray() + Mdd @ Psi

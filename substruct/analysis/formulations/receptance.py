@@ -111,7 +111,12 @@ def generalized_inverse_sweep(K: sp.csr_array, M: sp.csr_array, C: sp.csr_array,
                               [sp.csr_array(W / beta), -sp.eye_array(m, dtype=complex)]],
                              format="csc")
         rhs = np.vstack([DE, np.zeros((m, E.shape[1]))]).astype(complex)
-        solve = factorizer("complex-lu")(big)
+        try:
+            solve = factorizer("complex-lu")(big)
+        except RuntimeError as exc:
+            raise AnalysisInputError(f"the generalized-inverse system (eq 15) is singular at "
+                                     f"omega = {w} (a resonance of an undamped system, or a "
+                                     f"motion with neither mass nor stiffness)") from exc
         xy = solve(rhs)
         xy = xy + solve(rhs - big @ xy)  # one step of iterative refinement
         out[k] = O @ xy[:n]

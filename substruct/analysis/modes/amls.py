@@ -34,7 +34,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from substruct.analysis.checks import modes_agreement
-from substruct.analysis.errors import AnalysisInputError
+from substruct.analysis.errors import AnalysisInputError, singular_model
+from substruct.linalg.definite import SingularPencil
 from substruct.analysis.events import Phase
 from substruct.analysis.modes.krylov import (
     check_inputs,
@@ -181,10 +182,8 @@ def amls_coupled_modes(M: Matrix, C: Matrix | None, K: Matrix, A: Matrix | None,
     Mt = sp.csr_array(T.T @ Ms @ T)
     try:
         r, w = _solve(Kt, Mt, count, opts, events)
-    except (RuntimeError, np.linalg.LinAlgError) as exc:   # a block's pencil not definite
-        raise AnalysisInputError("singular model: a motion with no mass, no stiffness and no "
-                                 "constraint (a massless coordinate or mechanism held by "
-                                 "nothing: a block's pencil is not definite)") from exc
+    except (RuntimeError, np.linalg.LinAlgError, SingularPencil) as exc:   # not definite
+        raise singular_model("a block's pencil is not definite") from exc
     k = r.lam.size if count is None else min(count, r.lam.size)
     U = T @ r.U[:, :k]
     agreement = {AMLS_CHECK: float(r.residual[:k].max(initial=0.0))}

@@ -22,6 +22,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from substruct.analysis.errors import singular_model
 from substruct.analysis.modes.krylov import (
     check_inputs,
     constraint_residuals,
@@ -39,6 +40,17 @@ from substruct.vocabulary import KKT, NULL_SPACE
 __all__ = ["damped_sparse_modes", "DAMPED_SHIFT", "ZERO_ROOT"]
 
 
+def _factorize(kind: str, B: sp.csc_array) -> Callable[[np.ndarray], np.ndarray]:
+    """``factorizer(kind, spd=False)(B)``; an exactly singular shifted pencil (SuperLU's zero
+    pivot: a motion with neither mass, damping nor stiffness) refused as bad input."""
+    try:
+        return factorizer(kind, spd=False)(B)
+    except RuntimeError as exc:
+        if "singular" not in str(exc):
+            raise
+        raise singular_model("the shifted pencil is singular") from None
+
+
 def _quadratic_operator(Mr: sp.csr_array, Cr: sp.csr_array, Kr: sp.csr_array,
                         sigma: float) -> Callable[[np.ndarray], np.ndarray]:
     r""":math:`x \mapsto (\mathcal{A} - \sigma \mathcal{B})^{-1} \mathcal{B} x` of the
@@ -52,7 +64,7 @@ def _quadratic_operator(Mr: sp.csr_array, Cr: sp.csr_array, Kr: sp.csr_array,
                y_2 = x_1 + \sigma y_1 .
     """
     r = Kr.shape[0]
-    solve = factorizer("saddle")(sp.csc_array(sigma**2 * Mr + sigma * Cr + Kr))
+    solve = _factorize("saddle", sp.csc_array(sigma**2 * Mr + sigma * Cr + Kr))
     D = sp.csr_array(Cr + sigma * Mr)
 
     def apply(x: np.ndarray) -> np.ndarray:
@@ -86,7 +98,7 @@ def _scaled_shift_invert(Ab: sp.sparray, Bb: sp.sparray, k: int, sigma: float,
         fin = np.abs(beta) > 1e-14 * np.abs(alpha)
         return alpha[fin] / beta[fin], V[:, fin]
     if operator is None:
-        solve = factorizer("superlu", spd=False)(sp.csc_array(Ab - sigma * Bb))
+        solve = _factorize("superlu", sp.csc_array(Ab - sigma * Bb))
         Bc = sp.csr_array(Bb)
 
         def operator(x: np.ndarray) -> np.ndarray:
@@ -228,6 +240,10 @@ def damped_sparse_modes(M: sp.sparray, C: sp.sparray | None, K: sp.sparray,
         sigma: the shift in units of :math:`\gamma`.
         ncv: Arnoldi basis size (``eigs`` default if ``None``).
         extra: roots computed beyond ``2 n_modes`` (conjugates, clusters).
+
+    Raises:
+        AnalysisInputError: the shifted pencil exactly singular (a motion with neither mass,
+            damping nor stiffness).
     """
     M, K, A, k = check_inputs(M, K, A, n_modes)
     n = K.shape[0]

@@ -60,8 +60,10 @@ from substruct.analysis.modes.krylov import (
     krylov_size,
     rigid_eigenvalue,
 )
+from substruct.analysis.errors import singular_model
 from substruct.analysis.results import Modes
 from substruct.analysis.modes.damped import damped_sparse_modes
+from substruct.linalg.definite import SingularPencil, definite_factorization
 from substruct.linalg.factorize import Factorize, Solve, factorizer
 from substruct.linalg.lanczos import shift_invert_lanczos_deflated
 from substruct.linalg.nullspace import Elimination
@@ -130,6 +132,9 @@ def null_space_modes(M: sp.sparray, K: sp.sparray, A: sp.sparray | None, n_modes
     Raises:
         ValueError: too few free coordinates for ``n_modes`` and a Krylov basis; bad shapes;
             an empty constraint row.
+        AnalysisInputError: the shifted pencil is singular
+            (:func:`substruct.linalg.definite.numerically_singular`): a motion with neither
+            mass nor stiffness, which would enter every mode shape unseen.
     """
     M, K, A, k = check_inputs(M, K, A, n_modes)
     el = elimination or eliminate(M, A)
@@ -139,7 +144,11 @@ def null_space_modes(M: sp.sparray, K: sp.sparray, A: sp.sparray | None, n_modes
     Kt, Mt = (Kt + Kt.T) / 2, (Mt + Mt.T) / 2
     size = krylov_size(k, free_coordinates(el, massless_coordinates(M)), ncv)
     s = default_shift(Kt, Mt) if sigma is None else float(sigma)
-    solve = factorizer(factorization, spd=True)(sp.csc_array(Kt - s * Mt))
+    try:
+        solve = definite_factorization(factorizer(factorization, spd=True),
+                                       sp.csc_array(Kt - s * Mt))
+    except SingularPencil:
+        raise singular_model("K - sigma M of the free coordinates is singular") from None
     v0 = np.random.default_rng(0).standard_normal(Kt.shape[0])
     lam, P = shift_invert_lanczos_deflated(Kt, Mt, k, s, solve, rigid_eigenvalue(Kt, Mt), v0,
                                            size)
@@ -187,6 +196,9 @@ def generalized_inverse_modes(M: sp.sparray, K: sp.sparray, A: sp.sparray | None
     Raises:
         ValueError: too few free coordinates for ``n_modes`` and a Krylov basis; bad shapes;
             an empty constraint row.
+        AnalysisInputError: the shifted pencil is singular
+            (:func:`substruct.linalg.definite.numerically_singular`): a motion with neither
+            mass nor stiffness, which would enter every mode shape unseen.
     """
     M, K, A, k = check_inputs(M, K, A, n_modes)
     n = K.shape[0]
@@ -196,7 +208,11 @@ def generalized_inverse_modes(M: sp.sparray, K: sp.sparray, A: sp.sparray | None
     Ak = sp.csr_array(A[el.kept_rows])  # rows of unit 2-norm (check_inputs)
     kscale = float(np.mean(abs(K.diagonal()))) or 1.0
     s = default_shift(K, M) if sigma is None else float(sigma)
-    kkt = _saddle(sp.csc_array(K - s * M), Ak, kscale)
+    try:   # the solves stay in null(A): the test is of the pencil there
+        kkt = definite_factorization(lambda B: _saddle(B, Ak, kscale),
+                                     sp.csc_array(K - s * M))
+    except SingularPencil:
+        raise singular_model("K - sigma M on the constraints' null space is singular") from None
     solve: Solve = kkt
     if project and Ak.shape[0]:
         Md = sp.csc_array(M + sp.diags_array(massless.astype(float)) *
