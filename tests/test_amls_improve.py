@@ -234,3 +234,35 @@ def test_constraint_modes_kept_on_disk_give_the_same_modes(pencil, monkeypatch, 
         tempfile.tempdir = None
     assert np.array_equal(memory.lam, disk.lam) and np.array_equal(memory.U, disk.U)
     assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("iterations", [0, 2])
+def test_mode_shapes_made_on_disk_are_the_same(pencil, monkeypatch, tmp_path, iterations):
+    """Mode shapes larger than the memory (2,000 modes of 2 x 10^6 coordinates are 32 GB)
+    are expanded into a column-major file a block of columns at a time and improved there
+    (``MODES_ON_DISK`` 0, blocks of 16 columns): the same modes (eigenvalues to round-off,
+    the same span: the square cross-section's bending pairs are degenerate, so a pair's
+    vectors may turn within it by the round-off of products of other widths), and nothing
+    left in the temporary directory once they are collected."""
+    import substruct.linalg.amls as amls_module
+
+    K, M, lam = pencil
+    w = float(np.sqrt(0.5 * (lam[39] + lam[40])))
+    memory = amls_modes(K, M, w, cutoff=3.0, leaf_size=60, iterations=iterations)
+    assert memory.lam.size > 16 and not isinstance(memory.U, np.memmap)
+    monkeypatch.setattr(amls_module, "MODES_ON_DISK", 0.0)
+    monkeypatch.setattr(amls_module, "EXPAND_MEMORY", 0.0)
+    monkeypatch.setenv("TMPDIR", str(tmp_path))
+    tempfile.tempdir = None
+    try:
+        disk = amls_modes(K, M, w, cutoff=3.0, leaf_size=60, iterations=iterations)
+        assert isinstance(disk.U, np.memmap) and disk.U.flags.f_contiguous
+        assert np.allclose(memory.lam, disk.lam, rtol=1e-12, atol=0)
+        overlap = np.linalg.svd(disk.U.T @ (M @ memory.U), compute_uv=False)
+        assert np.abs(overlap - 1).max() < 1e-10        # M-orthonormal, one span
+        assert np.allclose(memory.residual, disk.residual, rtol=1e-6, atol=1e-14)
+        del disk
+        gc.collect()
+        assert not list(tmp_path.iterdir())
+    finally:
+        tempfile.tempdir = None

@@ -43,6 +43,8 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
+from substruct.machine import available_memory
+
 from substruct.linalg.amls_improve import (
     SOLVE_COLUMNS,
     chebyshev_shifts,
@@ -54,9 +56,11 @@ from substruct.linalg.amls_tree import DissectionNode, dissection_tree
 from substruct.linalg.definite import definite_factorization
 from substruct.linalg.factorize import factorizer
 from substruct.linalg.scaling import rigid_eigenvalue
+from substruct.linalg.scratch_arrays import ScratchArrays
 from substruct.linalg.task_runner import TaskRunner
 
-__all__ = ["AMLSModes", "amls_modes", "reduced_eigenpairs", "relative_residuals"]
+__all__ = ["AMLSModes", "amls_modes", "expand_modes", "reduced_eigenpairs",
+           "relative_residuals"]
 
 #: The shift of the subspace iteration and of the blocks with no boundary, as a fraction of
 #: the wanted eigenvalue :math:`\omega_{max}^2` (negative: ``K - sigma M`` is positive
@@ -185,6 +189,34 @@ def reduced_eigenpairs(red: ReducedModel, lam_max: float) -> tuple[np.ndarray, n
     return lam[order], Z[:, order] * d[:, None] * np.sqrt(lam[order])
 
 
+#: Mode shapes are made in a file (:class:`~substruct.linalg.scratch_arrays.ScratchArrays`)
+#: when the ``n x k`` array would take more than this fraction of the memory available.
+MODES_ON_DISK = 0.4
+
+#: The fraction of the memory available that the temporaries of one block of columns of an
+#: expansion to disk may take (about ``16 n`` bytes a column: the subdomains' parts and their
+#: boundaries' values).
+EXPAND_MEMORY = 0.1
+
+
+def expand_modes(red: ReducedModel, Y: np.ndarray, tasks: TaskRunner | None,
+                 scratch: ScratchArrays) -> np.ndarray:
+    r"""The mode shapes :math:`U = Z Y` (:meth:`ReducedModel.expand`), in memory, or, when
+    ``n x k`` doubles would exceed :data:`MODES_ON_DISK` of the memory available, in a
+    column-major file of ``scratch`` expanded a block of columns at a time (each block's
+    temporaries within :data:`EXPAND_MEMORY` of it; the subdomains are factorized again for
+    each block).  The same numbers either way: each column's expansion is independent."""
+    n, k = red.n, Y.shape[1]
+    have = available_memory()
+    if not k or have is None or 8.0 * n * k <= MODES_ON_DISK * have:
+        return red.expand(Y, tasks) if k else np.zeros((n, 0))
+    U = scratch.empty((n, k))
+    columns = int(min(k, max(16, EXPAND_MEMORY * have // (16 * n))))
+    for j in range(0, k, columns):
+        red.expand(Y[:, j:j + columns], tasks, out=U[:, j:j + columns])
+    return U
+
+
 def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_max: float,
                cutoff: float = 5.0, leaf_size: int = 1000, iterations: int = 0,
                ritz_ratio: float = 1.5, progress: Callable[[str], None] | None = None,
@@ -241,7 +273,8 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
     lam, Y = reduced_eigenpairs(red, bound)
     times["reduced"] = time.perf_counter() - t
     t = time.perf_counter()
-    U = red.expand(Y, tasks) if Y.shape[1] else np.zeros((red.n, 0))
+    scratch = ScratchArrays("substruct-modes-")
+    U = expand_modes(red, Y, tasks, scratch)
     times["expand"] = time.perf_counter() - t
     n_reduced = red.size
     levels = np.bincount(red.level, minlength=int(red.level.max(initial=0)) + 1)
@@ -253,11 +286,11 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
         filter_steps(M, U, solve, chebyshev_shifts(iterations, sigma, np.sqrt(bound * lam_c)),
                      say)
         del solve    # freed before the n x k modes are made: the peak is one of the two
-        lam, U = ritz_pairs(K, M, U, lam_w)
+        lam, U = ritz_pairs(K, M, U, lam_w,
+                            scratch.empty if isinstance(U, np.memmap) else np.empty)
     times["improve"] = time.perf_counter() - t
-    keep = lam <= lam_w
-    if not keep.all():
-        lam, U = lam[keep], U[:, keep]
+    found = int(np.searchsorted(lam, lam_w, side="right"))   # lam ascending
+    lam, U = lam[:found], U[:, :found]
     lam = np.where(np.abs(lam) <= rigid_eigenvalue(K, M), 0.0, lam)
     t = time.perf_counter()
     res = relative_residuals(K, M, lam, U)

@@ -143,17 +143,19 @@ def subspace_iteration(K: sp.csr_array, M: sp.csr_array, U: np.ndarray, solve: S
     return ritz_pairs(K, M, U, lam_max)
 
 
-def ritz_pairs(K: sp.csr_array, M: sp.csr_array, W: np.ndarray, lam_max: float
+def ritz_pairs(K: sp.csr_array, M: sp.csr_array, W: np.ndarray, lam_max: float,
+               allocate: Callable[[tuple[int, int]], np.ndarray] = np.empty
                ) -> tuple[np.ndarray, np.ndarray]:
     r"""The Rayleigh-Ritz eigenpairs of ``(K, M)`` on the span of ``W`` with
     :math:`\lambda \le` ``lam_max``, ascending, ``M``-orthonormal; the memory is ``W``, the
-    ``n x k`` result and ``n x SOLVE_COLUMNS`` temporaries."""
+    ``n x k`` result (made by ``allocate``: on disk for modes larger than the memory) and
+    ``n x SOLVE_COLUMNS`` temporaries."""
     n = W.shape[0]
     Mp = projection(M, W)
     s = 1.0 / np.sqrt(np.diag(Mp))    # unit columns: W's scale by about 1 / lambda_j
     lam, rot = sla.eigh(projection(K, W) * s[:, None] * s[None, :],
                         Mp * s[:, None] * s[None, :], overwrite_a=True, overwrite_b=True,
                         subset_by_value=(-np.inf, lam_max), driver="gvx")
-    out = np.empty((n, lam.size))
+    out = allocate((n, lam.size))
     _rotate(W, s[:, None] * rot, out)
     return lam, out

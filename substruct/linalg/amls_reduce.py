@@ -127,13 +127,15 @@ class ReducedModel:
         """Number of reduced coordinates."""
         return int(self.lam.size)
 
-    def expand(self, Y: np.ndarray, tasks: TaskRunner | None = None) -> np.ndarray:
+    def expand(self, Y: np.ndarray, tasks: TaskRunner | None = None,
+               out: np.ndarray | None = None) -> np.ndarray:
         r"""Physical coordinates :math:`X = Z Y` of reduced ones (``size x k``), top-down:
         :math:`x_b = \Phi_b y_b + \Psi_b x_B` for the separators, root first, then every
         subdomain as one task of a map of ``tasks``
-        (:func:`substruct.linalg.amls_block.expand_leaf`)."""
+        (:func:`substruct.linalg.amls_block.expand_leaf`); written into ``out`` if given
+        (``n x k``, zero)."""
         Y = np.asarray(Y, dtype=float).reshape(self.size, -1)
-        X = np.zeros((self.n, Y.shape[1]))
+        X = np.zeros((self.n, Y.shape[1])) if out is None else out
         leaves = []
         for b in self.blocks:
             if b.Psi is None:

@@ -6,7 +6,10 @@ collected; on a POSIX system a file removed while mapped stays readable until un
 
 Used for what a multilevel reduction must keep but reads once
 (:mod:`substruct.linalg.amls_reduce`: the separators' constraint modes, 13 GB at 10^6
-coordinates of a solid, and the condensations waiting for their parents).  The directory is
+coordinates of a solid, and the condensations waiting for their parents), and for mode shapes
+larger than the memory (:func:`substruct.linalg.amls.amls_modes`: 2,000 modes of 2 x 10^6
+coordinates are 32 GB), written a block of columns at a time (:meth:`ScratchArrays.empty`).
+A map outlives its directory: the file stays on disk, nameless, until the map is collected.  The directory is
 made in the system's temporary directory (``TMPDIR``).
 """
 
@@ -34,13 +37,25 @@ class ScratchArrays:
     def keep(self, array: np.ndarray) -> np.ndarray:
         """``array`` written to a file of the directory, returned as a read-only memory map
         of it (the same values, bit for bit)."""
+        name = self._new_name()
+        np.save(name, np.asarray(array), allow_pickle=False)
+        return np.load(name, mmap_mode="r", allow_pickle=False)
+
+    def _new_name(self) -> str:
         if self.path is None:
             self.path = tempfile.mkdtemp(prefix=self.prefix)
             self._finalizer = weakref.finalize(self, shutil.rmtree, self.path, True)
         name = os.path.join(self.path, f"{self.count}.npy")
         self.count += 1
-        np.save(name, np.asarray(array), allow_pickle=False)
-        return np.load(name, mmap_mode="r", allow_pickle=False)
+        return name
+
+    def empty(self, shape: tuple[int, int]) -> np.ndarray:
+        """A new writable ``float64`` array of ``shape`` in a file of the directory, in
+        column-major (Fortran) order: a block of columns is one contiguous stretch of the
+        file, written and read without touching the others' pages."""
+        name = self._new_name()
+        return np.lib.format.open_memmap(name, mode="w+", dtype=np.float64, shape=shape,
+                                         fortran_order=True)
 
     def discard(self, array: np.ndarray) -> None:
         """Remove the file behind ``array`` (a map from :meth:`keep`; anything else is left
