@@ -303,6 +303,8 @@ class MatrixSpec(StrictModel):
         mats: dict[str, Any] = {}
         for field in ("M", "K", "C"):
             value = getattr(self, field)
+            if value is None and field != "C":
+                raise FieldError(field, "required: the matrix as rows, or {file: ...}", None)
             if value is None:
                 continue
             mat = load_matrix(field, value, base, params)

@@ -162,6 +162,9 @@ class RandomAnalysis(BaseDrivenResponse):
                              "only (generalized-inverse, null-space, kkt)", self.method)
         check_cross(self.input_names() if self.base is None else [], self.cross)
         f = self.frequencies.grid()
+        if len(f) < 2:
+            raise FieldError("frequencies", "the RMS integrates the response PSD over the grid: "
+                             "give at least two frequencies", self.frequencies.values)
         if np.any(f <= 0):
             raise FieldError("frequencies", "must be > 0 Hz", float(f[f <= 0][0]))
         if np.any(np.diff(f) <= 0):

@@ -50,6 +50,7 @@ from substruct.analysis.transient.srs import MAX_FN_DT, srs
 from substruct.builder.frf_parts import has_frf_parts
 from substruct.builder.model import Model
 from substruct.case.spec_analysis import LossFactorSpec
+from substruct.case.fields import gigabytes, memory_limit
 from substruct.case.loader import Case
 from substruct.case.random_cross import cross_matrix
 from substruct.linalg.task_runner import TaskRunner
@@ -224,6 +225,15 @@ def random_result(case: Case, model: Model, tasks: TaskRunner | None = None
     names = spec.input_names()
     columns = [t.columns() for t in tables]
     S_in = np.column_stack([interpolate_psd(list(ft), list(st), f) for ft, st in columns])
+    for j, column in enumerate(S_in.T):
+        if not np.any(column > 0):
+            where = (*loc, "base", "psd") if spec.base is not None else \
+                (*loc, "bases" if bases else "forces", j, "psd")
+            rows = tables[j].rows
+            raise case.error(where, f"the input PSD is 0 on the whole frequency grid "
+                             f"({f[0]:g}-{f[-1]:g} Hz; the table spans {rows[0][0]:g}-"
+                             f"{rows[-1][0]:g} Hz)", rows if len(rows) <= 4 else
+                             [list(rows[0]), "...", list(rows[-1])])
     S = cross_matrix(names, spec.cross, S_in)
     if spec.cross:
         try:
@@ -271,7 +281,8 @@ def srs_result(case: Case, tr: Transient) -> ShockSpectra | None:
 
     Raises:
         CaseError: a frequency above ``0.1 / dt`` of the recorded histories (10 samples a
-            period), or fewer than two recorded samples.
+            period), fewer than two recorded samples, or a lowest frequency whose period of
+            residual response would not fit in memory.
     """
     spec = case.analysis.srs
     if spec is None:
@@ -285,6 +296,14 @@ def srs_result(case: Case, tr: Transient) -> ShockSpectra | None:
         raise case.error(("analysis", "srs", "frequencies", "stop"),
                          f"above {MAX_FN_DT / dt:.4g} Hz, 0.1 / the recorded step "
                          f"({dt:g} s: 10 samples a period)", float(fn.max()))
+    samples = len(tr.t) + np.ceil(1.0 / (float(fn.min()) * dt))   # + one period of rest
+    need = 8.0 * 6 * samples        # the padded history, a filter's output and state
+    if need > memory_limit():
+        raise case.error(("analysis", "srs", "frequencies", "start"),
+                         f"the residual response is followed for one period of the lowest "
+                         f"frequency, {samples:.3g} samples of {dt:g} s: about "
+                         f"{gigabytes(need)} of memory, more than this machine has available",
+                         float(fn.min()))
     outs = list(spec.outputs) if spec.outputs is not None else list(tr.outputs)
     acc = np.asarray(tr.acceleration)
     if not np.all(np.isfinite(acc)):
