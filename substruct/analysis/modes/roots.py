@@ -116,7 +116,15 @@ def rigid_basis(K: np.ndarray, A: np.ndarray) -> np.ndarray:
     rank decision does not depend on units nor on a stiff spring next to a soft one (``K_ii``
     of ``1e12`` beside ``1`` would otherwise look like a rank-deficient ``K``).  Each motion is
     then confirmed by its strain energy, componentwise (:data:`RIGID_ENERGY_TOL`).
+
+    Coordinates with no stiffness at all (a node no element uses, a rotation that only a
+    rigid link or a point mass reaches) are split off first (:func:`_free_coordinates_basis`):
+    the decomposition's round-off would otherwise spread their motion over stiff coordinates
+    and fail the energy test.
     """
+    free = ~np.any(K != 0, axis=1)
+    if free.any():
+        return _free_coordinates_basis(K, A, free)
     n = K.shape[0]
     d = np.abs(np.diag(K)).astype(float)
     pos = d > 0
@@ -141,6 +149,34 @@ def rigid_basis(K: np.ndarray, A: np.ndarray) -> np.ndarray:
                                1e-300))
     w, W = np.linalg.eigh(energy / np.outer(level, level))
     return Q @ W[:, np.abs(w) <= RIGID_ENERGY_TOL]
+
+
+def _free_coordinates_basis(K: np.ndarray, A: np.ndarray, free: np.ndarray) -> np.ndarray:
+    r""":func:`rigid_basis` when the coordinates ``free`` (``Z``) have no stiffness:
+    :math:`K u = 0` is :math:`K_{SS} u_S = 0` on the others (``S``), so
+
+    .. math::  u = \begin{bmatrix} N & 0 \\ 0 & I \end{bmatrix} v, \qquad
+               N = \operatorname{rigid\_basis}(K_{SS}), \qquad
+               v \in \operatorname{null}\, [A_S N, \ A_Z]
+
+    (rows of unit norm; orthonormal columns, as both factors have them)."""
+    n = K.shape[0]
+    S, Z = np.flatnonzero(~free), np.flatnonzero(free)
+    N = rigid_basis(K[np.ix_(S, S)], np.zeros((0, S.size))) if S.size else np.zeros((0, 0))
+    p = N.shape[1]
+    basis = np.zeros((n, p + Z.size))
+    basis[S, :p] = N
+    basis[Z, p + np.arange(Z.size)] = 1.0
+    if not A.size:
+        return basis
+    B = A @ basis
+    nrm = np.linalg.norm(B, axis=1)
+    B = B[nrm > 0] / nrm[nrm > 0, None]
+    if not B.size:
+        return basis
+    _, sv, Vh = sla.svd(B)
+    sv = np.concatenate([sv, np.zeros(basis.shape[1] - sv.size)])
+    return basis @ Vh.conj().T[:, sv <= RIGID_SINGULAR_TOL * max(sv[0], 1.0)]
 
 
 def root_structure(M: np.ndarray, C: np.ndarray, K: np.ndarray,
