@@ -253,6 +253,9 @@ def system_modes(system: ConstrainedSystem, count: int | None = None, *,
     tolerance, what, full_checks, events = opts.tolerance, opts.what, opts.full_checks, \
         opts.events
     M, C, K, A = system.M, system.C, system.K, system.A
+    if not np.any(sp.csr_array(M).data):
+        raise AnalysisInputError("the model has no mass (M = 0): every root is infinite, "
+                                 "there is no mode to compute")
     choice = choose_solver(M, C, A, count, solver)
     if choice.strategy == "amls":
         return _amls(system, count, opts)
