@@ -34,6 +34,7 @@ from typing import Any, Callable, Sequence
 
 from substruct.cli.arguments import COMMANDS, build_parser
 from substruct.cli.errors import InputError
+from substruct.cli.warning_lines import install_warning_lines
 from substruct.cli.signals import (TERMINATED_LINE, Terminated, exit_without_teardown,
                                    silence_stdout, terminate_on_sigterm, terminate_until_exit)
 
@@ -126,6 +127,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 def _main(argv: Sequence[str] | None) -> int:
+    install_warning_lines()
     parser = build_parser()
     try:
         args = parser.parse_args(argv)
