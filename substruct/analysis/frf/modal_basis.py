@@ -7,7 +7,9 @@ In the first-order (state-space) form, which holds for any damping,
            a_r = u_r^T (2 \lambda_r M + C)\, u_r ,
 
 each complex root beside its conjugate; a cluster of repeated roots is summed through its
-projected pencil (:mod:`substruct.analysis.frf.clusters`), and rigid-body modes (zero roots of
+projected pencil (:mod:`substruct.analysis.frf.clusters`; on its invariant subspace when its
+vectors are nearly parallel, a defective root, :mod:`substruct.analysis.frf.defective`), and
+rigid-body modes (zero roots of
 an undamped model) are kept apart, :math:`-\Phi_0 \Phi_0^T / \omega^2`.
 
 :func:`modal_terms` evaluates the sum projected on outputs and inputs a frequency at a time
@@ -33,6 +35,7 @@ from substruct.analysis.frf.clusters import (
     root_accuracy,
     root_clusters,
 )
+from substruct.analysis.frf.defective import complete_clusters
 from substruct.analysis.modes.amls import AmlsOptions, amls_damped_basis
 from substruct.analysis.modes.eigen import modes
 from substruct.analysis.modes.sparse import has_damping
@@ -155,6 +158,7 @@ def modal_basis(M: sp.csr_array, C: sp.csr_array | None, K: sp.csr_array, A: sp.
     Cd = C if damped else None
     accuracy = root_accuracy(M, Cd, K, A, lam, U, norms)
     clusters = root_clusters(M, Cd, K, lam, U, lam.imag > 0, accuracy)
+    U, clusters = complete_clusters(M, Cd, K, A, lam, U, clusters)
     return ModalBasis(lam, U, norms, lam.imag > 0, Phi, highest, clusters)
 
 
