@@ -71,16 +71,22 @@ def root_accuracy(M: sp.csr_array, C: sp.csr_array | None, K: sp.csr_array, A: s
     a root at relative distance ``g`` that its residual causes is :math:`\epsilon_r / g`.
 
     .. math::  r_r = P (\lambda_r^2 M + \lambda_r C + K) u_r, \qquad
-               \epsilon_r = \frac{\|r_r\| \, \|u_r\|}{|a_r| \, |\lambda_r|}
+               \epsilon_r = \frac{\max(\|r_r\|, \epsilon_{mach} \rho_r) \, \|u_r\|}
+               {|a_r| \, |\lambda_r|}, \qquad
+               \rho_r = \|K u_r\| + |\lambda_r| \|C u_r\| + |\lambda_r|^2 \|M u_r\|
 
     (``P`` the orthogonal projector on ``null(A)``, which removes the constraint forces
     :math:`A^T \mu`; by the independent rows of ``A``, one sparse factorization of
     :math:`A_k A_k^T`).  Invariant under the scaling of ``u``, of ``M, C, K`` together and of
     time.
     """
-    R = K @ U + (M @ U) * lam[None, :] ** 2
+    KU, MU = K @ U, (M @ U) * lam[None, :] ** 2
+    R = KU + MU
+    floor = np.linalg.norm(KU, axis=0) + np.linalg.norm(MU, axis=0)
     if C is not None:
-        R = R + (C @ U) * lam[None, :]
+        CU = (C @ U) * lam[None, :]
+        R = R + CU
+        floor = floor + np.linalg.norm(CU, axis=0)
     if A.shape[0] and A.nnz:
         Ak = sp.csr_array(A[independent_rows(A).keep])
         if Ak.shape[0]:
@@ -90,7 +96,12 @@ def root_accuracy(M: sp.csr_array, C: sp.csr_array | None, K: sp.csr_array, A: s
                 1j * np.asarray(solve(AR.imag)).reshape(AR.shape)
             R = R - Ak.T @ mu
     size = np.abs(norms) * np.abs(lam)
-    eps = np.linalg.norm(R, axis=0) * np.linalg.norm(U, axis=0) / np.where(size > 0, size, 1.0)
+    # a residual is never below the rounding of its terms: a vector that the computed root
+    # leaves with no residual at all (a critically damped mode, whose double root is split by
+    # sqrt(eps)) is no more accurate than that
+    rounding = float(np.finfo(float).eps) * floor
+    eps = np.maximum(np.linalg.norm(R, axis=0), rounding) * np.linalg.norm(U, axis=0) / \
+        np.where(size > 0, size, 1.0)
     return np.where(size > 0, eps, np.inf)
 
 

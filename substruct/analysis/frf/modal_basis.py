@@ -7,7 +7,9 @@ In the first-order (state-space) form, which holds for any damping,
            a_r = u_r^T (2 \lambda_r M + C)\, u_r ,
 
 each complex root beside its conjugate; a cluster of repeated roots is summed through its
-projected pencil (:mod:`substruct.analysis.frf.clusters`), and rigid-body modes (zero roots of
+projected pencil (:mod:`substruct.analysis.frf.clusters`; on its invariant subspace when its
+vectors are nearly parallel, a defective root, :mod:`substruct.analysis.frf.defective`), and
+rigid-body modes (zero roots of
 an undamped model) are kept apart, :math:`-\Phi_0 \Phi_0^T / \omega^2`.
 
 :func:`modal_terms` evaluates the sum projected on outputs and inputs a frequency at a time
@@ -33,13 +35,14 @@ from substruct.analysis.frf.clusters import (
     root_accuracy,
     root_clusters,
 )
+from substruct.analysis.frf.defective import complete_clusters
 from substruct.analysis.modes.amls import AmlsOptions, amls_damped_basis
 from substruct.analysis.modes.eigen import modes
 from substruct.analysis.modes.sparse import has_damping
 from substruct.analysis.results import Modes
 
 __all__ = ["DEFAULT_CUTOFF", "RIGID_ROOT_FRACTION", "TERMS_BYTES", "ModalBasis", "modal_basis",
-           "modal_terms", "modal_moment"]
+           "modal_terms", "modal_moment", "root_entries"]
 
 #: Default cut-off: the modes up to this multiple of the highest frequency of the grid.
 DEFAULT_CUTOFF = 10.0
@@ -79,6 +82,17 @@ class ModalBasis:
         return int(self.eigenvalues.size)
 
 
+def root_entries(n: int, damped: bool) -> int:
+    r"""The most entries an eigensolver can report for ``n`` coordinates: ``n`` undamped (one
+    per conjugate pair :math:`\pm i\omega_r`), ``2 n`` damped, where an over-damped mode gives
+    two real roots, each an entry of its own, beside the pairs of the others.
+
+    .. math::  \#\{\text{entries}\} = N_{pairs} + N_{real}, \qquad
+               2 N_{pairs} + N_{real} \le 2 n
+    """
+    return 2 * n if damped else n
+
+
 def _modes(M: sp.csr_array, C: sp.csr_array | None, K: sp.csr_array, A: sp.csr_array,
            count: int | None, solver: str) -> Modes:
     return modes(M, C, K, A, count, solver=solver, what="frf (modal)")
@@ -93,7 +107,9 @@ def modal_basis(M: sp.csr_array, C: sp.csr_array | None, K: sp.csr_array, A: sp.
     .. math::  |\lambda_r| \le c\, \omega_{max}
 
     With ``count`` ``None`` the sparse solvers are asked for 20, 40, 80, ... roots until one
-    passes the cut-off (the dense solver computes all and keeps those below it).  With
+    passes the cut-off (the dense solver computes all and keeps those below it), up to
+    :func:`root_entries` (``2 n`` for a damped model: an over-damped mode is two real roots, an
+    entry each, so ``n`` entries could leave a root below the cut-off out).  With
     ``solver="amls"`` one AMLS reduction gives every undamped mode below the cut-off (or the
     lowest ``count``) and the damping is projected on them
     (:func:`substruct.analysis.modes.amls.amls_damped_basis`, options ``amls``).  Repeated
@@ -103,8 +119,9 @@ def modal_basis(M: sp.csr_array, C: sp.csr_array | None, K: sp.csr_array, A: sp.
     Raises:
         ValueError: a damped model with rigid-body modes.
     """
-    n = K.shape[0]
     damped = has_damping(C)
+    n = K.shape[0]
+    entries = root_entries(n, damped)
     Cm = C if damped else None
     limit = cutoff * omega_max
     if solver == "amls":
@@ -113,14 +130,14 @@ def modal_basis(M: sp.csr_array, C: sp.csr_array | None, K: sp.csr_array, A: sp.
         md, _ = amls_damped_basis(M, Cm, K, A, None if count is None else min(int(count), n),
                                   opts)
     elif count is not None:
-        md = _modes(M, Cm, K, A, min(int(count), n), solver)
+        md = _modes(M, Cm, K, A, min(int(count), entries), solver)
     else:
-        k = min(20, n)
+        k = min(20, entries)
         while True:
             md = _modes(M, Cm, K, A, k, solver)
-            if len(md) < k or md.omega.max(initial=0.0) > limit or k >= n:
+            if len(md) < k or md.omega.max(initial=0.0) > limit or k >= entries:
                 break
-            k = min(2 * k, n)
+            k = min(2 * k, entries)
         md = md.lowest(int(np.sum(md.omega <= limit)) + (1 if np.any(md.omega > limit) else 0))
     lam = np.asarray(md.eigenvalues, dtype=complex)
     U = np.asarray(md.shapes, dtype=complex)
@@ -141,6 +158,7 @@ def modal_basis(M: sp.csr_array, C: sp.csr_array | None, K: sp.csr_array, A: sp.
     Cd = C if damped else None
     accuracy = root_accuracy(M, Cd, K, A, lam, U, norms)
     clusters = root_clusters(M, Cd, K, lam, U, lam.imag > 0, accuracy)
+    U, clusters = complete_clusters(M, Cd, K, A, lam, U, clusters)
     return ModalBasis(lam, U, norms, lam.imag > 0, Phi, highest, clusters)
 
 
