@@ -130,7 +130,7 @@ def write_tpa(out: Path) -> None:
 
 def write_bad_testlab(out: Path) -> None:
     """``tests/bad_cases/data/tpa_*.npz``, ``semm_*.npz``: operating responses (one of them
-    not finite) and a measured receptance on a three-mass model's points."""
+    not finite, one out of range) and a measured receptance on a three-mass model's points."""
     w = np.array([1.0, 2.0, 3.0])
     labels = np.array(["P@q1", "P@q2", "P@q3"])
     u = np.arange(9.0).reshape(3, 3) + 1j
@@ -138,5 +138,8 @@ def write_bad_testlab(out: Path) -> None:
     u = u.copy()
     u[1, 2] = np.nan
     np.savez(out / "tpa_responses_nan.npz", omega=w, labels=labels, u=u)
+    u = np.arange(9.0).reshape(3, 3) + 1j
+    u[2, 0] = 3e300
+    np.savez(out / "tpa_responses_huge.npz", omega=w, labels=labels, u=u)
     np.savez(out / "semm_measured.npz", omega=w, outputs=labels[:2], inputs=labels[:1],
              H=np.ones((3, 2, 1), dtype=complex))

@@ -47,6 +47,7 @@ from substruct.case.errors import FieldError
 from substruct.case.fields import Point, StrictModel
 from substruct.case.frf_files import GRID_DIGITS_RTOL, MAX_FRF_FILE
 from substruct.case.npz_files import npz_members, read_npz
+from substruct.case.numbers import MAX_MAGNITUDE, RANGE
 from substruct.case.virtual_points import VpRegularization
 
 
@@ -118,6 +119,12 @@ def _finite(path: Path, name: str, values: np.ndarray, labels: Sequence[Sequence
         where = "/".join(lab[i] for lab, i in zip(labels, at[1:]))
         raise ValueError(f"{path.name}: {name} at {where} is {values[tuple(at)]} at "
                          f"frequency index {at[0]}")
+    size = np.abs(values)
+    if size.size and size.max() > MAX_MAGNITUDE:
+        at = [int(v) for v in np.unravel_index(int(np.argmax(size)), size.shape)]
+        where = "/".join(lab[i] for lab, i in zip(labels, at[1:]))
+        raise ValueError(f"{path.name}: {name} at {where} has magnitude "
+                         f"{size[tuple(at)]:.3g} at frequency index {at[0]} ({RANGE})")
 
 
 def _distinct(key: str, names: Sequence[str]) -> None:
