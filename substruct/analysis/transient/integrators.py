@@ -34,7 +34,9 @@ with :math:`S` in the place of :math:`M`: the acceleration without constraint,
 which makes :math:`A d_{n+1} = b` (:math:`d^*` the predicted displacement; with a moving
 ground, :math:`b_{n+1} = b + e g_{n+1}`, :mod:`substruct.analysis.transient.base`).  :math:`S` is
 definite where :math:`M` is only semidefinite (massless coordinates with a stiffness, eq 10),
-so the same correction serves.  After each step the displacement, velocity and acceleration
+so the same correction serves; where a massless motion has no stiffness either and only the
+constraints hold it, the form solves with :math:`S + A^T D A` instead, which gives the same
+step (:mod:`substruct.analysis.transient.effective`).  After each step the displacement, velocity and acceleration
 are projected (the :math:`S`-orthogonal projector), which removes the rounding that would
 otherwise accumulate: :math:`|A d_n - b|` stays at the rounding level of one step.
 """
