@@ -124,10 +124,12 @@ def constraint_correction(S: sp.sparray | np.ndarray, solve: Solve, A: sp.csr_ar
     r"""The gain :math:`S^{-1} A^T (A S^{-1} A^T)^+` (``A`` equilibrated), its rank decided on
     ``A`` with the columns scaled by ``S``
     (:func:`substruct.linalg.constraints.independent_rows`); ``S`` and ``solve`` those of
-    :func:`effective_solver` (augmented or not, the same projection onto :math:`A a = c`)."""
+    :func:`effective_solver` (augmented or not, the same projection onto :math:`A a = c`).
+    Rows of rank ``n`` hold every coordinate: the correction is then the prescribed motion
+    itself (``Correction.held``)."""
     At = sp.csr_array(A.T).toarray()
     Y = np.asarray(solve(At)).reshape(At.shape)
     rank = independent_rows(A, col_scale=mass_column_scale(sp.csr_array(S))).rank
     return Correction(A=A, b=b, gain=Y @ pinv_sym(At.T @ Y, rank),
                       e=None if motion is None else motion.e,
-                      g=None if motion is None else motion.g)
+                      g=None if motion is None else motion.g, held=rank == A.shape[1])

@@ -206,6 +206,13 @@ def direct_run(phys: Physical, form: str, s: Scheme, h: float, n_steps: int, d0:
         rec = Recorder(dataclasses.replace(phys, qp=None), M, K, h, forces, fields)
         ground = None if mo is None else (lambda k: mo.e * mo.g[k, 2])
         restart = restarter(phys.M, phys.C, phys.K, phys.B, phys.A, ground)
+        if corr is not None and corr.held:  # every coordinate prescribed: A a = e g'' fixes a
+            held = corr
+
+            def restart(step: int, d: np.ndarray, v: np.ndarray, f: np.ndarray) -> np.ndarray:
+                return held.apply(d, 0.0 if ground is None else ground(step))
+
+            a0 = restart(0, d0, v0, phys.f[0])
         integrate(M, C, K, B, phys.loads, StepState(d0, v0, a0), rec,
                   StepControl(s, h, n_steps, eff.solve, opts.every), correction=corr,
                   restart=restart)
