@@ -196,3 +196,26 @@ def test_a_massless_motion_held_by_nothing_is_refused():
     corr = constraint_correction(eff.S, eff.solve, A, np.zeros(1))
     a = corr.apply(eff.solve(np.array([1.0, 0.0])), np.zeros(1))
     assert eff.augmented and np.abs(a - 1.0).max() < 10 * EPS
+
+
+def test_velocity_given_at_the_masses_only_is_followed_by_the_massless_coordinate():
+    """A unit mass on a spring chain 2, -1 / -1, 1 with a massless end (no constraint) released
+    with q1' = 1: condensed, a unit oscillator of stiffness 2 - 1 = 1, q1 = sin t, and the end
+    follows its static equation, q2 = q1, q2' = cos t, q2'' = -sin t (before this, q2' started
+    at 0 and its velocity and acceleration rang at the Nyquist frequency, 2 and 4e4).  Newmark's
+    error: at most the period error, |1 - (2/h) atan(h/2)| t."""
+    from substruct.analysis.transient import InitialConditions
+    from substruct.analysis.transient.initial import InitialStateError
+
+    h, n_steps = 0.01, 100
+    M, K = np.diag([1.0, 0.0]), np.array([[2.0, -1.0], [-1.0, 1.0]])
+    load = LoadHistory(np.zeros((2, 0)), np.zeros((n_steps + 1, 0)), h, n_steps)
+    r = transient(M, None, K, None, None, load, TransientOutputs(np.eye(2)),
+                  initial=InitialConditions(v0=np.array([1.0, 0.0])))
+    bound = abs(1 - 2 / h * np.arctan(h / 2)) * r.t[-1] * 1.01 + 1e3 * EPS
+    assert np.abs(r.displacement - np.sin(r.t)[:, None]).max() <= bound
+    assert np.abs(r.velocity - np.cos(r.t)[:, None]).max() <= bound
+    assert np.abs(r.acceleration + np.sin(r.t)[:, None]).max() <= bound
+    with pytest.raises(InitialStateError, match="got 0.5"):  # a velocity of its own there
+        transient(M, None, K, None, None, load, TransientOutputs(np.eye(2)),
+                  initial=InitialConditions(v0=np.array([1.0, 0.5])))

@@ -61,7 +61,12 @@ from substruct.analysis.transient.effective import (
 )
 from substruct.analysis.transient.fields import FieldStore, field_steps
 from substruct.analysis.transient.loads import for_scheme
-from substruct.analysis.transient.initial import InitialStateError, check_initial, static_state
+from substruct.analysis.transient.initial import (
+    InitialStateError,
+    check_initial,
+    massless_velocity,
+    static_state,
+)
 from substruct.analysis.transient.modal import modal_run
 from substruct.analysis.transient.record import (
     Physical,
@@ -327,6 +332,7 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
         if vec.shape != (n,) or not np.all(np.isfinite(vec)):
             raise InitialStateError(f"the initial {name} needs {n} finite values, got "
                                     f"{vec.size}")
+    v0 = massless_velocity(Ms, Cs, Ks, A0, v0)
     motion = None
     if base is not None:
         e = np.asarray(eq.scale.apply(np.asarray(base.rows, dtype=float)))
