@@ -34,7 +34,9 @@ with :math:`S` in the place of :math:`M`: the acceleration without constraint,
 which makes :math:`A d_{n+1} = b` (:math:`d^*` the predicted displacement; with a moving
 ground, :math:`b_{n+1} = b + e g_{n+1}`, :mod:`substruct.analysis.transient.base`).  :math:`S` is
 definite where :math:`M` is only semidefinite (massless coordinates with a stiffness, eq 10),
-so the same correction serves.  After each step the displacement, velocity and acceleration
+so the same correction serves; where a massless motion has no stiffness either and only the
+constraints hold it, the form solves with :math:`S + A^T D A` instead, which gives the same
+step (:mod:`substruct.analysis.transient.effective`).  After each step the displacement, velocity and acceleration
 are projected (the :math:`S`-orthogonal projector), which removes the rounding that would
 otherwise accumulate: :math:`|A d_n - b|` stays at the rounding level of one step.
 """
@@ -115,6 +117,10 @@ class Correction:
     #: ``A v_k = e g'_k``; ``g`` is ``(n_steps + 1) x 3`` (``None``: a fixed ``b``)
     e: np.ndarray | None = None
     g: np.ndarray | None = None
+    #: the rows hold every coordinate (rank ``n``): :math:`A x = t` fixes ``x``, and
+    #: :meth:`apply` gives :math:`G t` itself, not ``x`` plus a correction of its rounding
+    #: (which would be carried from step to step: a zero response of round-off, not 0)
+    held: bool = False
 
     def target(self, step: int) -> np.ndarray:
         """The right-hand side :math:`b + e g_k` of step ``step``."""
@@ -126,7 +132,9 @@ class Correction:
 
     def apply(self, x: np.ndarray, target: np.ndarray | float) -> np.ndarray:
         r""":math:`x + G (t - A x)`: the :math:`S`-orthogonal projection onto
-        :math:`A x = t`."""
+        :math:`A x = t` (:math:`G t` when the rows hold every coordinate, ``held``)."""
+        if self.held:
+            return self.gain @ np.broadcast_to(target, (self.A.shape[0],))
         return x + self.gain @ (target - self.A @ x)
 
     def apply_both(self, x: np.ndarray, x_target: np.ndarray | float, y: np.ndarray,
@@ -134,6 +142,8 @@ class Correction:
         r""":meth:`apply` to two vectors with one product of the gain (``n x 2``): the gain,
         ``n x m`` and dense, is read once instead of twice (at 100k coordinates and 1,203
         rows it is 0.96 GB, read every step)."""
+        if self.held:
+            return self.apply(x, x_target), self.apply(y, y_target)
         misfit = np.column_stack([x_target - self.A @ x, y_target - self.A @ y])
         step = self.gain @ misfit
         return x + step[:, 0], y + step[:, 1]

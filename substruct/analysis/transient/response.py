@@ -9,7 +9,9 @@ integrated by Newmark's average acceleration or the generalized-alpha method
 
 * ``generalized-inverse``: every coordinate is integrated and the acceleration of each step
   is eq (5) with the effective matrix :math:`S` of the step in the place of :math:`M`
-  (:math:`S` is definite where :math:`M` is semidefinite, eq 10); displacements, velocities
+  (:math:`S` is definite where :math:`M` is semidefinite, eq 10; where a massless motion is
+  held by the constraints alone, :math:`S + A^T D A`,
+  :mod:`substruct.analysis.transient.effective`); displacements, velocities
   and accelerations are projected onto :math:`A q = b` with the :math:`S`-orthogonal projector
   at every step, so the constraints hold to rounding over any number of steps;
 * ``null-space``: :math:`q = T p + q_p` with ``T`` from the master-slave elimination
@@ -42,7 +44,6 @@ from substruct.analysis.checks import (
     require_agreement,
 )
 from substruct.analysis.transient.integrators import (
-    Correction,
     Restart,
     Scheme,
     StepControl,
@@ -53,9 +54,19 @@ from substruct.analysis.transient.integrators import (
 from substruct.analysis.modes.krylov import eliminate
 from substruct.analysis.formulations.projection import constrained_acceleration
 from substruct.analysis.transient.base import BaseMotion, Motion, ground_history, influence
+from substruct.analysis.transient.effective import (
+    constraint_correction,
+    effective_solver,
+    spd_solver,
+)
 from substruct.analysis.transient.fields import FieldStore, field_steps
 from substruct.analysis.transient.loads import for_scheme
-from substruct.analysis.transient.initial import InitialStateError, check_initial, static_state
+from substruct.analysis.transient.initial import (
+    InitialStateError,
+    check_initial,
+    massless_velocity,
+    static_state,
+)
 from substruct.analysis.transient.modal import modal_run
 from substruct.analysis.transient.record import (
     Physical,
@@ -70,8 +81,8 @@ from substruct.analysis.transient.options import (
     TransientOutputs,
 )
 from substruct.analysis.transient.results import Transient
-from substruct.linalg.constraints import independent_rows, particular_solution, pinv_sym
-from substruct.linalg.factorize import Solve, factorizer
+from substruct.linalg.constraints import independent_rows, particular_solution
+from substruct.linalg.factorize import factorizer
 from substruct.linalg.scaling import (
     equilibrate,
     mass_column_scale,
@@ -86,34 +97,10 @@ __all__ = ["TRANSIENT_FORMS", "DENSE_STEP", "LoadHistory", "InitialConditions",
 DENSE_STEP = 200
 
 
-def _spd_solver(S: sp.sparray | np.ndarray, kind: str) -> Solve:
-    """A solve with the symmetric positive definite ``S``: an explicit inverse if small and
-    dense, else the registry's factorization (SuperLU if CHOLMOD refuses it)."""
-    if isinstance(S, np.ndarray):
-        inv = np.linalg.inv(S)
-        return lambda r: inv @ r
-    try:
-        return factorizer(kind, spd=True)(sp.csc_array(S))
-    except Exception:  # CHOLMOD: not positive definite to its test; SuperLU pivots instead
-        return factorizer("superlu", spd=False)(sp.csc_array(S))
-
-
 def _small(*mats: sp.sparray | np.ndarray | None) -> list[np.ndarray | None]:
     """Dense copies of small matrices (``None`` kept)."""
     return [None if m is None else np.asarray(sp.csr_array(m).toarray()) if sp.issparse(m)
             else np.asarray(m, float) for m in mats]
-
-
-def _correction(S: sp.sparray | np.ndarray, solve: Solve, A: sp.csr_array,
-                b: np.ndarray, motion: Motion | None = None) -> Correction:
-    r"""The gain :math:`S^{-1} A^T (A S^{-1} A^T)^+` (``A`` equilibrated), its rank decided on
-    ``A`` with the columns scaled by ``S`` (:func:`substruct.linalg.constraints.independent_rows`)."""
-    At = sp.csr_array(A.T).toarray()
-    Y = np.asarray(solve(At)).reshape(At.shape)
-    rank = independent_rows(A, col_scale=mass_column_scale(sp.csr_array(S))).rank
-    return Correction(A=A, b=b, gain=Y @ pinv_sym(At.T @ Y, rank),
-                      e=None if motion is None else motion.e,
-                      g=None if motion is None else motion.g)
 
 
 def _kkt_acceleration(M: sp.csr_array, A: sp.csr_array, target: np.ndarray,
@@ -217,16 +204,23 @@ def direct_run(phys: Physical, form: str, s: Scheme, h: float, n_steps: int, d0:
     if form == GENERALIZED_INVERSE:
         if n <= DENSE_STEP:
             M, C, K, B = _small(M, C, K, B)  # type: ignore[assignment]
-        S = effective_matrix(M, C, K, s, h)
-        solve = _spd_solver(S, opts.factorization)
-        corr = (_correction(S, solve, phys.A, phys.b, phys.motion) if phys.A.shape[0]
-                else None)
+        eff = effective_solver(effective_matrix(M, C, K, s, h), phys.A, opts.factorization)
+        corr = (constraint_correction(eff.S, eff.solve, phys.A, phys.b, phys.motion)
+                if phys.A.shape[0] else None)
         # the generalized-inverse form integrates q itself: no particular solution to add
         rec = Recorder(dataclasses.replace(phys, qp=None), M, K, h, forces, fields)
         ground = None if mo is None else (lambda k: mo.e * mo.g[k, 2])
+        restart = restarter(phys.M, phys.C, phys.K, phys.B, phys.A, ground)
+        if corr is not None and corr.held:  # every coordinate prescribed: A a = e g'' fixes a
+            held = corr
+
+            def restart(step: int, d: np.ndarray, v: np.ndarray, f: np.ndarray) -> np.ndarray:
+                return held.apply(d, 0.0 if ground is None else ground(step))
+
+            a0 = restart(0, d0, v0, phys.f[0])
         integrate(M, C, K, B, phys.loads, StepState(d0, v0, a0), rec,
-                  StepControl(s, h, n_steps, solve, opts.every), correction=corr,
-                  restart=restarter(phys.M, phys.C, phys.K, phys.B, phys.A, ground))
+                  StepControl(s, h, n_steps, eff.solve, opts.every), correction=corr,
+                  restart=restart)
         return rec
     el = eliminate(sp.csr_array(M), phys.A)
     T = sp.csr_array(el.T)
@@ -246,11 +240,11 @@ def direct_run(phys: Physical, form: str, s: Scheme, h: float, n_steps: int, d0:
     pa0 = a0[el.masters]
     if not massless_coordinates(Mt).any() and Mt.shape[0]:  # independent of eq 10
         r0 = Bt @ ft[0] - Kt @ p0 - (Ct @ pv0 if Ct is not None else 0.0)
-        pa0 = _spd_solver(Mt if Mt.shape[0] > DENSE_STEP else Mt.toarray(), "superlu")(r0)
+        pa0 = spd_solver(Mt if Mt.shape[0] > DENSE_STEP else Mt.toarray(), "superlu")(r0)
     if Mt.shape[0] <= DENSE_STEP:
         Mt, Ct, Kt, Bt = _small(Mt, Ct, Kt, Bt)  # type: ignore[assignment]
     S = effective_matrix(Mt, Ct, Kt, s, h)
-    solve = _spd_solver(S, opts.factorization)
+    solve = spd_solver(S, opts.factorization)
     nphys = Physical(phys.M, phys.C, phys.K, phys.B, phys.f, phys.A, phys.b, phys.O, T, qp,
                      phys.motion, phys.pairs)
     rec = Recorder(nphys, Mt, Kt, h, forces, fields)
@@ -338,6 +332,7 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
         if vec.shape != (n,) or not np.all(np.isfinite(vec)):
             raise InitialStateError(f"the initial {name} needs {n} finite values, got "
                                     f"{vec.size}")
+    v0 = massless_velocity(Ms, Cs, Ks, A0, v0)
     motion = None
     if base is not None:
         e = np.asarray(eq.scale.apply(np.asarray(base.rows, dtype=float)))
