@@ -136,7 +136,7 @@ def make_substructures(case: Case, positions: dict[str, list[float]],
         elif is_nastran(spec):
             from substruct.builder.nastran import build_nastran  # Nastran: only when used
 
-            subs.append(build_nastran(spec))
+            subs.append(build_nastran(case, spec))
         # type: frf has no matrices: split off by substruct.builder.frf_parts
     return subs
 

@@ -163,11 +163,15 @@ def case_links(case: Any, subs: Sequence[Substructure], points: Mapping[str, Poi
     origin: dict[str, Any] = {}
     for spec in case.substructures:
         if isinstance(spec, NastranSpec) and spec.name in by_name:
-            from substruct.builder.nastran import bulk_links  # Nastran: only when used
+            from substruct.builder.nastran import bulk_error, bulk_links  # Nastran: when used
 
-            for link, line, card, ident in bulk_links(spec.name, spec.bulk, by_name):
+            try:
+                made = bulk_links(spec.name, spec.bulk, by_name)
+            except BdfError as err:
+                raise bulk_error(case, spec, err) from None
+            for link, line, card, ident in made:
                 links.append(link)
-                origin[link.name] = (spec.bulk.source, line, card, ident)
+                origin[link.name] = (spec, line, card, ident)
     for k, spec in enumerate(case.links):
         link = _yaml_link(case, k, spec, by_name, points)
         links.append(link)
@@ -179,8 +183,11 @@ def case_links(case: Any, subs: Sequence[Substructure], points: Mapping[str, Poi
         text = str(err)[len(name) + 2:] if name else str(err)
         where = origin.get(name) if name else None
         if isinstance(where, tuple):
-            raise BdfError(where[0], text, line=where[1], card=where[2],
-                           ident=where[3]) from None
+            from substruct.builder.nastran import bulk_error
+
+            spec, line, card, ident = where
+            raise bulk_error(case, spec, BdfError(spec.bulk.source, text, line=line, card=card,
+                                                  ident=ident)) from None
         raise case.error(("links", where if where is not None else 0), text) from None
     refs = [(t.substructure, t.where) for r in rows for t, c in r.terms if c != 0.0]
     refs += [(p.substructure, p.where) for p in points.values()]

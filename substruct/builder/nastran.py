@@ -4,6 +4,7 @@ substructures (:mod:`substruct.models.nastran`), their rigid elements and MPC se
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any, Collection, Mapping
 
 import numpy as np
@@ -14,21 +15,37 @@ from substruct.assembly.links import (
 )
 from substruct.case.bdf import BulkData
 from substruct.case.bdf_fields import BdfError
-from substruct.case.nastran import NastranSpec
+from substruct.case.errors import CaseError
+from substruct.case.nastran import BDF_SUFFIXES, NastranSpec
 from substruct.models.nastran import nastran_matrices, nastran_substructure
 from substruct.substructure import Substructure
 
-__all__ = ["build_nastran", "bulk_links", "rigid_element_grids", "autospc"]
+__all__ = ["build_nastran", "bulk_error", "bulk_links", "rigid_element_grids", "autospc"]
 
 
-def build_nastran(spec: NastranSpec) -> Substructure:
-    """The substructure of a ``type: nastran`` item, its SPC set and GRID PS removed (AUTOSPC
-    comes later, :func:`autospc`).
+def bulk_error(case: Any, spec: NastranSpec, err: BdfError) -> CaseError:
+    """A problem of a bulk data file found while the model is built, reported as those found
+    when the case is read: ``<case file>: substructures.<name>.file: <file as written>: line
+    <n>: <CARD> <id>: ...``.  For a bulk data file run directly (``substruct run MODEL.bdf``)
+    the error itself, which names the file as given on the command line."""
+    if Path(case.source).suffix.lower() in BDF_SUFFIXES:
+        return err
+    k = next(k for k, s in enumerate(case.substructures) if s is spec)
+    return case.error(("substructures", k, "file"), str(err))
+
+
+def build_nastran(case: Any, spec: NastranSpec) -> Substructure:
+    """The substructure of a ``type: nastran`` item of ``case``, its SPC set and GRID PS
+    removed (AUTOSPC comes later, :func:`autospc`).
 
     Raises:
-        BdfError: an element that cannot be made, naming the file, line, card and id.
+        CaseError: an element that cannot be made, naming the case's field, then the file,
+            line, card and id (:func:`bulk_error`).
     """
-    return nastran_substructure(spec.name, nastran_matrices(spec.bulk), autospc=False)
+    try:
+        return nastran_substructure(spec.name, nastran_matrices(spec.bulk), autospc=False)
+    except BdfError as err:
+        raise bulk_error(case, spec, err) from None
 
 
 def bulk_links(name: str, bulk: BulkData, subs: Mapping[str, Substructure]

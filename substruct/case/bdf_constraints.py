@@ -113,7 +113,8 @@ def read_mpc(c: RawCard) -> Mpc:
             comp = components(c, s + 1, f"C{n}")
             if len(comp) != 1:
                 raise c.error("one component per term", comp, f"C{n}")
-            terms.append((c.integer(s, f"G{n}"), int(comp) - 1, c.real(s + 2, f"A{n}")))
+            terms.append((c.integer(s, f"G{n}"), int(comp) - 1,
+                          c.real(s + 2, f"A{n}", coefficient=True)))
         if c.text(8 * line + 7):
             raise c.error("field 9 of an MPC line is blank", c.text(8 * line + 7),
                           f"line {line + 1} field 9")

@@ -38,6 +38,7 @@ from pathlib import Path
 from typing import Any
 
 from substruct.case.errors import MISSING, CaseError
+from substruct.case.numbers import coefficient_problem, number_problem
 
 __all__ = ["MAX_BDF_FILE", "BdfError", "RawCard", "BdfText", "read_bdf_text", "split_bdf",
            "nastran_real", "nastran_int"]
@@ -130,8 +131,14 @@ class RawCard:
                              name)
         return v
 
-    def real(self, i: int, name: str, default: float | None = None) -> float:
-        """Real field ``i`` (a decimal point required); ``default`` if blank."""
+    def real(self, i: int, name: str, default: float | None = None,
+             coefficient: bool = False) -> float:
+        """Real field ``i`` (a decimal point required); ``default`` if blank.
+
+        The value is a number of the case (:func:`~substruct.case.numbers.number_problem`:
+        finite, 0 or within ``1e-30 .. 1e30`` in magnitude), or with ``coefficient`` a
+        constraint coefficient (an MPC's, finite at any magnitude: its row is equilibrated).
+        """
         t = self.text(i)
         if not t:
             if default is None:
@@ -143,6 +150,9 @@ class RawCard:
                              t, name)
         if v != v or v in (float("inf"), float("-inf")):
             raise self.error("must be finite", t, name)
+        problem = coefficient_problem(v) if coefficient else number_problem(v)
+        if problem is not None:
+            raise self.error(problem, t, name)
         return v
 
     def no_damping(self, i: int, name: str) -> None:

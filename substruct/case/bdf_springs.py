@@ -63,11 +63,23 @@ def read_celas(c: RawCard) -> Spring:
     a = _end(c, 2, "1", blank_ok=False)
     b = _end(c, 4, "2", blank_ok=True)
     assert a is not None
+    if b == a:  # k (u - u) = 0: the spring adds nothing
+        raise c.error("the spring joins a coordinate to itself (G1, C1 and G2, C2 are the "
+                      "same): it would add no stiffness", [a[0], a[1] + 1], "G2")
     if c.name == "CELAS2":
         c.no_damping(6, "GE")
     if c.name == "CELAS1":
         return Spring(eid, None, c.integer(1, "PID", eid), a, b, c.line)
-    return Spring(eid, c.real(1, "K"), None, a, b, c.line)
+    return Spring(eid, _stiffness(c, 1, "K"), None, a, b, c.line)
+
+
+def _stiffness(c: RawCard, i: int, name: str) -> float:
+    """A scalar spring's stiffness: not negative, as PBUSH's (a negative spring makes a
+    stiffness that is not positive semi-definite, and modes that are not vibrations)."""
+    k = c.real(i, name)
+    if k < 0:
+        raise c.error("stiffnesses must not be negative", c.text(i), name)
+    return k
 
 
 def read_pelas(c: RawCard) -> list[tuple[int, float]]:
@@ -76,9 +88,9 @@ def read_pelas(c: RawCard) -> list[tuple[int, float]]:
     c.blank_after(8, "PELAS has one line")
     c.no_damping(2, "GE1")
     c.no_damping(6, "GE2")
-    out = [(c.integer(0, "PID1"), c.real(1, "K1"))]
+    out = [(c.integer(0, "PID1"), _stiffness(c, 1, "K1"))]
     if c.text(4):
-        out.append((c.integer(4, "PID2"), c.real(5, "K2")))
+        out.append((c.integer(4, "PID2"), _stiffness(c, 5, "K2")))
     return out
 
 

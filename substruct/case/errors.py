@@ -214,6 +214,12 @@ def field_path(loc: Sequence[str | int], raw: Any) -> str:
         if isinstance(node, dict) and isinstance(el, str) and el in node:
             out += ("." if out else "") + _key(el)
             node = node[el]
+        elif isinstance(node, dict) and isinstance(el, int) and \
+                any(isinstance(k, bool) and k == el for k in node):
+            # a key true/false, which pydantic's location holds as 1/0
+            key = next(k for k in node if isinstance(k, bool) and k == el)
+            out += ("." if out else "") + ("true" if key else "false")
+            node = node[key]
         elif isinstance(node, list) and isinstance(el, int) and 0 <= el < len(node):
             item = node[el]
             name = item.get("name") if isinstance(item, dict) else None

@@ -35,7 +35,8 @@ from substruct.machine import available_memory, gigabytes
 __all__ = [
     "MEMORY_LIMIT", "MAX_ASSUMED_MODES", "MAX_ELEMENTS", "MAX_FREQUENCIES", "MAX_MATRIX_SIZE",
     "MAX_DENSE_ENTRIES", "MAX_COUNT", "MAX_NAME_LENGTH", "DENSE_CHECK", "NAME_PATTERN",
-    "Number", "Coefficient", "Positive", "NonNegative", "Count", "Name", "Point", "Distribution",
+    "Number", "Coefficient", "Positive", "NonNegative", "Count", "Id", "Name", "Point",
+    "Distribution",
     "StrictModel", "parse_point", "gigabytes", "memory_limit",
 ]
 
@@ -115,6 +116,17 @@ def _count(value: Any, info: ValidationInfo) -> Any:
             raise ValueError(f"must be an integer: {value.strip()!r} = {x:.6g}")
         return int(round(x))
     return _no_bool(value)
+
+
+def _id(value: Any) -> Any:
+    """An id (a node number) as YAML writes it: ``true``/``false`` are not ``1``/``0``."""
+    if isinstance(value, bool):
+        raise ValueError("an id is an integer, not true/false")
+    return value
+
+
+#: An id (a frame's node number): an integer, a boolean refused.
+Id = Annotated[int, BeforeValidator(_id)]
 
 
 #: A finite number, 0 or within 1e-30 .. 1e30 in magnitude; or an expression of the case

@@ -29,7 +29,7 @@ from pydantic import Field, model_validator
 
 from substruct.case.errors import FieldError
 from substruct.case.fields import (
-    MAX_ELEMENTS, Count, Name, NonNegative, Number, Positive, StrictModel,
+    MAX_ELEMENTS, Count, Id, Name, NonNegative, Number, Positive, StrictModel,
 )
 
 __all__ = ["FrameMaterial", "FrameSection", "FrameMember", "FrameShell", "FrameSpec",
@@ -86,7 +86,7 @@ class FrameMember(StrictModel):
     """A member: end ``nodes``, ``section`` and ``material`` names, ``orientation`` vector,
     ``theory``, ``divisions`` and Nastran pin flags ``pin_a``/``pin_b``."""
 
-    nodes: tuple[int, int]
+    nodes: tuple[Id, Id]
     section: Name
     material: Name
     orientation: tuple[Number, Number, Number]
@@ -113,7 +113,7 @@ class FrameShell(StrictModel):
     theory of its ``bending``: ``kirchhoff`` (DKQ/DKT, the default) or ``mindlin`` (MITC4/
     MITC3, transverse shear stiffness 5/6 G t)."""
 
-    nodes: Annotated[list[int], Field(min_length=3, max_length=4)]
+    nodes: Annotated[list[Id], Field(min_length=3, max_length=4)]
     thickness: Positive
     material: Name
     divisions: Count | tuple[Count, Count] = 1
@@ -138,14 +138,14 @@ class FrameSpec(StrictModel):
 
     name: Name
     type: Literal["frame"]
-    nodes: Annotated[dict[int, tuple[Number, Number, Number]], Field(min_length=1)]
+    nodes: Annotated[dict[Id, tuple[Number, Number, Number]], Field(min_length=1)]
     materials: Annotated[dict[Name, FrameMaterial], Field(min_length=1)]
     sections: dict[Name, FrameSection] = {}
     members: list[FrameMember] = []
     shells: list[FrameShell] = []
-    supports: dict[int, Any] = {}
+    supports: dict[Id, Any] = {}
     mass: Literal["consistent", "lumped"] = "consistent"
-    node_masses: dict[int, Any] = {}
+    node_masses: dict[Id, Any] = {}
 
     @model_validator(mode="after")
     def _references(self) -> "FrameSpec":

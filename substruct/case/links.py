@@ -203,6 +203,12 @@ class InterpolationLinkSpec(_Link):
                              "face: {part, box, plane}")
         self.check_nodes([("reference", self.reference)] +
                          [(("nodes", j), d) for j, d in enumerate(self.nodes or [])])
+        seen = [self.reference.replace(" ", "")]
+        for j, d in enumerate(self.nodes or []):
+            if d.replace(" ", "") in seen:  # as a rigid link's, and an RBE3's grids
+                raise FieldError(("nodes", j), "a node appears twice in the link (or is the "
+                                 "reference)", d)
+            seen.append(d.replace(" ", ""))
         if isinstance(self.weights, list) and self.nodes is None:
             raise FieldError("weights", "the weights of a face are uniform or area",
                              self.weights)

@@ -351,7 +351,8 @@ def parse_case(text: str, source: str = "<string>", base_dir: str | Path = ".",
         raise CaseError(source, "", f"{problem}, not a {type(data).__name__}", data)
     set_paths = apply_overrides(data, overrides, source)
     _check_numbers(data, source, set_paths)
-    context = {"parameters": _parameters(data.get("parameters")), "base_dir": Path(base_dir)}
+    context = {"parameters": _parameters(data.get("parameters")), "base_dir": Path(base_dir),
+               "source": source}
     try:
         case = Case.model_validate(data, context=context)
     except ValidationError as exc:

@@ -49,9 +49,15 @@ class NastranSpec(StrictModel):
     def _read(self, info: ValidationInfo) -> "NastranSpec":
         from substruct.case.bdf import read_bulk
 
-        base = Path((info.context or {}).get("base_dir", "."))
+        context = info.context or {}
+        base = Path(context.get("base_dir", "."))
+        source = context.get("source", "")
+        if Path(source).suffix.lower() in BDF_SUFFIXES:  # substruct run MODEL.bdf
+            source = str(source)  # the file as given on the command line
+        else:
+            source = self.file  # as written in the case
         try:
-            self._bulk = read_bulk(base / self.file, self.file)
+            self._bulk = read_bulk(base / self.file, source)
         except CaseError as err:
             raise FieldError("file", str(err)) from None
         return self
@@ -80,7 +86,7 @@ def bdf_case(path: Path, source: str) -> str:
     from substruct.case.bdf_fields import BdfError
     from substruct.case.fields import MAX_COUNT
 
-    bulk = read_bulk(path, path.name)
+    bulk = read_bulk(path, source)
     eig = bulk.eigrl
     if eig is None:
         raise BdfError(source, "no EIGRL: substruct run of a bulk data file computes the "

@@ -32,7 +32,7 @@ import numpy as np
 __all__ = [
     "MAX_MAGNITUDE", "MIN_MAGNITUDE", "MAX_DIGITS", "MAX_DAMPING_RATIO", "RANGE",
     "BigNumber", "number_problem", "coefficient_problem", "array_problem", "digits_problem",
-    "find_problem", "is_coefficient",
+    "find_problem", "is_coefficient", "entry_problem",
 ]
 
 #: Largest magnitude of any number in a case.
@@ -159,6 +159,27 @@ def array_problem(values: Any) -> str | None:
     if 0 < top < MIN_MAGNITUDE:
         return f"its largest entry is of magnitude {top:.3g}, out of range ({RANGE})"
     return None
+
+
+def entry_problem(values: Any) -> tuple[tuple[int, ...], float, str] | None:
+    """The first entry of a real array that :func:`number_problem` refuses, each entry held to
+    the rule of a single number (unlike :func:`array_problem`, which accepts small entries
+    beside large ones): ``(index, value, problem)``, or ``None``.
+
+    For the entries of Nastran matrices (OP4, DMIG), which are numbers of the model as a
+    bulk data card's fields are.
+    """
+    a = np.asarray(values, dtype=float)
+    with np.errstate(all="ignore"):
+        size = np.abs(a)
+        bad = ~(size <= MAX_MAGNITUDE) | ((size != 0) & (size < MIN_MAGNITUDE))
+    if not bad.any():
+        return None
+    index = tuple(int(i) for i in np.unravel_index(int(np.argmax(bad)), a.shape))
+    value = float(a[index])
+    problem = number_problem(value)
+    assert problem is not None
+    return index, value, problem
 
 
 #: A run of digits that starts a number in an expression (not the fraction after a point, not

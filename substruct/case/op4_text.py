@@ -65,6 +65,9 @@ class _Lines:
             line = self.next(where) or ""
             k = min(per, count - start)
             fields = [line[j * width:(j + 1) * width] for j in range(k)]
+            if line[k * width:].strip():  # a number wider than its field, or one too many
+                raise Op4Error(f"{where}: line {self.number}: expected {k} numbers of "
+                               f"{width} characters, but the line holds more: {line[:60]!r}")
             try:
                 out[start:start + k] = [float(f.replace("D", "E").replace("d", "e"))
                                         for f in fields]

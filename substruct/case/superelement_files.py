@@ -22,6 +22,7 @@ from substruct.case.ansys_full import read_full
 from substruct.case.dmig import dmig_matrices
 from substruct.case.errors import CaseError, FieldError
 from substruct.case.fields import MEMORY_LIMIT
+from substruct.case.numbers import entry_problem
 from substruct.machine import gigabytes
 from substruct.case.npz_files import read_npz
 from substruct.case.op4 import Op4Error, read_op4
@@ -107,6 +108,11 @@ def read_matrix_file(file: str, base: Path, loc: Any, names: Mapping[str, str],
                     raise FieldError(where.get(key, key), f"matrix {name!r} of {path.name} is "
                                      "complex; a superelement's matrices are real", name)
                 out[key] = m.dense()
+                found = entry_problem(out[key])
+                if found is not None:
+                    (i, j), value, problem = found
+                    raise FieldError(where.get(key, key), f"matrix {name!r} of {path.name}: "
+                                     f"entry ({i + 1}, {j + 1}): {problem}", value)
             nbytes = 4 if any(got[n.upper()].type == 1 for n in names.values()) else 8
             extra = {m: got[m.upper()].dense() for m in members}
             return MatrixFile(path, out, nbytes, extra)

@@ -141,7 +141,7 @@ def _node_mass(name: str, node: int, value: Any) -> np.ndarray:
     if arr.ndim == 0:
         if not (np.isfinite(arr) and arr > 0):
             raise ValueError(f"{name}: mass at node {node} must be finite and positive, "
-                             f"got {value!r}")
+                             f"got {float(arr)!r}")
         return np.diag([float(arr)] * 3 + [0.0] * 3)
     if arr.shape != (6, 6) or not np.all(np.isfinite(arr)) or \
             np.abs(arr - arr.T).max() > 1e-12 * np.abs(arr).max():

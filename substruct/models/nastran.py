@@ -49,6 +49,7 @@ from substruct.case.bdf import BulkData, BdfSection
 from substruct.case.bdf_fields import BdfError
 from substruct.models.frame import frame_component
 from substruct.models.nastran_bars import bar_blocks, bar_matrices
+from substruct.models.nastran_bounds import check_element, check_elements, check_solid_block
 from substruct.models.nastran_shells import bush_matrices, plate_matrices
 from substruct.models.selection import node_tolerance
 from substruct.substructure import Geometry, PointError, Substructure, as_csr
@@ -142,13 +143,17 @@ def nastran_matrices(bulk: BulkData) -> NastranMatrices:
     for rod, s in bulk.rods:
         a, b = rod.nodes
         try:
-            add(dofs2(a, b), *_rod(bulk.grids[a], bulk.grids[b], s, bulk.coupled))
+            Kr, Mr = _rod(bulk.grids[a], bulk.grids[b], s, bulk.coupled)
         except ValueError as err:
             raise BdfError(bulk.source, str(err), line=rod.line, card="CROD",
                            ident=rod.id) from None
+        check_element(bulk, "CROD", rod.id, rod.line, Kr, Mr)
+        add(dofs2(a, b), Kr, Mr)
         pairs.append((index[a], index[b]))
     if bulk.bars:  # all at once: 12 coordinates of each element
         Kbars, Mbars = bar_blocks(bulk)
+        check_elements(bulk, [(bar.kind, bar.id, bar.line) for bar, _ in bulk.bars],
+                       Kbars, Mbars)
         ends = np.array([[index[g] for g in bar.nodes] for bar, _ in bulk.bars])
         bar_dofs = (6 * ends[:, :, None] + np.arange(6)).reshape(len(ends), 12)
         rows.append(np.repeat(bar_dofs, 12, axis=1).ravel())
@@ -157,7 +162,8 @@ def nastran_matrices(bulk: BulkData) -> NastranMatrices:
         mv.append(Mbars.ravel())
         pairs += [(int(a), int(b)) for a, b in ends]
     faces: dict[str, list[tuple[int, ...]]] = {}
-    for kind, nodes, Ke, Me in plate_matrices(bulk, index):
+    for (kind, nodes, Ke, Me), (plate, _) in zip(plate_matrices(bulk, index), bulk.plates):
+        check_element(bulk, plate.kind, plate.id, plate.line, Ke, Me)
         add((6 * np.asarray(nodes)[:, None] + np.arange(6)).ravel(), Ke, Me)
         faces.setdefault(kind, []).append(nodes)
     if bulk.solids:  # scikit-fem and meshio loaded only for solid elements (start-up time)
@@ -167,6 +173,7 @@ def nastran_matrices(bulk: BulkData) -> NastranMatrices:
     else:
         blocks = []
     for kind, conn, Ks, Ms in blocks:
+        check_solid_block(bulk, index, conn, Ks, Ms)
         rows += [Ks.row, Ms.row]
         cols += [Ks.col, Ms.col]
         kv += [Ks.data, np.zeros_like(Ms.data)]
@@ -174,10 +181,13 @@ def nastran_matrices(bulk: BulkData) -> NastranMatrices:
         faces.setdefault(kind, []).extend(tuple(int(i) for i in c) for c in conn)
     for bush in bulk.bushes:
         grids, Kb = bush_matrices(bulk, bush)
+        check_element(bulk, "CBUSH", bush.bush.id, bush.bush.line, Kb, None)
         dofs = (6 * np.array([index[g] for g in grids])[:, None] + np.arange(6)).ravel()
         add(dofs, Kb, np.zeros_like(Kb))
     for m in bulk.masses:
-        add(6 * index[m.g] + np.arange(6), np.zeros((6, 6)), conm2_matrix(m.m, m.x, m.inertia))
+        Mm = conm2_matrix(m.m, m.x, m.inertia)
+        check_element(bulk, "CONM2", m.id, m.line, None, Mm)
+        add(6 * index[m.g] + np.arange(6), np.zeros((6, 6)), Mm)
     for _, k, ea, eb in bulk.springs:
         if eb is None:
             add(np.array([6 * index[ea[0]] + ea[1]]), np.array([[k]]), np.zeros((1, 1)))

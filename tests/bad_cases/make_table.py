@@ -281,7 +281,11 @@ def limits() -> str:
          f"{_n(numbers.MIN_MAGNITUDE)} .. {_n(numbers.MAX_MAGNITUDE)} in magnitude; in a "
          f"matrix file or a mesh every entry is finite and at most {_n(numbers.MAX_MAGNITUDE)} "
          "in magnitude, smaller entries beside larger ones are accepted as rounding, but not "
-         f"a matrix whose largest entry is below {_n(numbers.MIN_MAGNITUDE)}", code(numbers, "MIN_MAGNITUDE") + ", `MAX_MAGNITUDE`"),
+         f"a matrix whose largest entry is below {_n(numbers.MIN_MAGNITUDE)}; Nastran's "
+         "numbers (every real field of a bulk data card but MPC coefficients, every entry "
+         "of an OP4 or DMIG matrix) each as a number of a case, and every entry of the "
+         "stiffness and mass a bulk data element makes of them (with WTMASS) at most "
+         f"{_n(numbers.MAX_MAGNITUDE)}", code(numbers, "MIN_MAGNITUDE") + ", `MAX_MAGNITUDE`"),
         ("integers", f"an integer of more than {numbers.MAX_DIGITS} digits (in YAML, an "
          "expression, a point) is refused by its number of digits, never converted",
          code(numbers, "MAX_DIGITS")),
