@@ -71,8 +71,12 @@ def test_a_solid_whose_matrices_leave_the_range_is_refused_by_its_card():
         nastran_matrices(parse_bulk(text, "t.bdf"))
 
 
-def test_entry_problem_holds_every_entry_to_the_rule():
+def test_entry_problem_holds_the_matrix_rule():
+    """Entries beyond 1e30 or not finite are refused where they are; a small entry beside
+    large ones is a round-off entry (an exported damping matrix has 6e-31), kept; a matrix
+    whose largest entry is below 1e-30 is refused at that entry."""
     assert entry_problem(np.array([[1.0, 0.0], [1e-30, 1e30]])) is None
-    assert entry_problem(np.array([[1.0, 0.0], [0.0, 2e-300]]))[:2] == ((1, 1), 2e-300)
+    assert entry_problem(np.array([[1.0, 0.0], [0.0, 2e-300]])) is None
+    assert entry_problem(np.array([[1e-31, 0.0], [0.0, 2e-300]]))[:2] == ((0, 0), 1e-31)
     index, value, problem = entry_problem(np.array([1.0, np.inf]))
     assert index == (1,) and problem == "must be a finite number"

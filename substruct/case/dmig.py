@@ -29,6 +29,7 @@ import numpy as np
 
 from substruct.case.bdf_fields import BdfError, RawCard, read_bdf_text, split_bdf
 from substruct.case.fields import MAX_MATRIX_SIZE, MEMORY_LIMIT, gigabytes
+from substruct.case.numbers import MAX_MAGNITUDE, RANGE
 
 __all__ = ["DmigMatrix", "read_dmig", "dmig_matrices", "DMIG_FORMS"]
 
@@ -130,7 +131,12 @@ def read_dmig(path: str | Path, source: str, names: Sequence[str] | None = None
             if not any(card.text(i + k) for k in range(4)):
                 continue
             row = _dof(card, i, f"G{(i - 4) // 4 + 1}")
-            value = card.real(i + 2, f"A{(i - 4) // 4 + 1}")
+            # an entry of a matrix: finite and at most 1e30 in size, but a round-off entry
+            # below 1e-30 beside the others is kept (as the matrix files' rule)
+            value = card.real(i + 2, f"A{(i - 4) // 4 + 1}", coefficient=True)
+            if abs(value) > MAX_MAGNITUDE:
+                raise card.error(f"out of range: too large ({RANGE})", card.text(i + 2),
+                                 f"A{(i - 4) // 4 + 1}")
             if card.text(i + 3):
                 raise card.error("B (the imaginary part) is blank for a real matrix",
                                  card.text(i + 3), f"B{(i - 4) // 4 + 1}")

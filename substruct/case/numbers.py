@@ -162,19 +162,21 @@ def array_problem(values: Any) -> str | None:
 
 
 def entry_problem(values: Any) -> tuple[tuple[int, ...], float, str] | None:
-    """The first entry of a real array that :func:`number_problem` refuses, each entry held to
-    the rule of a single number (unlike :func:`array_problem`, which accepts small entries
-    beside large ones): ``(index, value, problem)``, or ``None``.
+    """The first entry of a real array that is not finite or beyond :data:`MAX_MAGNITUDE`, or
+    its largest entry if that is below :data:`MIN_MAGNITUDE` but not zero (the rule of
+    :func:`array_problem`: small entries beside large ones are rounding noise, as in a matrix
+    written by another program), located: ``(index, value, problem)``, or ``None``.
 
-    For the entries of Nastran matrices (OP4, DMIG), which are numbers of the model as a
-    bulk data card's fields are.
+    For the entries of Nastran matrices (OP4), whose refusal names the entry.
     """
     a = np.asarray(values, dtype=float)
     with np.errstate(all="ignore"):
         size = np.abs(a)
-        bad = ~(size <= MAX_MAGNITUDE) | ((size != 0) & (size < MIN_MAGNITUDE))
+        bad = ~(size <= MAX_MAGNITUDE)
     if not bad.any():
-        return None
+        if not a.size or not 0 < size.max() < MIN_MAGNITUDE:
+            return None
+        bad = size == size.max()
     index = tuple(int(i) for i in np.unravel_index(int(np.argmax(bad)), a.shape))
     value = float(a[index])
     problem = number_problem(value)
