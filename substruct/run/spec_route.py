@@ -225,15 +225,14 @@ def random_result(case: Case, model: Model, tasks: TaskRunner | None = None
     names = spec.input_names()
     columns = [t.columns() for t in tables]
     S_in = np.column_stack([interpolate_psd(list(ft), list(st), f) for ft, st in columns])
-    for j, column in enumerate(S_in.T):
-        if not np.any(column > 0):
-            where = (*loc, "base", "psd") if spec.base is not None else \
-                (*loc, "bases" if bases else "forces", j, "psd")
-            rows = tables[j].rows
-            raise case.error(where, f"the input PSD is 0 on the whole frequency grid "
-                             f"({f[0]:g}-{f[-1]:g} Hz; the table spans {rows[0][0]:g}-"
-                             f"{rows[-1][0]:g} Hz)", rows if len(rows) <= 4 else
-                             [list(rows[0]), "...", list(rows[-1])])
+    if not np.any(S_in > 0):     # one input of several may be 0 there, not all of them
+        where = (*loc, "base", "psd") if spec.base is not None else \
+            (*loc, "bases" if bases else "forces", 0, "psd")
+        rows = tables[0].rows
+        every = "every input PSD is" if len(tables) > 1 else "the input PSD is"
+        raise case.error(where, f"{every} 0 on the whole frequency grid ({f[0]:g}-{f[-1]:g} "
+                         f"Hz; this table spans {rows[0][0]:g}-{rows[-1][0]:g} Hz)",
+                         rows if len(rows) <= 4 else [list(rows[0]), "...", list(rows[-1])])
     S = cross_matrix(names, spec.cross, S_in)
     if spec.cross:
         try:
