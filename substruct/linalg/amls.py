@@ -43,8 +43,6 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
-from substruct.machine import available_memory
-
 from substruct.linalg.amls_improve import (
     SOLVE_COLUMNS,
     chebyshev_shifts,
@@ -58,6 +56,7 @@ from substruct.linalg.factorize import factorizer
 from substruct.linalg.scaling import rigid_eigenvalue
 from substruct.linalg.scratch_arrays import ScratchArrays
 from substruct.linalg.task_runner import TaskRunner
+from substruct.machine import available_memory
 
 __all__ = ["AMLSModes", "amls_modes", "expand_modes", "reduced_eigenpairs",
            "relative_residuals"]
@@ -205,7 +204,8 @@ def expand_modes(red: ReducedModel, Y: np.ndarray, tasks: TaskRunner | None,
     ``n x k`` doubles would exceed :data:`MODES_ON_DISK` of the memory available, in a
     column-major file of ``scratch`` expanded a block of columns at a time (each block's
     temporaries within :data:`EXPAND_MEMORY` of it; the subdomains are factorized again for
-    each block).  The same numbers either way: each column's expansion is independent."""
+    each block).  The same numbers either way, each column's expansion being independent (up to
+the rounding of the dense products over blocks of other widths)."""
     n, k = red.n, Y.shape[1]
     have = available_memory()
     if not k or have is None or 8.0 * n * k <= MODES_ON_DISK * have:
