@@ -26,3 +26,15 @@ def default_ctrl_c() -> None:
     in the background by a shell without job control (``make test &`` in a script) ignores
     SIGINT, and a child would inherit that."""
     signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
+#: The ``substructures:`` block of the paper's three-mass model with a dashpot on the first
+#: mass (eq 40's matrices), for case texts built in tests.
+DAMPED_THREE_MASS = """\
+substructures:
+  - name: P
+    type: matrices
+    M: [[1, 0, 0], [0, 2, 0], [0, 0, 4]]
+    K: [[20, -10, 0], [-10, 30, -20], [0, -20, 20]]
+    C: [[10, 0, 0], [0, 0, 0], [0, 0, 0]]
+"""

@@ -29,6 +29,7 @@ import pytest
 import scipy.sparse as sp
 from scipy.linalg import null_space
 
+from cli_helpers import DAMPED_THREE_MASS
 from substruct.analysis.api import receptance_sweep
 from substruct.analysis.frf.modal import ModalOptions, modal_basis
 from substruct.case.loader import parse_case
@@ -212,14 +213,7 @@ def test_amls_slow_overdamped_roots():
     assert _error(H, ref) < ROUND_OFF + _moment_bound(M, C, K, np.zeros((0, 2)), w, E, O)
 
 
-RANDOM = """
-name: rnd
-substructures:
-  - name: P
-    type: matrices
-    M: [[1, 0, 0], [0, 2, 0], [0, 0, 4]]
-    K: [[20, -10, 0], [-10, 30, -20], [0, -20, 20]]
-    C: [[10, 0, 0], [0, 0, 0], [0, 0, 0]]
+RANDOM = "\nname: rnd\n" + DAMPED_THREE_MASS + """\
 analysis:
   random:
     frequencies: {start: 0.05, stop: 1, num: 50}

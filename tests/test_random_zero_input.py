@@ -9,17 +9,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from cli_helpers import DAMPED_THREE_MASS
 from substruct.case.loader import parse_case
 from substruct.run.runner import run_case
 
-CASE = """\
-name: two_forces
-substructures:
-  - name: P
-    type: matrices
-    M: [[1, 0, 0], [0, 2, 0], [0, 0, 4]]
-    K: [[20, -10, 0], [-10, 30, -20], [0, -20, 20]]
-    C: [[10, 0, 0], [0, 0, 0], [0, 0, 0]]
+CASE = "name: two_forces\n" + DAMPED_THREE_MASS + """\
 analysis:
   random:
     frequencies: {start: 0.1, stop: 2, num: 40}

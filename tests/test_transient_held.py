@@ -6,7 +6,7 @@ over round-off."""
 import numpy as np
 import pytest
 
-from cli_helpers import run
+from cli_helpers import DAMPED_THREE_MASS, run
 from substruct.analysis.transient.base import BaseMotion
 from substruct.analysis.transient import (
     InitialConditions,
@@ -67,14 +67,7 @@ def test_every_coordinate_held_follows_the_constraints():
 def test_every_coordinate_held_through_the_command_line(tmp_path, capsys):
     """The case of the receptance's exact zero (``frf_all_held``) with a transient: exit 0."""
     case = tmp_path / "held.yaml"
-    case.write_text("""\
-name: held
-substructures:
-  - name: P
-    type: matrices
-    M: [[1, 0, 0], [0, 2, 0], [0, 0, 4]]
-    K: [[20, -10, 0], [-10, 30, -20], [0, -20, 20]]
-    C: [[10, 0, 0], [0, 0, 0], [0, 0, 0]]
+    case.write_text("name: held\n" + DAMPED_THREE_MASS + """\
 constraints:
   - {name: a, terms: {P@1: 1}}
   - {name: b, terms: {P@2: 1}}
