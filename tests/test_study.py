@@ -326,6 +326,18 @@ def test_the_command_writes_the_file_and_refuses_bad_input(tmp_path, capsys):
         dask_study(tmp_path, SMALL, scheduler="tcp://127.0.0.1:9", connect_timeout=2)
 
 
+def test_a_study_whose_every_sample_failed_is_exit_1_and_writes_nothing(tmp_path, capsys):
+    bad = ["study.grid.parameters[0]={parameter: kc, values: [1150.0]}",
+           "study.grid.parameters[1]={parameter: cc, values: [-1.0, -2.0]}"] + SMALL[2:]
+    args = ["study", str(TUNING), "--out", str(tmp_path / "o"), "--no-pictures",
+            *sum((["--set", s] for s in bad), [])]
+    assert cli.main(args) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "every sample of the study failed (2 of 2)" in err
+    assert "substructures.c.damping: must be >= 0" in err
+    assert not (tmp_path / "o").exists() or not any((tmp_path / "o").iterdir())
+
+
 # ----------------------------------------------------------------- the shipped study
 
 

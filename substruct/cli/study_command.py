@@ -82,7 +82,9 @@ def backend_options(args: argparse.Namespace) -> Any:
 
 def study_command(args: argparse.Namespace) -> int:
     """Run the study of ``args.case``; return the exit code (0, also when samples failed:
-    they are recorded in the file and listed in the summary)."""
+    they are recorded in the file and listed in the summary; when every sample failed the
+    study has no result: :class:`~substruct.analysis.errors.CheckError`, exit 1, nothing
+    written)."""
     from substruct.case.loader import load_case
     from substruct.io.file_set import OutputDir
     from substruct.studies.study_run import study_of
@@ -126,6 +128,13 @@ def _study_locked(args: argparse.Namespace, case: Any, backend: Any, out: Path, 
         parts.close()
         samples.close()
     seconds = time.perf_counter() - start
+    if result.failed and len(result.failed) == len(result.errors):
+        from substruct.analysis.errors import CheckError
+
+        first = result.failed[0]
+        raise CheckError(f"every sample of the study failed ({len(result.failed)} of "
+                         f"{len(result.errors)}), nothing written; sample {first}: "
+                         f"{result.errors[first]}")
     staging = held.stage(f"{case.name}_study")
     pictures = []
     tuning = _den_hartog(case)

@@ -73,6 +73,7 @@ from substruct.analysis.transient.record import (
     Recorder,
     constraint_force_solver,
     require_energy_balance,
+    roundoff_energy,
 )
 from substruct.analysis.transient.options import (
     InitialConditions,
@@ -359,9 +360,10 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
         rec = (modal_run(phys, s, dt, n_steps, d0, v0, opts, store) if form == "modal" else
                direct_run(phys, form, s, dt, n_steps, d0, v0, a0, opts, store))
         require_energy_balance(opts.what, form, np.asarray(rec.energy).reshape(-1, 4), s,
-                               tolerance)
+                               tolerance, floor)
         return rec
 
+    floor = roundoff_energy(Ks, Ms, Bs, f, dt)
     steps = field_steps(n_steps, opts.every, opts.field_every)
     main = run(method, FieldStore(n, steps, dt, outputs.fields) if steps.size else None)
     agreement = {m: _difference(run(m), main) for m in check_methods(method, opts.checks)}
