@@ -1,7 +1,7 @@
 """AMLS for thousands of modes of a plate-like solid of millions of coordinates, alone.
 
     OMP_NUM_THREADS=1 python benchmarks/amls_slab.py [--size 2000000] [--modes 2000]
-        [--omega-guess 3e5] [--cutoff 1.6] [--leaf-size 1000]
+        [--omega-guess 3e5] [--cutoff 1.6] [--leaf-size 1000] [--workers N] [--reduce-only]
 
 The model: a steel slab ``2 x 1 x 0.05`` m of Q1 hexahedra, two through the thickness, clamped
 on its edge ``x = 0`` (:func:`substruct.models.solid.solid_box`); ``--size`` coordinates about.
@@ -17,6 +17,12 @@ count below the guess shows that the wanted modes are all there, and the effecti
 against the last wanted frequency is printed.  Peak memory: ``VmHWM`` (with the pages of the
 mode file mapped while they are written and read) and the largest anonymous memory sampled
 every second (``RssAnon``: what the process itself holds).
+
+``--workers N``: the blocks of the reduction and the subdomains' expansions run as tasks on a
+Dask LocalCluster of N worker processes (``substruct run --workers N``), one thread each.
+``--reduce-only``: the dissection and the reduction alone (their wall seconds and the reduced
+size); run once with ``--workers 0`` and once with ``--workers 2`` for the parallel speed-up
+of the reduction (the peak memory is then the command's process only, not the workers').
 """
 
 from __future__ import annotations
@@ -68,7 +74,21 @@ def main(argv: list[str] | None = None) -> None:
                    help="rad/s, above the wanted modes' highest frequency")
     p.add_argument("--cutoff", type=float, default=1.6)
     p.add_argument("--leaf-size", type=int, default=1000)
+    p.add_argument("--workers", type=int, default=0,
+                   help="Dask LocalCluster worker processes for the tasks (0: this process)")
+    p.add_argument("--reduce-only", action="store_true",
+                   help="stop after the reduction (its time against --workers)")
     args = p.parse_args(argv)
+    if args.workers:
+        from substruct.studies.study_backend import Backend, Session
+        with Session(Backend(workers=args.workers)) as session:
+            run(args, session)
+    else:
+        run(args, None)
+
+
+def run(args: argparse.Namespace, tasks: object) -> None:
+    """The measurement of ``main`` (``tasks``: the Dask session, or ``None``)."""
     from substruct.linalg.amls import (AUTO, SHIFT_FRACTION, expand_modes, reduced_eigenpairs,
                                        relative_residuals)
     from substruct.linalg.amls_reduce import amls_reduce
@@ -92,10 +112,18 @@ def main(argv: list[str] | None = None) -> None:
     times["tree"] = time.perf_counter() - t0
     lam_w = args.omega_guess ** 2
     t = time.perf_counter()
-    red = amls_reduce(K, M, tree, (args.cutoff * args.omega_guess) ** 2, AUTO, say, None,
+    red = amls_reduce(K, M, tree, (args.cutoff * args.omega_guess) ** 2, AUTO, say, tasks,
                       SHIFT_FRACTION * lam_w)
     times["reduce"] = time.perf_counter() - t
     n_reduced = red.size
+    if args.reduce_only:
+        out = {"n": K.shape[0], "workers": args.workers, "n_reduced": n_reduced,
+               "times": times, "vmhwm_mb": _status("VmHWM") // 2**20,
+               "anonymous_peak_mb": anon.mb}
+        print(json.dumps(out))
+        print(f"{out['n']} coordinates, reduced size {n_reduced}, workers {args.workers}: "
+              f"tree {times['tree']:.1f} s, reduction {times['reduce']:.1f} s wall")
+        return
     t = time.perf_counter()
     lam, Y = reduced_eigenpairs(red, lam_w)
     times["reduced"] = time.perf_counter() - t
@@ -106,7 +134,7 @@ def main(argv: list[str] | None = None) -> None:
     lam, Y = lam[:args.modes], Y[:, :args.modes]
     say(f"reduced eigenpairs: {below} below the guess, the lowest {args.modes} kept")
     t = time.perf_counter()
-    U = expand_modes(red, Y, None, ScratchArrays("substruct-modes-"))
+    U = expand_modes(red, Y, tasks, ScratchArrays("substruct-modes-"))
     times["expand"] = time.perf_counter() - t
     del red, Y
     t = time.perf_counter()

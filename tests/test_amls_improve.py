@@ -137,6 +137,43 @@ def test_shifted_blocked_iteration_equals_the_whole_array_form(pencil, iteration
     assert np.allclose(V.T @ (M @ V), np.eye(got.size), atol=1e-10)
 
 
+@pytest.mark.parametrize("iterations", [1, 3])
+def test_iteration_from_a_column_file_equals_the_array_form(pencil, iterations, tmp_path):
+    """The Ritz vectors in a :class:`ColumnFile` (read and written by blocks of columns: the
+    projections block by block, the Cholesky QR's triangular rotation in place from the last
+    block, the Ritz rotation by blocks of the result) against the same vectors in memory,
+    three column blocks, the last partial: the projections to round-off of the products,
+    the same Ritz values (1e-10, the projected eigenproblem's round-off from random vectors;
+    measured 5e-12 with three steps, 0 with one) and the same vectors (up to sign, 1e-8, on
+    simple eigenvalues)."""
+    from substruct.linalg.column_file import ColumnFile
+
+    K, M, lam = pencil
+    n, p = K.shape[0], 2 * SOLVE_COLUMNS + 40
+    U0 = np.random.default_rng(3).standard_normal((n, p))
+    W = ColumnFile(str(tmp_path / "w"), (n, p))
+    for j in range(0, p, 100):                       # written in blocks of another width
+        W.write(j, U0[:, j:j + 100])
+    full = U0.T @ (K @ U0)
+    assert np.abs(projection(K, W) - full).max() < 1e-12 * np.abs(full).max()
+    sigma = -1e-3 * lam[0]
+    solve = factorizer("auto")(sp.csc_array(K - sigma * M))
+    lam_max, lam_u = 0.5 * (lam[59] + lam[60]), lam[200]
+    mem, U = subspace_iteration(K, M, U0.copy(), solve, iterations, lam_max, sigma=sigma,
+                                lam_unwanted=lam_u)
+    got, V = subspace_iteration(K, M, W, solve, iterations, lam_max, sigma=sigma,
+                                lam_unwanted=lam_u)
+    assert got.size == mem.size > 40
+    assert np.allclose(got, mem, rtol=1e-10, atol=0)
+    simple = np.ones(got.size, dtype=bool)
+    close = np.isclose(got[1:], got[:-1], rtol=1e-6)
+    simple[1:] &= ~close
+    simple[:-1] &= ~close
+    dots = np.abs(np.einsum("ij,ij->j", V, M @ U))[simple]
+    assert simple.sum() > 20 and np.allclose(dots, 1.0, atol=1e-8)
+    W.close()
+
+
 def test_chebyshev_steps_improve_the_amls_ritz_values(pencil):
     """On AMLS's own Ritz vectors (cut-off 2, those up to 1.2 x the wanted frequency), two
     Chebyshev-shifted steps on [0, 1/(lam_u - sigma)], lam_u between the Ritz bound and the
@@ -234,6 +271,32 @@ def test_constraint_modes_kept_on_disk_give_the_same_modes(pencil, monkeypatch, 
         tempfile.tempdir = None
     assert np.array_equal(memory.lam, disk.lam) and np.array_equal(memory.U, disk.U)
     assert not list(tmp_path.iterdir())
+
+
+def test_ritz_vectors_iterated_from_a_file_give_the_same_modes(pencil, monkeypatch, tmp_path):
+    """The Ritz vectors of the subspace iteration written to a column file (``RITZ_ON_DISK``
+    0; from 64 MB on, so that the iteration holds the factorization and a few blocks, not
+    the ``n x p`` vectors beside it): the same modes as from memory (eigenvalues to 1e-12,
+    one span, the same residuals), the file removed when the modes are made."""
+    import substruct.linalg.amls as amls_module
+
+    K, M, lam = pencil
+    w = float(np.sqrt(0.5 * (lam[39] + lam[40])))
+    memory = amls_modes(K, M, w, cutoff=3.0, leaf_size=60, iterations=2, ritz_ratio=1.5)
+    monkeypatch.setattr(amls_module, "RITZ_ON_DISK", 0)
+    monkeypatch.setenv("TMPDIR", str(tmp_path))
+    tempfile.tempdir = None
+    try:
+        disk = amls_modes(K, M, w, cutoff=3.0, leaf_size=60, iterations=2, ritz_ratio=1.5)
+        assert not isinstance(disk.U, np.memmap) and disk.lam.size == memory.lam.size > 30
+        assert np.allclose(memory.lam, disk.lam, rtol=1e-12, atol=0)
+        overlap = np.linalg.svd(disk.U.T @ (M @ memory.U), compute_uv=False)
+        assert np.abs(overlap - 1).max() < 1e-10
+        assert np.allclose(memory.residual, disk.residual, rtol=1e-6, atol=1e-14)
+        gc.collect()
+        assert all(not list(d.iterdir()) for d in tmp_path.iterdir())
+    finally:
+        tempfile.tempdir = None
 
 
 @pytest.mark.parametrize("iterations", [0, 2])

@@ -45,10 +45,12 @@ import scipy.sparse.linalg as spla
 
 from substruct.linalg.amls_improve import (
     SOLVE_COLUMNS,
+    Vectors,
     chebyshev_shifts,
     filter_steps,
     ritz_pairs,
 )
+from substruct.linalg.column_file import ColumnFile
 from substruct.linalg.amls_reduce import ReducedModel, amls_reduce
 from substruct.linalg.amls_tree import DissectionNode, dissection_tree
 from substruct.linalg.definite import definite_factorization
@@ -58,8 +60,8 @@ from substruct.linalg.scratch_arrays import ScratchArrays
 from substruct.linalg.task_runner import TaskRunner
 from substruct.machine import available_memory
 
-__all__ = ["AMLSModes", "amls_modes", "expand_modes", "reduced_eigenpairs",
-           "relative_residuals"]
+__all__ = ["AMLSModes", "RITZ_ON_DISK", "amls_modes", "expand_modes", "iterated_vectors",
+           "reduced_eigenpairs", "relative_residuals"]
 
 #: The shift of the subspace iteration and of the blocks with no boundary, as a fraction of
 #: the wanted eigenvalue :math:`\omega_{max}^2` (negative: ``K - sigma M`` is positive
@@ -217,6 +219,29 @@ the rounding of the dense products over blocks of other widths)."""
     return U
 
 
+#: Ritz vectors of this many bytes or more are iterated from a file
+#: (:class:`~substruct.linalg.column_file.ColumnFile`), not from memory: the subspace
+#: iteration then holds the full factorization and a few blocks of columns, not the ``n x p``
+#: vectors beside it (2.4 GB of 1,012 vectors of 297,714 coordinates, as much as the
+#: Lanczos basis of the same 500 modes).
+RITZ_ON_DISK = 64 * 2**20
+
+
+def iterated_vectors(U: np.ndarray, scratch: ScratchArrays) -> Vectors:
+    """The Ritz vectors ``U`` as the subspace iteration takes them: the file of mode shapes
+    already on disk (a memory map of :func:`expand_modes`), a new column file of ``scratch``
+    (written a block of columns at a time) when of :data:`RITZ_ON_DISK` bytes or more, else
+    ``U`` itself.  The caller drops ``U`` then."""
+    if isinstance(U, np.memmap):
+        return ColumnFile.of(U)
+    if U.nbytes < RITZ_ON_DISK:
+        return U
+    W = scratch.columns(U.shape)
+    for j in range(0, U.shape[1], SOLVE_COLUMNS):
+        W.write(j, U[:, j:j + SOLVE_COLUMNS])
+    return W
+
+
 def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_max: float,
                cutoff: float = 5.0, leaf_size: int = 1000, iterations: int = 0,
                ritz_ratio: float = 1.5, progress: Callable[[str], None] | None = None,
@@ -281,13 +306,19 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
     del red, Y   # the blocks' modes and constraint modes: not held through the iteration
     t = time.perf_counter()
     if iterations and U.shape[1]:
+        huge = isinstance(U, np.memmap)
+        W = iterated_vectors(U, scratch)
+        del U        # on disk now, or W itself
         sigma = SHIFT_FRACTION * lam_w
         solve = definite_factorization(factorizer(AUTO), sp.csc_array(K - sigma * M))
-        filter_steps(M, U, solve, chebyshev_shifts(iterations, sigma, np.sqrt(bound * lam_c)),
+        filter_steps(M, W, solve, chebyshev_shifts(iterations, sigma, np.sqrt(bound * lam_c)),
                      say)
         del solve    # freed before the n x k modes are made: the peak is one of the two
-        lam, U = ritz_pairs(K, M, U, lam_w,
-                            scratch.empty if isinstance(U, np.memmap) else np.empty)
+        lam, U = ritz_pairs(K, M, W, lam_w, scratch.empty if huge else np.empty)
+        if isinstance(W, ColumnFile):
+            W.close()
+            scratch.discard(W)
+        del W
     times["improve"] = time.perf_counter() - t
     found = int(np.searchsorted(lam, lam_w, side="right"))   # lam ascending
     lam, U = lam[:found], U[:, :found]

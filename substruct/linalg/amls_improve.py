@@ -16,6 +16,12 @@ span matters, so an intermediate step makes :math:`W` ``M``-orthonormal by a Cho
 eigensolve or rotation); the Rayleigh-Ritz is done once, after the last step, for the
 eigenpairs up to the wanted one only.
 
+The vectors may be a :class:`~substruct.linalg.column_file.ColumnFile` instead of an array:
+then every pass reads and writes them a block of columns at a time (the projections block
+``(i, j)`` by block, the rotations by blocks of the result's columns), and the memory holds a
+few ``n x SOLVE_COLUMNS`` blocks, not the ``n x p`` vectors.  The same arithmetic up to the
+order of the sums of the rotations.
+
 **Chebyshev shifts.**  ``k`` plain steps apply :math:`A^k`, :math:`A = (K - \sigma M)^{-1}
 M`, which damps an unwanted component of eigenvalue :math:`\theta = 1/(\lambda - \sigma)`
 against the wanted mode ``j`` by :math:`(\theta/\theta_j)^k`.  Given an interval
@@ -52,10 +58,14 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
+from substruct.linalg.column_file import ColumnFile
 from substruct.linalg.factorize import Solve
 
-__all__ = ["SOLVE_COLUMNS", "ROWS", "chebyshev_shifts", "filter_steps", "projection",
-           "ritz_pairs", "subspace_iteration"]
+__all__ = ["SOLVE_COLUMNS", "ROWS", "Vectors", "chebyshev_shifts", "columns", "filter_steps",
+           "projection", "ritz_pairs", "subspace_iteration"]
+
+#: ``n x p`` vectors: in memory, or in a file read and written by blocks of columns.
+Vectors = np.ndarray | ColumnFile
 
 #: Columns of an ``n x p`` block of vectors handled at once (solves, sparse products,
 #: residuals): the temporaries are ``n x SOLVE_COLUMNS``, not ``n x p``.
@@ -65,16 +75,36 @@ SOLVE_COLUMNS = 128
 ROWS = 4096
 
 
-def projection(A: sp.csr_array, W: np.ndarray) -> np.ndarray:
+def columns(W: Vectors, a: int, b: int) -> np.ndarray:
+    """Columns ``a:b`` of ``W`` as a new C-ordered array (the same layout from either kind)."""
+    block = W.read(a, min(b, W.shape[1])) if isinstance(W, ColumnFile) else W[:, a:b]
+    return np.ascontiguousarray(block)
+
+
+def _put(W: Vectors, a: int, block: np.ndarray) -> None:
+    if isinstance(W, ColumnFile):
+        W.write(a, block)
+    else:
+        W[:, a:a + block.shape[1]] = block
+
+
+def projection(A: sp.csr_array, W: Vectors) -> np.ndarray:
     r""":math:`W^T A W` for a symmetric sparse ``A``, summed by blocks of ``SOLVE_COLUMNS`` columns
     over the upper triangle (block ``j``: :math:`W_{:, :j+c}^T (A W_{:, j:j+c})`), then
-    mirrored: half the dense products of ``W.T @ (A @ W)`` and an ``n x SOLVE_COLUMNS`` temporary."""
+    mirrored: half the dense products of ``W.T @ (A @ W)`` and an ``n x SOLVE_COLUMNS`` temporary
+    (from a file: the products of block ``i <= j`` one at a time, each block read again)."""
     p = W.shape[1]
     out = np.empty((p, p))
     for j in range(0, p, SOLVE_COLUMNS):
         e = min(j + SOLVE_COLUMNS, p)
-        AW = A @ np.ascontiguousarray(W[:, j:e])
-        out[:e, j:e] = W[:, :e].T @ AW
+        Wj = columns(W, j, e)
+        AW = A @ Wj
+        if isinstance(W, ColumnFile):
+            for i in range(0, j, SOLVE_COLUMNS):
+                out[i:i + SOLVE_COLUMNS, j:e] = columns(W, i, i + SOLVE_COLUMNS).T @ AW
+            out[j:e, j:e] = Wj.T @ AW
+        else:
+            out[:e, j:e] = W[:, :e].T @ AW
     upper = np.triu(out)
     return upper + np.triu(upper, 1).T
 
@@ -85,13 +115,32 @@ def _rotate(W: np.ndarray, R: np.ndarray, out: np.ndarray) -> None:
         out[i:i + ROWS] = W[i:i + ROWS] @ R
 
 
-def _orthonormalize(M: sp.csr_array, W: np.ndarray) -> None:
+def _rotate_columns(W: ColumnFile, R: np.ndarray, out: Vectors, upper: bool = False) -> None:
+    """``out = W @ R`` by blocks of ``out``'s columns, each the sum of the products of ``W``'s
+    blocks; with ``upper`` (``R`` upper triangular, ``out`` may be ``W``) only the blocks at
+    or above the diagonal, the last block first, so that each is written after every block it
+    needs was read."""
+    p, k = R.shape
+    starts = range(0, k, SOLVE_COLUMNS)
+    for j in reversed(starts) if upper else starts:
+        e = min(j + SOLVE_COLUMNS, k)
+        acc = np.zeros((W.shape[0], e - j))
+        for i in range(0, e if upper else p, SOLVE_COLUMNS):
+            acc += columns(W, i, i + SOLVE_COLUMNS) @ R[i:i + SOLVE_COLUMNS, j:e]
+        _put(out, j, acc)
+
+
+def _orthonormalize(M: sp.csr_array, W: Vectors) -> None:
     r"""``W`` made ``M``-orthonormal in place, same span: Cholesky QR of the column-scaled
     ``W`` (:math:`G = W^T M W = R^T R`, :math:`W \leftarrow W R^{-1}`)."""
     G = projection(M, W)
     s = 1.0 / np.sqrt(np.diag(G))
     R = sla.cholesky(G * s[:, None] * s[None, :])
-    _rotate(W, s[:, None] * sla.solve_triangular(R, np.eye(R.shape[0])), W)
+    T = s[:, None] * sla.solve_triangular(R, np.eye(R.shape[0]))
+    if isinstance(W, ColumnFile):
+        _rotate_columns(W, T, W, upper=True)
+    else:
+        _rotate(W, T, W)
 
 
 def chebyshev_shifts(iterations: int, sigma: float, lam_unwanted: float | None
@@ -108,7 +157,7 @@ def chebyshev_shifts(iterations: int, sigma: float, lam_unwanted: float | None
     return 0.5 * a * (1.0 + np.cos((2 * i - 1) * np.pi / (2 * iterations)))
 
 
-def filter_steps(M: sp.csr_array, W: np.ndarray, solve: Solve, shifts: np.ndarray,
+def filter_steps(M: sp.csr_array, W: Vectors, solve: Solve, shifts: np.ndarray,
                  say: Callable[[str], None] | None = None) -> None:
     r"""The steps of the subspace iteration on the ``n x p`` vectors ``W``, in place: step
     ``i`` is :math:`W \leftarrow (K - \sigma M)^{-1} M W - x_i W` (``solve``:
@@ -119,16 +168,16 @@ def filter_steps(M: sp.csr_array, W: np.ndarray, solve: Solve, shifts: np.ndarra
         if it:
             _orthonormalize(M, W)
         for j in range(0, p, SOLVE_COLUMNS):
-            Wj = np.ascontiguousarray(W[:, j:j + SOLVE_COLUMNS])
+            Wj = columns(W, j, j + SOLVE_COLUMNS)
             Y = np.asarray(solve(M @ Wj)).reshape(Wj.shape)
             if x:
                 Y -= x * Wj
-            W[:, j:j + SOLVE_COLUMNS] = Y
+            _put(W, j, Y)
         if say is not None:
             say(f"AMLS subspace iteration {it + 1}: {p} vectors")
 
 
-def subspace_iteration(K: sp.csr_array, M: sp.csr_array, U: np.ndarray, solve: Solve,
+def subspace_iteration(K: sp.csr_array, M: sp.csr_array, U: Vectors, solve: Solve,
                        iterations: int, lam_max: float,
                        say: Callable[[str], None] | None = None,
                        sigma: float = 0.0, lam_unwanted: float | None = None
@@ -143,7 +192,7 @@ def subspace_iteration(K: sp.csr_array, M: sp.csr_array, U: np.ndarray, solve: S
     return ritz_pairs(K, M, U, lam_max)
 
 
-def ritz_pairs(K: sp.csr_array, M: sp.csr_array, W: np.ndarray, lam_max: float,
+def ritz_pairs(K: sp.csr_array, M: sp.csr_array, W: Vectors, lam_max: float,
                allocate: Callable[[tuple[int, int]], np.ndarray] = np.empty
                ) -> tuple[np.ndarray, np.ndarray]:
     r"""The Rayleigh-Ritz eigenpairs of ``(K, M)`` on the span of ``W`` with
@@ -157,5 +206,8 @@ def ritz_pairs(K: sp.csr_array, M: sp.csr_array, W: np.ndarray, lam_max: float,
                         Mp * s[:, None] * s[None, :], overwrite_a=True, overwrite_b=True,
                         subset_by_value=(-np.inf, lam_max), driver="gvx")
     out = allocate((n, lam.size))
-    _rotate(W, s[:, None] * rot, out)
+    if isinstance(W, ColumnFile):
+        _rotate_columns(W, s[:, None] * rot, out)
+    else:
+        _rotate(W, s[:, None] * rot, out)
     return lam, out

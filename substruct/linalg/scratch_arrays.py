@@ -8,7 +8,9 @@ Used for what a multilevel reduction must keep but reads once
 (:mod:`substruct.linalg.amls_reduce`: the separators' constraint modes, 13 GB at 10^6
 coordinates of a solid, and the condensations waiting for their parents), and for mode shapes
 larger than the memory (:func:`substruct.linalg.amls.amls_modes`: 2,000 modes of 2 x 10^6
-coordinates are 32 GB), written a block of columns at a time (:meth:`ScratchArrays.empty`).
+coordinates are 32 GB), written a block of columns at a time (:meth:`ScratchArrays.empty`),
+and for the Ritz vectors of the subspace iteration, read and written by blocks of columns
+without a map (:meth:`ScratchArrays.columns`).
 A map outlives its directory: the file stays on disk, nameless, until the map is collected.  The directory is
 made in the system's temporary directory (``TMPDIR``).
 """
@@ -21,6 +23,8 @@ import tempfile
 import weakref
 
 import numpy as np
+
+from substruct.linalg.column_file import ColumnFile
 
 __all__ = ["ScratchArrays"]
 
@@ -57,9 +61,15 @@ class ScratchArrays:
         return np.lib.format.open_memmap(name, mode="w+", dtype=np.float64, shape=shape,
                                          fortran_order=True)
 
-    def discard(self, array: np.ndarray) -> None:
-        """Remove the file behind ``array`` (a map from :meth:`keep`; anything else is left
-        alone): its pages stay readable until the map is collected."""
+    def columns(self, shape: tuple[int, int]) -> ColumnFile:
+        """A new ``n x p`` :class:`~substruct.linalg.column_file.ColumnFile` (zeros) in a file
+        of the directory."""
+        return ColumnFile(self._new_name(), shape)
+
+    def discard(self, array: np.ndarray | ColumnFile) -> None:
+        """Remove the file behind ``array`` (a map from :meth:`keep` or :meth:`empty`, a
+        :meth:`columns` file; anything else is left alone): a map's pages stay readable until
+        it is collected."""
         name = getattr(array, "filename", None)
         if self.path is not None and name and os.path.dirname(name) == self.path:
             os.remove(name)
