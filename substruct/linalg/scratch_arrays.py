@@ -26,7 +26,17 @@ import numpy as np
 
 from substruct.linalg.column_file import ColumnFile
 
-__all__ = ["ScratchArrays"]
+__all__ = ["ScratchArrays", "read_whole"]
+
+
+def read_whole(array: np.ndarray) -> np.ndarray:
+    """``array`` itself, or, for a memory map of a ``.npy`` file (:meth:`ScratchArrays.keep`),
+    its values read from the file into a new array: a map's pages, once touched, stay in the
+    process (counted in its resident memory) until the map is collected, while a read's pages
+    are the operating system's cache, and the new array goes when its user drops it."""
+    if isinstance(array, np.memmap) and array.filename is not None:
+        return np.load(array.filename, allow_pickle=False)
+    return array
 
 
 class ScratchArrays:
