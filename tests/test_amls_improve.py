@@ -151,9 +151,14 @@ def test_iteration_from_a_column_file_equals_the_array_form(pencil, iterations, 
     K, M, lam = pencil
     n, p = K.shape[0], 2 * SOLVE_COLUMNS + 40
     U0 = np.random.default_rng(3).standard_normal((n, p))
-    W = ColumnFile(str(tmp_path / "w"), (n, p))
-    for j in range(0, p, 100):                       # written in blocks of another width
-        W.write(j, U0[:, j:j + 100])
+    W = ColumnFile(str(tmp_path / "w"), (n, p), SOLVE_COLUMNS)
+    for j in range(0, p, SOLVE_COLUMNS):
+        W.write(j, U0[:, j:j + SOLVE_COLUMNS])
+    assert np.array_equal(W.read(2 * SOLVE_COLUMNS), U0[:, 2 * SOLVE_COLUMNS:])
+    with pytest.raises(IndexError, match="no block of 128 columns starts at column 5"):
+        W.read(5)
+    with pytest.raises(ValueError, match="shape"):
+        W.write(0, U0[:, :5])
     full = U0.T @ (K @ U0)
     assert np.abs(projection(K, W) - full).max() < 1e-12 * np.abs(full).max()
     sigma = -1e-3 * lam[0]

@@ -228,17 +228,17 @@ RITZ_ON_DISK = 64 * 2**20
 
 
 def iterated_vectors(U: np.ndarray, scratch: ScratchArrays) -> Vectors:
-    """The Ritz vectors ``U`` as the subspace iteration takes them: the file of mode shapes
-    already on disk (a memory map of :func:`expand_modes`), a new column file of ``scratch``
-    (written a block of columns at a time) when of :data:`RITZ_ON_DISK` bytes or more, else
-    ``U`` itself.  The caller drops ``U`` then."""
-    if isinstance(U, np.memmap):
-        return ColumnFile.of(U)
-    if U.nbytes < RITZ_ON_DISK:
+    """The Ritz vectors ``U`` as the subspace iteration takes them: ``U`` itself when of less
+    than :data:`RITZ_ON_DISK` bytes and in memory, else a new column file of ``scratch``
+    (blocks of ``SOLVE_COLUMNS`` columns) written a block at a time, the file of ``U`` (mode
+    shapes larger than the memory, :func:`expand_modes`) removed then.  The caller drops ``U``
+    then."""
+    if U.nbytes < RITZ_ON_DISK and not isinstance(U, np.memmap):
         return U
-    W = scratch.columns(U.shape)
+    W = scratch.columns(U.shape, SOLVE_COLUMNS)
     for j in range(0, U.shape[1], SOLVE_COLUMNS):
         W.write(j, U[:, j:j + SOLVE_COLUMNS])
+    scratch.discard(U)
     return W
 
 

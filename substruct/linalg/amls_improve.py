@@ -16,8 +16,9 @@ span matters, so an intermediate step makes :math:`W` ``M``-orthonormal by a Cho
 eigensolve or rotation); the Rayleigh-Ritz is done once, after the last step, for the
 eigenpairs up to the wanted one only.
 
-The vectors may be a :class:`~substruct.linalg.column_file.ColumnFile` instead of an array:
-then every pass reads and writes them a block of columns at a time (the projections block
+The vectors may be a :class:`~substruct.linalg.column_file.ColumnFile` (blocks of
+``SOLVE_COLUMNS`` columns) instead of an array: then every pass reads and writes them a block
+of columns at a time (the projections block
 ``(i, j)`` by block, the rotations by blocks of the result's columns), and the memory holds a
 few ``n x SOLVE_COLUMNS`` blocks, not the ``n x p`` vectors.  The same arithmetic up to the
 order of the sums of the rotations.
@@ -76,9 +77,11 @@ ROWS = 4096
 
 
 def columns(W: Vectors, a: int, b: int) -> np.ndarray:
-    """Columns ``a:b`` of ``W`` as a new C-ordered array (the same layout from either kind)."""
-    block = W.read(a, min(b, W.shape[1])) if isinstance(W, ColumnFile) else W[:, a:b]
-    return np.ascontiguousarray(block)
+    """Columns ``a:b`` of ``W`` (from a file: ``a`` a block's first column, ``b`` its end) as
+    a C-ordered array (a new one, or, from memory, a copy)."""
+    if isinstance(W, ColumnFile):
+        return W.read(a)
+    return np.ascontiguousarray(W[:, a:b])
 
 
 def _put(W: Vectors, a: int, block: np.ndarray) -> None:

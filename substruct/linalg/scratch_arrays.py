@@ -71,10 +71,10 @@ class ScratchArrays:
         return np.lib.format.open_memmap(name, mode="w+", dtype=np.float64, shape=shape,
                                          fortran_order=True)
 
-    def columns(self, shape: tuple[int, int]) -> ColumnFile:
-        """A new ``n x p`` :class:`~substruct.linalg.column_file.ColumnFile` (zeros) in a file
-        of the directory."""
-        return ColumnFile(self._new_name(), shape)
+    def columns(self, shape: tuple[int, int], width: int) -> ColumnFile:
+        """A new ``n x p`` :class:`~substruct.linalg.column_file.ColumnFile` of blocks of
+        ``width`` columns (zeros) in a file of the directory."""
+        return ColumnFile(self._new_name(), shape, width)
 
     def discard(self, array: np.ndarray | ColumnFile) -> None:
         """Remove the file behind ``array`` (a map from :meth:`keep` or :meth:`empty`, a
