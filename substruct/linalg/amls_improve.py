@@ -18,10 +18,9 @@ eigenpairs up to the wanted one only.
 
 The vectors may be a :class:`~substruct.linalg.column_file.ColumnFile` (blocks of
 ``SOLVE_COLUMNS`` columns) instead of an array: then every pass reads and writes them a block
-of columns at a time (the projections block
-``(i, j)`` by block, the rotations by blocks of the result's columns), and the memory holds a
-few ``n x SOLVE_COLUMNS`` blocks, not the ``n x p`` vectors.  The same arithmetic up to the
-order of the sums of the rotations.
+of columns at a time (the projections block ``(i, j)`` by block, the rotations by blocks of
+the result's columns), and the memory holds a few ``n x SOLVE_COLUMNS`` blocks, not the
+``n x p`` vectors.  The same arithmetic up to the order of the sums of the rotations.
 
 **Chebyshev shifts.**  ``k`` plain steps apply :math:`A^k`, :math:`A = (K - \sigma M)^{-1}
 M`, which damps an unwanted component of eigenvalue :math:`\theta = 1/(\lambda - \sigma)`
@@ -77,9 +76,12 @@ ROWS = 4096
 
 
 def columns(W: Vectors, a: int, b: int) -> np.ndarray:
-    """Columns ``a:b`` of ``W`` (from a file: ``a`` a block's first column, ``b`` its end) as
-    a C-ordered array (a new one, or, from memory, a copy)."""
+    """A new C-ordered array of the columns ``a:b`` of ``W`` (of a file: ``a`` the first column
+    of one of its blocks, which must be ``SOLVE_COLUMNS`` wide, and ``b`` that block's end)."""
     if isinstance(W, ColumnFile):
+        if W.width != SOLVE_COLUMNS:
+            raise ValueError(f"a column file of blocks of {SOLVE_COLUMNS} columns is needed, "
+                             f"got {W.width}")
         return W.read(a)
     return np.ascontiguousarray(W[:, a:b])
 
