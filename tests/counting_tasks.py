@@ -17,6 +17,8 @@ class Counting:
         return self.s.done(h)
     def completed(self, hs):
         return self.s.completed(hs)
+    def task_memory(self):
+        return self.s.task_memory()
     def counts(self):
         return [self.maps, self.submits, self.chained]
 """

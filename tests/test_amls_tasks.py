@@ -67,6 +67,65 @@ def test_dask_local_cluster_gives_the_same_bits(tmp_path):
     assert chained == separators + 2 * blocks - 1
 
 
+CAPPED = """
+import sys
+import numpy as np
+import scipy.sparse as sp
+from substruct.linalg.amls_reduce import amls_reduce
+from substruct.linalg.amls_tree import dissection_tree
+from substruct.linalg.task_runner import IN_PROCESS
+from substruct.models.solid import BoxGrid, solid_box
+from substruct.studies.study_backend import Backend, Session
+b = solid_box("b", BoxGrid((4.0, 1.0, 1.0), (16, 4, 4)), 2.1e11, 0.3, 7850.0,
+              fixed=[{"box": [[0, 0, 0], [0, 1, 1]]}])
+K, M = sp.csr_array(b.K), sp.csr_array(b.M)
+tree = dissection_tree(K, 100)
+blocks = len(tree.postorder())
+lam_cut = (3 * 3000.0) ** 2
+""" + COUNTING + """
+class Capped(Counting):
+    def __init__(self, s, cap):
+        super().__init__(s)
+        self.cap = cap
+    def task_memory(self):
+        return self.cap
+serial = amls_reduce(K, M, tree, lam_cut)
+for cap in 2.0 ** np.arange(10, 34):  # a worker's limit that keeps a few blocks here
+    here = amls_reduce(K, M, tree, lam_cut, tasks=Capped(IN_PROCESS, int(cap))).blocks_here
+    if 0 < here < blocks // 2:
+        break
+Y = np.random.default_rng(1).standard_normal((serial.size, 5))
+with Session(Backend(workers=2)) as s:
+    where = Capped(s, int(cap))
+    lines = []
+    dask = amls_reduce(K, M, tree, lam_cut, tasks=where, progress=lines.append)
+    X = dask.expand(Y, where)
+np.savez(sys.argv[1], lam_s=serial.lam, lam_d=dask.lam, X_s=serial.expand(Y), X_d=X,
+         M_diff=(serial.M != dask.M).nnz, here=dask.blocks_here, blocks=blocks,
+         calls=np.array(where.counts()), said=np.array(lines[:1]))
+"""
+
+
+def test_blocks_too_large_for_a_worker_are_reduced_here_with_the_same_bits(tmp_path):
+    """A worker's memory limit (here made small) below what a block's task would hold: that
+    block and every one above it are reduced in this process, the rest on the workers; the
+    reduced pencil and its expansion are the same bit for bit."""
+    out = tmp_path / "capped.npz"
+    done = subprocess.run([sys.executable, "-c", CAPPED, str(out)], capture_output=True,
+                          text=True, env=ENV, timeout=600)
+    assert done.returncode == 0, done.stderr[-3000:]
+    r = np.load(out)
+    here, blocks = int(r["here"]), int(r["blocks"])
+    assert 0 < here < blocks // 2
+    assert np.array_equal(r["lam_s"], r["lam_d"]) and int(r["M_diff"]) == 0
+    assert np.array_equal(r["X_s"], r["X_d"])
+    # only the blocks not reduced here were tasks (three submits each: the block, its kept
+    # part, its condensation; the root is among those reduced here)
+    maps, submits, chained = r["calls"]
+    assert submits == 3 * (blocks - here)
+    assert str(r["said"][0]).startswith(f"AMLS: {here} of {blocks} blocks would hold more")
+
+
 CASE = two_boxes_case("tied", """\
   modes: {count: 8, solver: SOLVER, tolerance: 0.05, amls: AMLS}
 """)

@@ -47,7 +47,7 @@ from substruct.linalg.lanczos import shift_invert_lanczos
 
 __all__ = ["DENSE_LEAF", "LeafJob", "SeparatorJob", "Condensation", "BlockModes",
            "LeafExpansion", "block_modes", "separator_condensation", "separator_pencil",
-           "reduce_leaf", "reduce_separator", "expand_leaf"]
+           "reduce_leaf", "reduce_separator", "expand_leaf", "task_bytes"]
 
 #: Subdomains up to this many coordinates get their fixed-interface modes by a dense ``eigh``;
 #: larger ones by shift-invert Lanczos on their sparse factorization.
@@ -118,6 +118,23 @@ class BlockModes:
     Psi: np.ndarray | None
     cross: list[np.ndarray]
     seconds: float = 0.0
+
+
+def task_bytes(own: int, boundary: int, children: Sequence[int], leaf: bool) -> int:
+    r"""The bytes a block's task holds at its peak, before LAPACK's workspaces and a
+    subdomain's sparse factor: for a separator with :math:`n_s` own coordinates, boundary
+    :math:`n_B` and children's boundaries :math:`n_{B_c}`, its dense local pencil, the
+    children's condensations, its own condensation and constraint-mode products,
+
+    .. math::  8\,\bigl(2 (n_s + n_B)^2 + 2 \textstyle\sum_c n_{B_c}^2 + 2 n_B^2
+               + 4 n_s n_B\bigr);
+
+    for a subdomain its dense coupling, constraint modes and their mass product and its
+    condensation, :math:`8 (3 n_s n_B + 2 n_B^2)`."""
+    if leaf:
+        return 8 * (3 * own * boundary + 2 * boundary ** 2)
+    return 8 * (2 * (own + boundary) ** 2 + 2 * sum(c * c for c in children)
+                + 2 * boundary ** 2 + 4 * own * boundary)
 
 
 def block_modes(Kb: np.ndarray | sp.sparray, Mb: np.ndarray | sp.sparray, lam_cut: float,

@@ -48,7 +48,12 @@ the numbering of the reduced coordinates is made here afterwards, so the reduced
 not depend on where the tasks ran.  The separators' constraint modes, the largest part of
 what is kept (:math:`\sum n_s n_B` entries) and used once by the expansion, are written to
 disk as they arrive when large (:data:`SPILL_BYTES`) and read back by the expansion; in this
-process so is a large condensation, until its parent has read it.
+process so is a large condensation, until its parent has read it.  On a cluster whose workers
+have a memory limit, a block whose task would hold more than :data:`LOCAL_FRACTION` of it
+(:func:`~substruct.linalg.amls_block.task_bytes`: the top separators of a large compact
+solid) is reduced in this process instead, with every block above it (:func:`reduced_here`),
+after the tasks are submitted: a worker would be stopped by its limit where this process,
+with the machine's memory, is not.
 """
 
 from __future__ import annotations
@@ -70,12 +75,13 @@ from substruct.linalg.amls_block import (
     expand_leaf,
     reduce_leaf,
     reduce_separator,
+    task_bytes,
 )
 from substruct.linalg.amls_tree import DissectionNode
 from substruct.linalg.scratch_arrays import ScratchArrays, read_whole
 from substruct.linalg.task_runner import IN_PROCESS, TaskRunner
 
-__all__ = ["ReducedModel", "SPILL_BYTES", "amls_reduce"]
+__all__ = ["ReducedModel", "SPILL_BYTES", "LOCAL_FRACTION", "amls_reduce", "reduced_here"]
 
 #: A separator's constraint modes (and, in this process, a condensation's stiffness or mass)
 #: from this many bytes up are kept on disk until the expansion (its parent) reads them (:class:`~substruct.linalg.scratch_arrays.ScratchArrays`): they sum
@@ -84,6 +90,12 @@ __all__ = ["ReducedModel", "SPILL_BYTES", "amls_reduce"]
 #: reduced model; the largest at 98,400 is 47 MB, so that a model of that size keeps every
 #: one in memory.
 SPILL_BYTES = 64 * 2**20
+
+#: On a cluster, a block whose task would hold more than this fraction of a worker's memory
+#: limit is reduced in this process (with every block above it), as it would be without the
+#: cluster: a LocalCluster's worker may use the machine's memory over the number of workers,
+#: and the largest separators of a 10^6-coordinate solid hold about 14 GB (docs/amls.md).
+LOCAL_FRACTION = 0.5
 
 #: The subdomains' expansions go to the tasks in batches whose inputs and results (their
 #: boundary's and their own rows of the expanded vectors) are about this many bytes: all at
@@ -118,6 +130,8 @@ class ReducedModel:
         factorization: the registry name the subdomains are factorized with.
         scratch: where the large constraint modes are kept on disk (:data:`SPILL_BYTES`),
             removed with the model.
+        blocks_here: how many blocks were too large for a worker of the cluster and were
+            reduced in this process (:func:`reduced_here`).
     """
 
     lam: np.ndarray
@@ -127,6 +141,7 @@ class ReducedModel:
     blocks: list[_Block] = field(repr=False)
     factorization: str = "auto"
     scratch: ScratchArrays | None = field(default=None, repr=False)
+    blocks_here: int = 0
 
     @property
     def size(self) -> int:
@@ -237,49 +252,91 @@ def amls_reduce(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, root: 
     scratch = ScratchArrays("substruct-amls-")
     up: dict[int, Any] = {}      # the condensation's handle of each block not yet used
     kept: dict[int, Any] = {}    # the kept part's handle of each block not yet brought here
+    limit = run.task_memory()
+    here = reduced_here(order, bounds, limit)
+    if any(here) and progress is not None:
+        progress(f"AMLS: {sum(here)} of {len(order)} blocks would hold more than "
+                 f"{LOCAL_FRACTION:g} of a worker's memory ({(limit or 0) / 2**30:.1f} GB): "
+                 f"reduced in this process")
+
+    def keep(i: int, value: BlockModes) -> None:
+        if value.Psi is not None and value.Psi.nbytes >= SPILL_BYTES:
+            value.Psi = scratch.keep(value.Psi)
+        results[i] = value
+        lev = order[i].level
+        left[lev] -= 1
+        if not left[lev] and progress is not None:
+            mine = levels[lev]
+            modes = sum(int(r.lam.size) for r in (results[j] for j in mine) if r is not None)
+            coords = sum(int(order[j].dofs.size) for j in mine)
+            spent = sum(r.seconds for r in (results[j] for j in mine) if r is not None)
+            progress(f"AMLS level {lev} ({depth - lev + 1} of {depth + 1}): {len(mine)} "
+                     f"block(s) of {coords} coordinates, {modes} modes kept "
+                     f"({spent:.1f} s)")
 
     def collect(positions: list[int]) -> None:
         for k, value in run.completed([kept[i] for i in positions]):
-            i = positions[k]
-            del kept[i]
-            if value.Psi is not None and value.Psi.nbytes >= SPILL_BYTES:
-                value.Psi = scratch.keep(value.Psi)
-            results[i] = value
-            lev = order[i].level
-            left[lev] -= 1
-            if not left[lev] and progress is not None:
-                here = levels[lev]
-                modes = sum(int(r.lam.size) for r in (results[j] for j in here) if r is not None)
-                coords = sum(int(order[j].dofs.size) for j in here)
-                spent = sum(r.seconds for r in (results[j] for j in here) if r is not None)
-                progress(f"AMLS level {lev} ({depth - lev + 1} of {depth + 1}): {len(here)} "
-                         f"block(s) of {coords} coordinates, {modes} modes kept "
-                         f"({spent:.1f} s)")
+            keep(positions[k], value)
+            del kept[positions[k]]
 
-    for i, b in enumerate(order):
+    def reduce(i: int, b: DissectionNode, where: TaskRunner) -> None:
         if b.is_leaf:
-            both = run.submit(reduce_leaf, _leaf_job(K, M, b.dofs, bounds[i], lam_cut,
-                                                     factorization, free_shift))
+            both = where.submit(reduce_leaf, _leaf_job(K, M, b.dofs, bounds[i], lam_cut,
+                                                       factorization, free_shift))
         else:
             kids = [index[id(c)] for c in b.children]
             job = _separator_job(K, M, b.dofs, bounds[i], lam_cut, [bounds[j] for j in kids],
                                  free_shift)
             inputs = [up.pop(j) for j in kids]
-            both = run.submit(reduce_separator, job, *inputs)
+            if where is not run:        # a task's condensation brought here
+                inputs = [c if here[j] else next(iter(run.completed([c])))[1]
+                          for j, c in zip(kids, inputs)]
+            both = where.submit(reduce_separator, job, *inputs)
             for c in inputs:            # in this process: read, no longer needed
                 if isinstance(c, Condensation):
                     scratch.discard(c.CK)
                     scratch.discard(c.CM)
             del inputs
-        kept[i] = run.submit(operator.getitem, both, 0)
+        if where is run:
+            kept[i] = run.submit(operator.getitem, both, 0)
+        else:
+            keep(i, both[0])
         if b is not root:
-            up[i] = _on_disk_if_large(run.submit(operator.getitem, both, 1), scratch)
+            up[i] = _on_disk_if_large(where.submit(operator.getitem, both, 1), scratch)
         del both
         collect([j for j in kept if run.done(kept[j])])
+
+    # the tasks first (none of them waits for a block reduced here), then the blocks too
+    # large for a worker, in post-order here, each as soon as its children are done
+    for i, b in enumerate(order):
+        if not here[i]:
+            reduce(i, b, run)
+    for i, b in enumerate(order):
+        if here[i]:
+            reduce(i, b, IN_PROCESS)
     collect(list(kept))
     red = _assemble(K, order, bounds, results, n, factorization)
     red.scratch = scratch
+    red.blocks_here = sum(here)
     return red
+
+
+def reduced_here(order: list[DissectionNode], bounds: list[np.ndarray], limit: int | None
+                 ) -> list[bool]:
+    """Which blocks (post-order) are reduced in this process instead of as tasks: those whose
+    task would hold more than :data:`LOCAL_FRACTION` of ``limit``, a worker's memory
+    (:func:`~substruct.linalg.amls_block.task_bytes`), and every ancestor of one, so that no
+    task waits for a block reduced here; none without a limit."""
+    if limit is None:
+        return [False] * len(order)
+    index = {id(b): i for i, b in enumerate(order)}
+    here: list[bool] = []
+    for i, b in enumerate(order):
+        kids = [index[id(c)] for c in b.children]
+        size = task_bytes(b.dofs.size, bounds[i].size, [bounds[j].size for j in kids],
+                          b.is_leaf)
+        here.append(size > LOCAL_FRACTION * limit or any(here[j] for j in kids))
+    return here
 
 
 def _on_disk_if_large(up: Any, scratch: ScratchArrays) -> Any:

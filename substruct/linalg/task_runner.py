@@ -1,5 +1,5 @@
 """Where independent tasks run: this process, or a cluster (a Dask session,
-:class:`substruct.studies.study_backend.Session`, has the same three methods).
+:class:`substruct.studies.study_backend.Session`, has the same methods).
 
 A task is a pure function of picklable data, so its result does not depend on where it ran.
 :meth:`TaskRunner.submit` returns a *handle* that later tasks take as an argument in place of
@@ -39,6 +39,11 @@ class TaskRunner(Protocol):
         the values are brought here and the handles no longer keep them elsewhere."""
         ...
 
+    def task_memory(self) -> int | None:
+        """The bytes one task may hold where it runs (the least memory limit of a cluster's
+        workers), or ``None``: no limit known (this process; workers without a limit)."""
+        ...
+
 
 class InProcess:
     """Every task in this process, at once: a handle is its value."""
@@ -54,6 +59,9 @@ class InProcess:
 
     def completed(self, handles: Sequence[Any], /) -> Iterator[tuple[int, Any]]:
         yield from enumerate(handles)
+
+    def task_memory(self) -> int | None:
+        return None
 
 
 #: The runner used when none is given.

@@ -326,6 +326,17 @@ class Session:
             for future, value in as_completed(handles, with_results=True):
                 yield where[future.key], value
 
+    def task_memory(self) -> int | None:
+        """The least memory limit of the cluster's workers in bytes (a LocalCluster's: the
+        machine's memory over the number of workers); ``None`` in-process, or when a worker
+        has no limit."""
+        if self.client is None:
+            return None
+        with self.contained():
+            workers = list(self.client.scheduler_info().get("workers", {}).values())
+        limits = [int(w.get("memory_limit") or 0) for w in workers]
+        return min(limits) if limits and all(limits) else None
+
     def parts(self, jobs: Sequence[PartJob], tick: Tick | None = None
               ) -> dict[str, Substructure]:
         """The shared reduced parts, each made once (one task each on Dask)."""
