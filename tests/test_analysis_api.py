@@ -84,17 +84,57 @@ def test_auto_is_sparse_above_the_limit_and_matches_the_closed_form():
     assert res.shapes.dtype == complex and res.eigenvalues.dtype == complex  # as dense
 
 
-def test_sparse_too_small_for_a_krylov_basis_falls_back_to_dense_and_says_so():
+def test_sparse_too_small_for_a_krylov_basis_solves_the_null_space_pencil_densely():
     n = 12  # 11 free coordinates: no Krylov basis for 10 modes
     M, C, K = chain(n)
     res = modes(M, C, K, fix_first(n), 10, method="kkt", solver="sparse")
-    assert res.solver == ("dense (sparse asked, but 11 free coordinates are too few for 10 "
-                          "modes and a Krylov basis)")
+    assert res.solver == ("sparse (11 coordinates left by the constraints: their pencil "
+                          "solved densely)")
+    assert res.method == "null-space/sparse"
     np.testing.assert_allclose(res.omega, chain_omega(n - 1, 10), rtol=1e-12)
+    assert max(res.agreement.values()) < 1e-10
+    # every formulation's own eigensolve asked for: the dense strategy, and it says so
+    full = modes(M, C, K, fix_first(n), 10, method="kkt", solver="sparse", full_checks=True)
+    assert full.solver == ("dense (sparse asked, but 11 free coordinates are too few for 10 "
+                           "modes and a Krylov basis)")
+    np.testing.assert_allclose(full.omega, chain_omega(n - 1, 10), rtol=1e-12)
     # with room for the basis the sparse strategy runs, with the same frequencies
     small = modes(M, C, K, fix_first(n), 3, method="kkt", solver="sparse")
     assert small.solver == "sparse"
     np.testing.assert_allclose(small.omega, chain_omega(n - 1, 3), rtol=1e-10)
+
+
+def test_a_large_model_held_to_a_few_free_coordinates_with_a_massless_one():
+    """``solver: auto`` above :data:`SPARSE_ABOVE` coordinates: the chain of its first
+    ``n - 1`` coordinates with every one from the fourth on tied to the third (a rigid link),
+    and a massless last coordinate on a spring of ``K0`` to the first mass; four free
+    coordinates, three finite modes (the massless direction has no finite root and is left
+    out), the same as the dense generalized-inverse form's."""
+    n = SPARSE_ABOVE + 100
+    springs = [(0, 0)] + [(i, i + 1) for i in range(n - 2)] + [(0, n - 1)]
+    Kd = np.zeros((n, n))
+    for a, b in springs:
+        Kd[a, a] += K0
+        if a != b:
+            Kd[b, b] += K0
+            Kd[a, b] -= K0
+            Kd[b, a] -= K0
+    Md = np.diag(np.r_[np.full(n - 1, M0), 0.0])
+    tied = np.arange(3, n - 1)                                # q_i - q_3 = 0
+    A = sp.csr_array((np.tile([1.0, -1.0], tied.size),
+                      (np.repeat(np.arange(tied.size), 2), np.ravel([[i, 2] for i in tied]))),
+                     shape=(tied.size, n))
+    res = modes(sp.csr_array(Md), None, sp.csr_array(Kd), A, 3)
+    assert res.solver.startswith("sparse (4 coordinates left by the constraints: their pencil "
+                                 "solved densely")
+    dense = modes(sp.csr_array(Md), None, sp.csr_array(Kd), A, 3, solver="dense")
+    np.testing.assert_allclose(res.omega, dense.omega, rtol=1e-9)
+    # the 3-mass fixed-free chain whose last mass is the n - 3 tied ones
+    m3 = np.diag([M0, M0, (n - 3) * M0])
+    k3 = K0 * np.array([[2.0, -1, 0], [-1, 2, -1], [0, -1, 1]])
+    np.testing.assert_allclose(res.omega, np.sqrt(np.linalg.eigvalsh(np.linalg.solve(
+        np.sqrt(m3), np.linalg.solve(np.sqrt(m3), k3).T))), rtol=1e-10)
+    assert np.all(np.abs(A @ res.shapes.real) < 1e-12)
 
 
 def test_damped_sparse_strategy_matches_first_order_perturbation():

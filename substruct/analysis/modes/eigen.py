@@ -46,6 +46,7 @@ from substruct.analysis.modes.dense import FORMULATIONS, coupled_modes
 from substruct.analysis.errors import INPUT_ERRORS, AnalysisInputError
 from substruct.analysis.events import Phase
 from substruct.analysis.modes.krylov import (
+    DENSE_FREE,
     check_inputs,
     eliminate,
     free_coordinates,
@@ -92,15 +93,17 @@ class SolverChoice:
 
 def choose_solver(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
                   A: sp.sparray | np.ndarray | None, count: int | None,
-                  solver: str = "auto") -> SolverChoice:
+                  solver: str = "auto", full_checks: bool = False) -> SolverChoice:
     """The strategy for the lowest ``count`` modes of a model: the one place where it is chosen.
 
     ``solver``: ``"dense"`` always dense; ``"sparse"`` sparse (``"sparse-damped"`` if ``C`` has
     nonzeros); ``"amls"`` AMLS (never chosen otherwise); ``"auto"`` dense up to :data:`SPARSE_ABOVE` coordinates and sparse above.  An
-    undamped sparse choice falls back to dense, with a note saying so, when the constraints
-    leave too few free coordinates for ``count`` roots and a Krylov basis around them
-    (:func:`substruct.analysis.modes.krylov.krylov_size`; ARPACK fails there), and when every mode
-    is asked for (``count`` ``None``).  (The damped sparse solver takes pencils that small
+    undamped sparse choice whose constraints leave too few free coordinates for ``count``
+    roots and a Krylov basis around them (:func:`substruct.analysis.modes.krylov.krylov_size`;
+    ARPACK fails there) stays sparse, the null-space pencil solved densely, when that pencil
+    has at most :data:`~substruct.analysis.modes.krylov.DENSE_FREE` coordinates (and
+    ``full_checks`` does not ask for every formulation's eigensolve); otherwise it falls back
+    to dense, with a note saying so, as when every mode is asked for (``count`` ``None``).  (The damped sparse solver takes pencils that small
     densely itself.)
 
     Raises:
@@ -123,6 +126,9 @@ def choose_solver(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
     try:
         krylov_size(k, free)
     except AnalysisInputError:
+        if el.T.shape[1] <= DENSE_FREE and not full_checks:
+            return SolverChoice("sparse", f"{el.T.shape[1]} coordinates left by the "
+                                          f"constraints: their pencil solved densely", el)
         return SolverChoice("dense", f"sparse asked, but {free} free coordinates are too few "
                                      f"for {k} modes and a Krylov basis")
     return SolverChoice("sparse", "", el)
@@ -256,7 +262,7 @@ def system_modes(system: ConstrainedSystem, count: int | None = None, *,
     if not np.any(sp.csr_array(M).data):
         raise AnalysisInputError("the model has no mass (M = 0): every root is infinite, "
                                  "there is no mode to compute")
-    choice = choose_solver(M, C, A, count, solver)
+    choice = choose_solver(M, C, A, count, solver, full_checks)
     if choice.strategy == "amls":
         return _amls(system, count, opts)
     others = check_methods(method, checks)
@@ -286,7 +292,8 @@ def system_modes(system: ConstrainedSystem, count: int | None = None, *,
             raise AnalysisInputError(f"sparse eigensolver: {' '.join(str(err).split())}") \
                 from None
         require_agreement(what, main.method, agreement, tolerance)
-        solver_label = f"{choice.strategy} ({note})" if note else choice.strategy
+        notes = "; ".join(text for text in (choice.note, note) if text)
+        solver_label = f"{choice.strategy} ({notes})" if notes else choice.strategy
     else:
         main = solve(method)
         agreement = {m: modes_agreement(solve(m), main) for m in others}

@@ -57,10 +57,11 @@ from substruct.analysis.modes.krylov import (
     default_shift,
     eliminate,
     free_coordinates,
+    DENSE_FREE,
     krylov_size,
     rigid_eigenvalue,
 )
-from substruct.analysis.errors import singular_model
+from substruct.analysis.errors import AnalysisInputError, singular_model
 from substruct.analysis.results import Modes
 from substruct.analysis.modes.damped import damped_sparse_modes
 from substruct.linalg.definite import SingularPencil, definite_factorization
@@ -142,17 +143,40 @@ def null_space_modes(M: sp.sparray, K: sp.sparray, A: sp.sparray | None, n_modes
     Kt = sp.csc_array(T.T @ (K @ T))
     Mt = sp.csc_array(T.T @ (M @ T))
     Kt, Mt = (Kt + Kt.T) / 2, (Mt + Mt.T) / 2
-    size = krylov_size(k, free_coordinates(el, massless_coordinates(M)), ncv)
+    try:
+        size = krylov_size(k, free_coordinates(el, massless_coordinates(M)), ncv)
+    except AnalysisInputError:
+        if Kt.shape[0] > DENSE_FREE:
+            raise
+        size = 0                        # the reduced pencil is small: solved densely
     s = default_shift(Kt, Mt) if sigma is None else float(sigma)
     try:
         solve = definite_factorization(factorizer(factorization, spd=True),
                                        sp.csc_array(Kt - s * Mt))
     except SingularPencil:
         raise singular_model("K - sigma M of the free coordinates is singular") from None
+    if not size:
+        P = small_pencil_modes(Kt, Mt, k, s)
+        return _finish(np.zeros(P.shape[1]), T @ P, K, M, A, "null-space/sparse")
     v0 = np.random.default_rng(0).standard_normal(Kt.shape[0])
     lam, P = shift_invert_lanczos_deflated(Kt, Mt, k, s, solve, rigid_eigenvalue(Kt, Mt), v0,
                                            size)
     return _finish(lam, T @ P, K, M, A, "null-space/sparse")
+
+
+def small_pencil_modes(K: sp.sparray, M: sp.sparray, k: int, sigma: float) -> np.ndarray:
+    r"""The vectors of the lowest ``k`` finite eigenvalues of a pencil of at most
+    :data:`~substruct.analysis.modes.krylov.DENSE_FREE` coordinates, by a dense ``eigh`` in the
+    inverse form, definite on the right whatever the mass,
+
+    .. math::  M p = \mu\, (K - \sigma M)\, p, \qquad \omega^2 = \sigma + 1/\mu
+
+    (the largest :math:`\mu` the lowest modes; a massless direction has :math:`\mu = 0`
+    and is not kept).  The eigenvalues follow from the Rayleigh-Ritz step of the caller."""
+    mu, V = sla.eigh(sp.csr_array(M).toarray(), sp.csr_array(K - sigma * M).toarray())
+    order = np.argsort(mu)[::-1]
+    finite = order[mu[order] > 1e3 * np.finfo(float).eps * max(mu.max(initial=0.0), 0.0)]
+    return V[:, finite[:k]]
 
 
 def _saddle(B: sp.sparray, Ak: sp.csr_array, scale: float) -> Solve:
