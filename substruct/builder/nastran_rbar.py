@@ -59,8 +59,8 @@ def rbar_link(subs: Mapping[str, Substructure], name: str, rb: Rbar, positions: 
     ends = (NodeRef(name, {"node": rb.ga}), NodeRef(name, {"node": rb.gb}))
     for k in (0, 1):  # all six independent at one grid: the RBE2 rows from it
         if (rb.cna, rb.cnb)[k] == "123456":
-            dep = (rb.cma, rb.cmb)[1 - k]
-            return rigid_link(subs, ends[k], [ends[1 - k]], dep, name=link_name)
+            return rigid_link(subs, ends[k], [ends[1 - k]], (rb.cma, rb.cmb)[1 - k],
+                              name=link_name)
     r = positions[1] - positions[0]
     R = rbar_rows(r)
     indep = [int(d) - 1 for d in rb.cna] + [6 + int(d) - 1 for d in rb.cnb]

@@ -162,16 +162,17 @@ def read_control(text: BdfText) -> dict[str, Any]:
         head = re.match(r"^[A-Z][A-Z0-9]*", t)
         written = head.group(0) if head else t.split()[0]
         try:
-            word = case_command(written)
+            command = case_command(written)
         except ValueError as err:
             raise BdfError(src, str(err), t, line=line) from None
         rest = t[len(written):]
-        m = re.match(r"^\s+()(\d+)$", rest) if word == "SUBCASE" else \
+        m = re.match(r"^\s+()(\d+)$", rest) if command == "SUBCASE" else \
             re.match(r"^\s*(\([^)]*\))?\s*(?:=\s*(.*))?$", rest)
-        if not m or word is None:
+        if not m or command is None:
             raise BdfError(src, f"case control {written} is not supported (read: "
                            f"{', '.join(CASE_CONTROL)}, or their first four letters or "
                            "more)", t, line=line)
+        word = command
         if word == "OUTPUT":
             plots = True
             continue
