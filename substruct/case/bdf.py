@@ -22,9 +22,11 @@ into the :class:`~substruct.case.bdf_model.BulkData` of the model.
 
 **Semantics** (Nastran's): lumped mass unless ``PARAM,COUPMASS,1`` (a positive value);
 ``PARAM,WTMASS`` multiplies every mass (structure, non-structural and CONM2);
-``PARAM,AUTOSPC,NO`` keeps coordinates without stiffness, which are otherwise removed
-(:mod:`substruct.models.nastran`).  An unsupported card, case control command or parameter is
-an error naming it, never skipped.
+``PARAM,AUTOSPC,NO`` (or the case control's ``AUTOSPC = NO``) keeps coordinates without
+stiffness, which are otherwise removed (:mod:`substruct.models.nastran`).  Element ids are
+unique within Nastran's three id tables, structural, mass (CONM2) and rigid elements (RBE2,
+RBE3, RBAR), and may repeat across them.  An unsupported card, case control command or
+parameter is an error naming it, never skipped.
 """
 
 from __future__ import annotations
