@@ -1,6 +1,7 @@
 """Nastran models of a case (``type: nastran``, :mod:`substruct.case.nastran`): their
 substructures (:mod:`substruct.models.nastran`), their rigid elements and MPC set as links
-(:mod:`substruct.assembly.links`), and AUTOSPC once every link is known."""
+(:mod:`substruct.assembly.links`; an RBAR by :mod:`substruct.builder.nastran_rbar`), and
+AUTOSPC once every link is known."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ import scipy.sparse as sp
 from substruct.assembly.links import (
     Link, LinkError, NodeRef, interpolation_link, mpc, rigid_link,
 )
+from substruct.builder.nastran_rbar import rbar_link
 from substruct.case.bdf import BulkData
 from substruct.case.bdf_fields import BdfError
 from substruct.case.errors import CaseError
@@ -50,8 +52,9 @@ def build_nastran(case: Any, spec: NastranSpec) -> Substructure:
 
 def bulk_links(name: str, bulk: BulkData, subs: Mapping[str, Substructure]
                ) -> list[tuple[Link, int, str, int]]:
-    """The RBE2, RBE3 and MPC cards of ``bulk`` (substructure ``name``) as links, each with
-    its card's ``(line, card name, id)``.
+    """The RBE2, RBE3, RBAR and MPC cards of ``bulk`` (substructure ``name``) as links, each
+    with its card's ``(line, card name, id)`` (a link's name holds its card's name, so an RBE2
+    and a CONM2 or CQUAD4 of one id, which Nastran keeps in separate tables, do not meet).
 
     RBE3: the groups of one card must use the same components (translations); a grid in two
     groups is refused.
@@ -97,6 +100,13 @@ def bulk_links(name: str, bulk: BulkData, subs: Mapping[str, Substructure]
         except LinkError as err:
             raise fail(err, r3.line, "RBE3", r3.id, "REFC") from None
         out.append((link, r3.line, "RBE3", r3.id))
+    for rb in bulk.rbar:
+        try:
+            link = rbar_link(subs, name, rb, np.array([bulk.grids[rb.ga], bulk.grids[rb.gb]]),
+                             f"{name}: RBAR {rb.id}")
+        except LinkError as err:
+            raise fail(err, rb.line, "RBAR", rb.id, "CNA") from None
+        out.append((link, rb.line, "RBAR", rb.id))
     for m in bulk.mpcs:
         try:
             link = mpc(subs, [(node(g), str(c + 1), a) for g, c, a in m.terms],
@@ -108,9 +118,10 @@ def bulk_links(name: str, bulk: BulkData, subs: Mapping[str, Substructure]
 
 
 def rigid_element_grids(bulk: BulkData) -> list[tuple[str, int | str, int, list[int]]]:
-    """The grids of each RBE2, RBE3 and MPC card of ``bulk``, in card order: ``(card name,
-    id, centre, others)``, the centre the RBE2's GN, the RBE3's REFGRID or the MPC's first
-    (dependent) grid, the others the RBE2's GMi, the RBE3's Gi,j (group by group, as
+    """The grids of each RBE2, RBE3, RBAR and MPC card of ``bulk``, in card order: ``(card
+    name, id, centre, others)``, the centre the RBE2's GN, the RBE3's REFGRID, the RBAR's GA
+    or the MPC's first (dependent) grid, the others the RBE2's GMi, the RBAR's GB, the RBE3's
+    Gi,j (group by group, as
     :func:`bulk_links` takes them) or the MPC's other grids, each once; an MPC's id is
     ``"<SID> (line <n>)"`` (cards of one set share the SID).  An MPC whose terms are all on
     one grid has nothing to draw and is left out."""
@@ -118,6 +129,7 @@ def rigid_element_grids(bulk: BulkData) -> list[tuple[str, int | str, int, list[
                                                         for r in bulk.rbe2]
     out += [("RBE3", r3.id, r3.ref, [g for _, _, gl in r3.groups for g in gl])
             for r3 in bulk.rbe3]
+    out += [("RBAR", rb.id, rb.ga, [rb.gb]) for rb in bulk.rbar]
     for m in bulk.mpcs:
         first = m.terms[0][0]
         others = list(dict.fromkeys(g for g, _, _ in m.terms[1:] if g != first))

@@ -22,9 +22,11 @@ into the :class:`~substruct.case.bdf_model.BulkData` of the model.
 
 **Semantics** (Nastran's): lumped mass unless ``PARAM,COUPMASS,1`` (a positive value);
 ``PARAM,WTMASS`` multiplies every mass (structure, non-structural and CONM2);
-``PARAM,AUTOSPC,NO`` keeps coordinates without stiffness, which are otherwise removed
-(:mod:`substruct.models.nastran`).  An unsupported card, case control command or parameter is
-an error naming it, never skipped.
+``PARAM,AUTOSPC,NO`` (or the case control's ``AUTOSPC = NO``) keeps coordinates without
+stiffness, which are otherwise removed (:mod:`substruct.models.nastran`).  Element ids are
+unique within Nastran's three id tables, structural, mass (CONM2) and rigid elements (RBE2,
+RBE3, RBAR), and may repeat across them.  An unsupported card, case control command or
+parameter is an error naming it, never skipped.
 """
 
 from __future__ import annotations
@@ -36,10 +38,10 @@ from substruct.case.bdf_cards import (
     read_bar, read_conm2, read_cord2r, read_grid, read_mat1, read_pbar, read_pbarl, read_prod,
     read_rod,
 )
-from substruct.case.bdf_constraints import read_mpc, read_rbe2, read_rbe3, read_spc, \
-    read_spc1, read_spcadd
-from substruct.case.bdf_control import CASE_CONTROL, OUTPUT_PARAMS, PARAMS, read_control, \
-    read_eigrl, read_static_load, read_uset
+from substruct.case.bdf_constraints import read_mpc, read_rbar, read_rbe2, read_rbe3, \
+    read_spc, read_spc1, read_spcadd
+from substruct.case.bdf_control import CASE_CONTROL, OUTPUT_PARAMS, PARAM_TABLE, PARAMS, \
+    read_control, read_eigrl, read_static_load, read_uset
 from substruct.case.bdf_fields import RawCard, split_bdf
 from substruct.case.bdf_include import bdf_lines
 from substruct.case.bdf_model import BulkData, BdfSection
@@ -48,7 +50,7 @@ from substruct.case.bdf_pcomp import read_pcomp
 from substruct.case.bdf_shells import read_cquad4, read_ctria3, read_pshell
 from substruct.case.bdf_solids import read_psolid, read_solid
 from substruct.case.bdf_springs import read_cbush, read_celas, read_pbush, read_pelas
-from substruct.case.bdf_xref import ELEMENTS, Cards, cross_reference
+from substruct.case.bdf_xref import ELEMENT_TABLES, Cards, cross_reference
 
 __all__ = ["BulkData", "BdfSection", "read_bulk", "parse_bulk", "CARDS", "PARAMS",
            "CASE_CONTROL"]
@@ -57,7 +59,13 @@ __all__ = ["BulkData", "BdfSection", "read_bulk", "parse_bulk", "CARDS", "PARAMS
 CARDS = ("GRID", "CORD2R", "CROD", "PROD", "CBAR", "PBAR", "PBARL", "CBEAM", "PBEAM",
          "PBEAML", "USET", "CQUAD4", "CTRIA3", "PSHELL", "PCOMP", "CHEXA", "CPENTA", "CTETRA",
          "PSOLID", "CONM2", "CELAS1", "CELAS2", "PELAS", "CBUSH", "PBUSH", "RBE2", "RBE3",
-         "MPC", "SPC", "SPC1", "SPCADD", "MAT1", "EIGRL", "PARAM", "LOAD", "FORCE")
+         "RBAR", "MPC", "SPC", "SPC1", "SPCADD", "MAT1", "EIGRL", "PARAM", "LOAD", "FORCE")
+
+
+#: Why some PARAMs that change the results are refused (the message of the others lists
+#: those read).
+_REFUSED = {"G": ": the structural damping G is not used by normal modes and the undamped "
+                 "responses of a substructure (damp in the case file's analysis)"}
 
 
 class _Reader:
@@ -89,7 +97,7 @@ def parse_bulk(text: str | list[tuple[str, int, str]], source: str) -> BulkData:
         "CROD": read_rod, "CBAR": read_bar, "CBEAM": read_bar, "CONM2": read_conm2,
         "CELAS1": read_celas, "CELAS2": read_celas, "CBUSH": read_cbush,
         "CQUAD4": read_cquad4, "CTRIA3": read_ctria3, "RBE2": read_rbe2, "RBE3": read_rbe3,
-        "MPC": read_mpc, "EIGRL": read_eigrl, "CHEXA": read_solid, "CPENTA": read_solid,
+        "RBAR": read_rbar, "MPC": read_mpc, "EIGRL": read_eigrl, "CHEXA": read_solid, "CPENTA": read_solid,
         "CTETRA": read_solid}
     for card in split.cards:
         name = card.name
@@ -142,18 +150,21 @@ def parse_bulk(text: str | list[tuple[str, int, str]], source: str) -> BulkData:
         elif name == "SPC":
             sid, pairs = read_spc(card)
             spc_sets.setdefault(sid, []).extend((card, g, c) for g, c in pairs)
+            cards.spc_first.setdefault(sid, card)
         elif name == "SPC1":
             sid, comp, gl = read_spc1(card)
             spc1.append((card, sid, comp, gl))
+            cards.spc_first.setdefault(sid, card)
         elif name == "USET":  # a user set for output or DMAP: read, no effect on the modes
             read_uset(card)
         elif name == "PARAM":
             key = card.text(0)
-            if key in OUTPUT_PARAMS:  # output requests: read, no effect on the modes
+            if key in OUTPUT_PARAMS:  # printing and output: read, no effect on the modes
                 card.blank_after(2, "PARAM has a name and a value")
                 continue
             if key not in PARAMS:
-                raise card.error(f"PARAM {key} is not supported (read: {', '.join(PARAMS)})")
+                raise card.error(f"PARAM {key} is not supported{_REFUSED.get(key, '')} "
+                                 f"(read: {', '.join(PARAM_TABLE)})")
             if key in params:
                 raise card.error(f"PARAM {key} given twice (also on line "
                                  f"{params[key][0].line})")
@@ -161,8 +172,8 @@ def parse_bulk(text: str | list[tuple[str, int, str]], source: str) -> BulkData:
             params[key] = (card, card.text(1))
         else:
             item = readers[name](card)
-            if name in ELEMENTS:
-                rd.unique("element", item.id, card)
+            if name in ELEMENT_TABLES:  # one id table each: elements, masses, rigid ones
+                rd.unique(ELEMENT_TABLES[name], item.id, card)
             elif name == "EIGRL":
                 rd.unique("EIGRL", item.sid, card)
             by.setdefault(name, []).append((card, item))

@@ -1,4 +1,4 @@
-"""The constraint cards of a Nastran file: rigid elements (RBE2, RBE3), multi-point
+"""The constraint cards of a Nastran file: rigid elements (RBE2, RBE3, RBAR), multi-point
 constraints (MPC) and single-point constraints (SPC, SPC1, SPCADD), read from the fields of a
 :class:`~substruct.case.bdf_fields.RawCard` with the field names of the Nastran Quick
 Reference Guide (field indices as in :mod:`substruct.case.bdf_cards`).  Every field is read or
@@ -12,8 +12,8 @@ from dataclasses import dataclass
 from substruct.case.bdf_cards import components
 from substruct.case.bdf_fields import RawCard, nastran_int
 
-__all__ = ["Rbe2", "Rbe3", "Mpc", "read_rbe2", "read_rbe3", "read_mpc", "read_spc",
-           "read_spc1", "read_spcadd", "int_list"]
+__all__ = ["Rbe2", "Rbe3", "Rbar", "Mpc", "read_rbe2", "read_rbe3", "read_rbar", "read_mpc",
+           "read_spc", "read_spc1", "read_spcadd", "int_list"]
 
 
 @dataclass(frozen=True)
@@ -35,6 +35,22 @@ class Rbe3:
     ref: int
     refc: str
     groups: tuple[tuple[float, str, tuple[int, ...]], ...]
+    line: int
+
+
+@dataclass(frozen=True)
+class Rbar:
+    """RBAR: a rigid bar between grids ``ga`` and ``gb``; independent components ``cna`` (at
+    GA) and ``cnb`` (at GB), six in all, and dependent ones ``cma``, ``cmb`` (when both are
+    blank on the card, every component not independent at each end: Nastran's rule)."""
+
+    id: int
+    ga: int
+    gb: int
+    cna: str
+    cnb: str
+    cma: str
+    cmb: str
     line: int
 
 
@@ -69,6 +85,34 @@ def read_rbe2(c: RawCard) -> Rbe2:
         c.real(k, "ALPHA")
         c.blank_after(k + 1, "RBE2 ends with ALPHA")
     return Rbe2(c.integer(0, "EID"), c.integer(1, "GN"), components(c, 2, "CM"), tuple(gm), c.line)
+
+
+def read_rbar(c: RawCard) -> Rbar:
+    """RBAR EID GA GB CNA CNB CMA CMB ALPHA.  CNA and CNB hold six components in all (whether
+    they determine the bar's rigid motion is checked where the grids' positions are known);
+    CMA and CMB blank (or 0) make every other component dependent.  ALPHA (thermal
+    expansion) is read and not used: thermal loads are not analysed, and normal modes do not
+    depend on it."""
+    c.blank_after(8, "RBAR has one line")
+    ga, gb = c.integer(1, "GA"), c.integer(2, "GB")
+    if ga == gb:
+        raise c.error("GA and GB are the same grid", gb, "GB")
+    cna, cnb = components(c, 3, "CNA", blank_ok=True), components(c, 4, "CNB", blank_ok=True)
+    if len(cna) + len(cnb) != 6:
+        raise c.error("CNA and CNB hold six independent components in all", f"{cna}+{cnb}",
+                      "CNA")
+    cm = [components(c, k, name, blank_ok=True) if c.text(k) != "0" else ""
+          for k, name in ((5, "CMA"), (6, "CMB"))]
+    if not cm[0] and not cm[1]:
+        cm = ["".join(d for d in "123456" if d not in cn) for cn in (cna, cnb)]
+    for cn, dep, name in ((cna, cm[0], "CMA"), (cnb, cm[1], "CMB")):
+        both = sorted(set(cn) & set(dep))
+        if both:
+            raise c.error("a component is both independent and dependent at the same grid",
+                          "".join(both), name)
+    if c.text(7):
+        c.real(7, "ALPHA")
+    return Rbar(c.integer(0, "EID"), ga, gb, cna, cnb, cm[0], cm[1], c.line)
 
 
 def read_rbe3(c: RawCard) -> Rbe3:

@@ -15,21 +15,60 @@ from typing import Any
 
 from substruct.case.bdf_fields import BdfError, BdfText, RawCard
 
-__all__ = ["PARAMS", "OUTPUT_PARAMS", "CASE_CONTROL", "Eigrl", "read_eigrl", "read_control",
-           "param", "select_sets", "read_uset", "read_static_load"]
+__all__ = ["PARAM_TABLE", "PARAMS", "OUTPUT_PARAMS", "CASE_CONTROL", "case_command", "Eigrl",
+           "read_eigrl", "read_control", "param", "select_sets", "read_uset",
+           "read_static_load"]
 
-#: PARAM names read (K6ROT only in a model without shells, where it has no effect).
-PARAMS = ("WTMASS", "COUPMASS", "AUTOSPC", "K6ROT")
-#: PARAM names of output requests: read, no effect on the modes.
-OUTPUT_PARAMS = ("POST", "POSTEXT", "OUGCORD", "GRDPNT", "PRTMAXIM", "NOCOMPS")
+#: Every PARAM accepted, one table: name -> (changes the model, what it does).  Those that
+#: change the model are read (docs/structures.md; K6ROT only in a model without shells, where
+#: it has no effect); the others, by Nastran's Quick Reference Guide, only control printing,
+#: output files or post-processing (stress recovery, random response), so they cannot change
+#: the modes or responses: their name and value are read and not used.
+PARAM_TABLE: dict[str, tuple[bool, str]] = {
+    "WTMASS": (True, "multiplies every mass"),
+    "COUPMASS": (True, "coupled mass when positive"),
+    "AUTOSPC": (True, "YES/NO: remove the coordinates nothing stiffens"),
+    "K6ROT": (True, "the drilling stiffness of shells: in a model without shells only"),
+    "POST": (False, "the files written for post-processors (OP2, XDB)"),
+    "POSTEXT": (False, "extra tables in the OP2"),
+    "OGEOM": (False, "the geometry tables in the OP2"),
+    "PATVER": (False, "the Patran version the OP2 is written for"),
+    "OUGCORD": (False, "the coordinate system of the printed displacements"),
+    "GRDPNT": (False, "the printout of the grid point weight generator"),
+    "PRTMAXIM": (False, "the printout of the largest displacements"),
+    "PRGPST": (False, "the printout of the grid point singularity table"),
+    "PRTBGPDT": (False, "the printout of the grid point table"),
+    "PRTCSTM": (False, "the printout of the coordinate system table"),
+    "PRTEQXIN": (False, "the printout of the grid and scalar point sequence table"),
+    "PRTGPL": (False, "the printout of the grid point list"),
+    "NOCOMPS": (False, "the stress output of composite plies"),
+    "NOFISR": (False, "the failure indices and strength ratios of composites (stress "
+                      "recovery)"),
+    "SRCOMPS": (False, "the strength ratios of composite plies (stress recovery)"),
+    "SPARSEDR": (False, "the method of the data recovery (sparse or not: the same results)"),
+    "RPOSTS1": (False, "the post-processing of random responses"),
+    "OPPHIPA": (False, "the mode shapes written at the aerodynamic points too"),
+}
+#: PARAM names read (they change the model).
+PARAMS = tuple(k for k, (read, _) in PARAM_TABLE.items() if read)
+#: PARAM names of printing, output and post-processing: read, no effect on the modes.
+OUTPUT_PARAMS = tuple(k for k, (read, _) in PARAM_TABLE.items() if not read)
 #: Case control commands read (titles and output requests have no effect: the mode shapes are
-#: always written; ``SEALL = ALL`` and ``SUPER = ALL`` name the one residual structure).
-#: ``OUTPUT(...)`` starts a plot subpackage: its lines (XYPRINT, ...) up to BEGIN BULK are
-#: output requests too.
+#: always written; ``SEALL = ALL`` and ``SUPER = ALL`` name the one residual structure;
+#: ``AUTOSPC = YES/NO`` as ``PARAM,AUTOSPC``).  ``OUTPUT(...)`` starts a plot subpackage: its
+#: lines (XYPRINT, ...) up to BEGIN BULK are output requests too.  As in Nastran, a command
+#: may be written by its first four letters or more (``SUBT``, ``DISP``).
 CASE_CONTROL = ("METHOD", "SPC", "MPC", "SUBCASE", "TITLE", "SUBTITLE", "LABEL", "ECHO",
-                "DISPLACEMENT", "DISP", "VECTOR", "ELFORCE", "ELFOR", "FORCE", "STRESS",
-                "STRAIN", "SPCFORCES", "MPCFORCES", "OLOAD", "GPFORCE", "ESE", "GPKE",
-                "OUTPUT", "SEALL", "SUPER", "MAXLINES")
+                "DISPLACEMENT", "VECTOR", "ELFORCE", "FORCE", "STRESS", "STRAIN",
+                "SPCFORCES", "MPCFORCES", "OLOAD", "GPFORCE", "ESE", "GPKE", "OUTPUT",
+                "SEALL", "SUPER", "MAXLINES", "AUTOSPC")
+#: Nastran case control commands not read whose first letters are those of one read: an
+#: abbreviation they share with it is ambiguous (``SUBC``: SUBCASE or SUBCOM).
+_OTHER_COMMANDS = ("SUBCOM", "SUBSEQ", "STRFIELD", "ECHOON", "ECHOOFF", "OUTRCV", "SUPORT1",
+                   "MAXMIN", "SEDR", "SEDV", "SEFINAL", "GPSTRESS", "GPSDCON")
+#: The options of the case control's ``AUTOSPC(...)`` that only control printing and
+#: punching (read, no effect); any other option is refused.
+_AUTOSPC_OUTPUT = ("PRINT", "NOPRINT", "PUNCH", "NOPUNCH")
 _EXECUTIVE = ("SOL", "ID", "TIME", "DIAG", "ASSIGN")
 #: ASSIGN statements of output files (read, no effect: the results go to the run's HDF5).
 _ASSIGN_OUTPUTS = ("OUTPUT2", "OUTPUT4", "PUNCH", "OP2")
@@ -68,8 +107,41 @@ def read_eigrl(c: RawCard) -> Eigrl:
     return Eigrl(c.integer(0, "SID"), v1, v2, nd, c.line, norm)
 
 
+def case_command(word: str) -> str | None:
+    """The case control command ``word`` names: itself, or the one read command it
+    abbreviates (its first four letters or more, Nastran's rule); ``None`` when it names none.
+
+    Raises:
+        ValueError: an abbreviation of several commands (its message names them).
+    """
+    if word in CASE_CONTROL:
+        return word
+    if len(word) < 4:
+        return None
+    found = [c for c in CASE_CONTROL + _OTHER_COMMANDS if c.startswith(word)]
+    if len(found) > 1:
+        raise ValueError(f"case control {word} is ambiguous: it abbreviates "
+                         f"{' and '.join(found)} (write more of the command)")
+    return found[0] if found and found[0] in CASE_CONTROL else None
+
+
+def _autospc(src: str, line: int, options: str | None, value: str) -> bool:
+    """``AUTOSPC[(options)] = YES|NO`` of the case control: its value; only printing and
+    punching options are accepted."""
+    for opt in (options or "").strip("()").split(","):
+        key = opt.split("=")[0].strip()
+        if key and key not in _AUTOSPC_OUTPUT:
+            raise BdfError(src, f"the AUTOSPC option {key} is not supported (read: "
+                           f"{', '.join(_AUTOSPC_OUTPUT)}, which only print or punch)",
+                           opt.strip(), line=line, card="AUTOSPC")
+    if value not in ("YES", "NO"):
+        raise BdfError(src, "AUTOSPC = YES or NO", value, line=line, card="AUTOSPC")
+    return value == "YES"
+
+
 def read_control(text: BdfText) -> dict[str, Any]:
-    """The choices of the executive and case control (``METHOD``, ``SPC``, ``MPC``)."""
+    """The choices of the executive and case control: ``METHOD``, ``SPC``, ``MPC`` (set ids)
+    and ``AUTOSPC`` (a bool), with the line of each in ``lines``."""
     src = text.source
     for line, t in text.executive:
         word = t.split()[0].split(",")[0]
@@ -81,18 +153,26 @@ def read_control(text: BdfText) -> dict[str, Any]:
         if word == "ASSIGN" and (re.split(r"[\s=]+", t) + [""])[1] not in _ASSIGN_OUTPUTS:
             raise BdfError(src, f"ASSIGN of output files ({', '.join(_ASSIGN_OUTPUTS)}) is "
                            "read, no other", t, line=line)
-    chosen: dict[str, Any] = {}
+    chosen: dict[str, Any] = {"lines": {}}
     subcases = 0
     plots = False
     for line, t in text.case_control:
         if plots:  # the plot subpackage's requests: no effect on the modes
             continue
-        m = re.match(r"^([A-Z]+)\s*(\([^)]*\))?\s*(?:=\s*(.*))?$", t) or \
-            re.match(r"^(SUBCASE)\s+()(\d+)$", t)
-        word = m.group(1) if m else t.split()[0]
-        if not m or word not in CASE_CONTROL:
-            raise BdfError(src, f"case control {word} is not supported (read: "
-                           f"{', '.join(CASE_CONTROL)})", t, line=line)
+        head = re.match(r"^[A-Z][A-Z0-9]*", t)
+        written = head.group(0) if head else t.split()[0]
+        try:
+            command = case_command(written)
+        except ValueError as err:
+            raise BdfError(src, str(err), t, line=line) from None
+        rest = t[len(written):]
+        m = re.match(r"^\s+()(\d+)$", rest) if command == "SUBCASE" else \
+            re.match(r"^\s*(\([^)]*\))?\s*(?:=\s*(.*))?$", rest)
+        if not m or command is None:
+            raise BdfError(src, f"case control {written} is not supported (read: "
+                           f"{', '.join(CASE_CONTROL)}, or their first four letters or "
+                           "more)", t, line=line)
+        word = command
         if word == "OUTPUT":
             plots = True
             continue
@@ -100,14 +180,18 @@ def read_control(text: BdfText) -> dict[str, Any]:
             subcases += 1
             if subcases > 1:
                 raise BdfError(src, "one subcase is run", t, line=line)
-        if word in ("SEALL", "SUPER") and (m.group(3) or "").strip() != "ALL":
+        value = (m.group(2) or "").strip()
+        if word in ("SEALL", "SUPER") and value != "ALL":
             raise BdfError(src, f"{word} = ALL is read (one residual structure, no "
                            "superelements)", t, line=line, card=word)
+        if word == "AUTOSPC":
+            chosen[word] = _autospc(src, line, m.group(1), value)
+            chosen["lines"][word] = line
         if word in ("METHOD", "SPC", "MPC"):
-            value = (m.group(3) or "").strip()
             if not value.isdigit():
                 raise BdfError(src, f"{word} names a set id", value, line=line, card=word)
             chosen[word] = int(value)
+            chosen["lines"][word] = line
     chosen["case_control"] = bool(text.case_control or text.executive)
     return chosen
 
@@ -160,20 +244,28 @@ def param(params: dict[str, tuple[RawCard, str]], key: str, kind: str, default: 
     return text == "YES"
 
 
-def select_sets(source: str, control: dict[str, Any], word: str, sets: set[int]) -> set[int]:
-    """The set ids used: the one the case control chooses, or all of a bulk-only file."""
+def select_sets(source: str, control: dict[str, Any], word: str, sets: dict[int, RawCard]
+                ) -> set[int]:
+    """The set ids used: the one the case control chooses, or all of a bulk-only file.
+    ``sets`` maps each set id to its first card, which a refusal names.
+
+    Raises:
+        BdfError: a chosen set the bulk data does not have (naming the case control's line),
+            a set not chosen (naming its first card).
+    """
     if word in control:
         if control[word] not in sets:
             raise BdfError(source, f"the case control chooses {word} set {control[word]}, "
-                           f"which the bulk data does not have", control[word], card=word)
-        rest = sorted(sets - {control[word]})
+                           f"which the bulk data does not have", control[word],
+                           line=control.get("lines", {}).get(word, 0), card=word)
+        rest = sorted(set(sets) - {control[word]})
         if rest:
-            raise BdfError(source, f"{word} set {rest[0]} is not chosen by the case control "
-                           f"({word} = {control[word]}) and would be unused", rest[0],
-                           card=word)
+            raise sets[rest[0]].error(f"{word} set {rest[0]} is not chosen by the case "
+                                      f"control ({word} = {control[word]}) and would be "
+                                      "unused", rest[0])
         return {control[word]}
     if sets and control["case_control"]:
-        raise BdfError(source, f"{word} sets {sorted(sets)} are not chosen by the case "
-                       f"control (no {word} = ...) and would be unused", sorted(sets)[0],
-                       card=word)
-    return sets
+        first = sorted(sets)[0]
+        raise sets[first].error(f"{word} sets {sorted(sets)} are not chosen by the case "
+                                f"control (no {word} = ...) and would be unused", first)
+    return set(sets)

@@ -5,7 +5,8 @@ A bulk data file is read as Nastran reads it:
 * **Sections.** Lines before ``CEND`` are executive control, lines between ``CEND`` and
   ``BEGIN BULK`` case control, lines after ``BEGIN BULK`` bulk data up to ``ENDDATA``.  A file
   without ``BEGIN BULK`` is bulk data only.  A card after ``ENDDATA`` is refused (it would not
-  be read), and so is text beyond column 80 of a bulk data line.
+  be read), another ``ENDDATA`` is not (it is harmless), and text beyond column 80 of a bulk
+  data line is refused.
 * **Comments** start with ``$``; blank lines are skipped; tabs are expanded to 8 columns.
 * **Small field:** columns 1-8 hold the card name (field 1), columns 9-72 eight fields of 8
   (fields 2-9), columns 73-80 the continuation marker (field 10, not read).
@@ -243,11 +244,11 @@ def _line_fields(text: str, source: str, n: int) -> tuple[str, list[str], bool]:
 
 
 def _nothing_after(text: list[tuple[str, int, str]], lines: list[str], start: int) -> None:
-    """Refuse a card after ``ENDDATA`` (it would not be read); comments and blank lines are
-    fine."""
+    """Refuse a card after ``ENDDATA`` (it would not be read); comments, blank lines and
+    another ``ENDDATA`` (which ends nothing more) are fine."""
     for k in range(start, len(lines)):
         rest = lines[k].split("$", 1)[0].strip()
-        if rest:
+        if rest and rest.upper().split()[0].split(",")[0] != "ENDDATA":
             raise BdfError(text[k][0], "a card after ENDDATA would not be read", rest,
                            line=text[k][1])
 

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from substruct.case.bdf_cards import Bar, Conm2, Mat1, Rod
-from substruct.case.bdf_constraints import Mpc, Rbe2, Rbe3
+from substruct.case.bdf_constraints import Mpc, Rbar, Rbe2, Rbe3
 from substruct.case.bdf_control import Eigrl
 from substruct.case.bdf_shells import Plate
 from substruct.case.bdf_solids import SolidCell
@@ -51,7 +51,7 @@ class BulkData:
         solids: CHEXA, CPENTA and CTETRA with their PSOLID's MAT1.
         masses: CONM2 with offset and inertia in basic coordinates.
         springs: ``(id, k, (grid, component), (grid, component) or None)``, components 0-5.
-        rbe2, rbe3, mpcs: rigid elements and the chosen MPC set.
+        rbe2, rbe3, rbar, mpcs: rigid elements and the chosen MPC set.
         spc: grid id -> components held (0-5): the chosen SPC set and GRID PS.
         eigrl: the chosen EIGRL (``None`` if the file has none).
         wtmass, coupled, autospc: PARAM WTMASS, COUPMASS > 0, AUTOSPC.
@@ -69,6 +69,7 @@ class BulkData:
     solids: list[tuple[SolidCell, Mat1]] = field(default_factory=list)
     rbe2: list[Rbe2] = field(default_factory=list)
     rbe3: list[Rbe3] = field(default_factory=list)
+    rbar: list[Rbar] = field(default_factory=list)
     mpcs: list[Mpc] = field(default_factory=list)
     spc: dict[int, set[int]] = field(default_factory=dict)
     eigrl: Eigrl | None = None

@@ -94,10 +94,24 @@ def read_pelas(c: RawCard) -> list[tuple[int, float]]:
     return out
 
 
+def _unused_orientation(c: RawCard) -> None:
+    """Check the form of a CBUSH's ``GO`` or ``X1 - X3`` beside ``CID``: by Nastran's CBUSH
+    remarks ``CID >= 0`` overrides them (FEMAP writes both), so they are read and not used."""
+    if c.text(4) and nastran_int(c.text(4)) is not None:
+        if c.text(5) or c.text(6):
+            raise c.error("with GO in field 6, X2 and X3 are blank", c.text(5) or c.text(6),
+                          "X2")
+        c.integer(4, "GO")
+    elif any(c.text(k) for k in (4, 5, 6)):
+        for k, name in ((4, "X1"), (5, "X2"), (6, "X3")):
+            c.real(k, name, 0.0)
+
+
 def read_cbush(c: RawCard) -> Bush:
     """CBUSH EID PID GA GB GO/X1 X2 X3 CID / S OCID S1 S2 S3.  With ``CID`` (0: basic) the
-    element axes are that system's and ``GO/X`` is blank; without it they come from ``GA ->
-    GB`` and ``GO/X`` (as CBAR).  ``S`` places the spring on ``GA -> GB`` (0.5); ``OCID`` other
+    element axes are that system's, and ``GO/X``, when given, is checked and not used (Nastran's
+    precedence: ``CID >= 0`` overrides it); without it they come from ``GA -> GB`` and ``GO/X``
+    (as CBAR).  ``S`` places the spring on ``GA -> GB`` (0.5); ``OCID`` other
     than -1 and the offsets ``S1 - S3`` are refused."""
     eid = c.integer(0, "EID")
     c.blank_after(13, "CBUSH has two lines")
@@ -117,9 +131,7 @@ def read_cbush(c: RawCard) -> Bush:
     if cid is not None:
         if cid < 0:
             raise c.error("CID is 0 (basic) or a coordinate system id", cid, "CID")
-        if any(c.text(k) for k in (4, 5, 6)):
-            raise c.error("with CID the element axes are the system's: GO/X is blank",
-                          c.text(4) or c.text(5) or c.text(6), "GO/X1")
+        _unused_orientation(c)
     elif c.text(4) and nastran_int(c.text(4)) is not None:
         if c.text(5) or c.text(6):
             raise c.error("with GO in field 6, X2 and X3 are blank", c.text(5) or c.text(6),

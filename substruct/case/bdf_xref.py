@@ -26,18 +26,27 @@ from substruct.case.bdf_solids import (
 )
 from substruct.case.fields import MAX_ELEMENTS, MAX_MATRIX_SIZE
 
-__all__ = ["ELEMENTS", "Cards", "coordinate_systems", "cross_reference"]
+__all__ = ["ELEMENTS", "ELEMENT_TABLES", "Cards", "coordinate_systems", "cross_reference"]
 
-#: Cards that are elements (their ids share one space).
-ELEMENTS = ("CROD", "CBAR", "CBEAM", "CONM2", "CELAS1", "CELAS2", "CBUSH", "CQUAD4", "CTRIA3",
-            "CHEXA", "CPENTA", "CTETRA", "RBE2", "RBE3")
+#: Cards that are elements, by id table.  Nastran keeps structural elements, mass elements
+#: (CONM2) and rigid elements (RBE2, RBE3, RBAR) in separate tables, as pyNastran does
+#: (``elements``, ``masses``, ``rigid_elements``): an id is unique within its table, and one
+#: id may name an element of each (MSC Nastran runs a CONM2 100 beside a CBAR 100).
+ELEMENT_TABLES: dict[str, str] = {
+    **{name: "element" for name in ("CROD", "CBAR", "CBEAM", "CELAS1", "CELAS2", "CBUSH",
+                                    "CQUAD4", "CTRIA3", "CHEXA", "CPENTA", "CTETRA")},
+    "CONM2": "mass element",
+    **{name: "rigid element" for name in ("RBE2", "RBE3", "RBAR")}}
+#: Cards that are elements.
+ELEMENTS = tuple(ELEMENT_TABLES)
 
 
 @dataclass
 class Cards:
     """The cards of a file as read, before cross-referencing: element-like cards ``by`` name
     (``(card, record)`` pairs), grids, coordinate systems, line properties, PSHELL, PBUSH,
-    materials, PELAS, PARAM, SPC and SPC1 sets, and the ``control`` choices."""
+    materials, PELAS, PARAM, SPC and SPC1 sets (``spc_first``: the first SPC or SPC1 card of
+    each set, which a refusal names), and the ``control`` choices."""
 
     source: str
     control: dict[str, Any]
@@ -55,6 +64,7 @@ class Cards:
     params: dict[str, tuple[RawCard, str]] = field(default_factory=dict)
     spc_sets: dict[int, list[tuple[RawCard, int, str]]] = field(default_factory=dict)
     spc1: list[tuple[RawCard, int, str, Any]] = field(default_factory=list)
+    spc_first: dict[int, RawCard] = field(default_factory=dict)
 
 
 
@@ -221,7 +231,13 @@ def cross_reference(cards: Cards) -> BulkData:
             for g in gl:
                 grid(card, g, "G")
         out.rbe3.append(r3)
-    mpc_sets = {m.sid for _, m in by.get("MPC", [])}
+    for card, rb in by.get("RBAR", []):
+        grid(card, rb.ga, "GA")
+        grid(card, rb.gb, "GB")
+        out.rbar.append(rb)
+    mpc_sets: dict[int, RawCard] = {}
+    for card, m in by.get("MPC", []):
+        mpc_sets.setdefault(m.sid, card)
     use = select_sets(source, control, "MPC", mpc_sets)
     for card, m in by.get("MPC", []):
         if m.sid in use:
@@ -246,11 +262,11 @@ def cross_reference(cards: Cards) -> BulkData:
         found = [e for e in eigs if e.sid == control["METHOD"]]
         if not found:
             raise BdfError(source, "the case control's METHOD names no EIGRL of the bulk data",
-                           control["METHOD"], card="METHOD")
+                           control["METHOD"], line=control["lines"]["METHOD"], card="METHOD")
         out.eigrl = found[0]
     elif len(eigs) > 1:
-        raise BdfError(source, "several EIGRL and no case control METHOD choosing one",
-                       [e.sid for e in eigs], card="EIGRL")
+        raise by["EIGRL"][1][0].error("several EIGRL and no case control METHOD choosing one",
+                                      [e.sid for e in eigs])
     elif eigs:
         out.eigrl = eigs[0]
     out.wtmass = float(param(params, "WTMASS", "real", 1.0))
@@ -266,13 +282,21 @@ def cross_reference(cards: Cards) -> BulkData:
                        "(PARAM,COUPMASS,1): Nastran's lumped mass of quadratic solids is not "
                        "reproduced", "no COUPMASS", line=q.line, card=q.kind, ident=q.id)
     out.autospc = param(params, "AUTOSPC", "yes", True)
+    if "AUTOSPC" in control:  # the case control's AUTOSPC = YES/NO, the same meaning
+        if "AUTOSPC" in params and out.autospc != control["AUTOSPC"]:
+            raise params["AUTOSPC"][0].error(
+                f"PARAM,AUTOSPC and the case control's AUTOSPC = "
+                f"{'YES' if control['AUTOSPC'] else 'NO'} (line "
+                f"{control['lines']['AUTOSPC']}) disagree", params["AUTOSPC"][1], "V1")
+        out.autospc = control["AUTOSPC"]
     return out
 
 
 def _spc_sets(cards: Cards) -> set[int]:
     """The SPC/SPC1 set ids in use: the case control's ``SPC`` choice (an SPCADD's sets when
     it names one), or every set of a file of bulk data only."""
-    sets = set(cards.spc_sets) | {sid for _, sid, _, _ in cards.spc1}
+    first = dict(cards.spc_first)
+    sets = set(first)
     for sid, (card, members) in cards.spcadd.items():
         if sid in sets:
             raise card.error("an SPCADD id must differ from the SPC and SPC1 set ids", sid,
@@ -284,13 +308,15 @@ def _spc_sets(cards: Cards) -> set[int]:
     if chosen in cards.spcadd:
         card, members = cards.spcadd[chosen]
         rest = sorted((sets | set(cards.spcadd)) - set(members) - {chosen})
+        first.update({sid: c for sid, (c, _) in cards.spcadd.items()})
         if rest:
-            raise BdfError(cards.source, f"SPC set {rest[0]} is not in the chosen SPCADD "
-                           f"{chosen} and would be unused", rest[0], card="SPC")
+            raise first[rest[0]].error(f"SPC set {rest[0]} is not in the chosen SPCADD "
+                                       f"{chosen} and would be unused", rest[0])
         return set(members)
     if cards.spcadd and not cards.control["case_control"]:  # bulk data only: every set
         return sets
-    return select_sets(cards.source, cards.control, "SPC", sets | set(cards.spcadd))
+    first.update({sid: c for sid, (c, _) in cards.spcadd.items()})
+    return select_sets(cards.source, cards.control, "SPC", first)
 
 
 def _shell_material(pcard: RawCard, mid: int, name: str, cards: Cards) -> Mat1:
