@@ -1,0 +1,55 @@
+"""Case keys that used to be accepted and ignored, or read loosely, and are now used or refused
+in one line (exit 2): the modal block of a direct receptance sweep, ..."""
+
+from __future__ import annotations
+
+import pytest
+
+from substruct.case.loader import CaseError, parse_case
+
+THREE_DOF = """
+name: three_dof
+substructures:
+  - name: P
+    type: matrices
+    M: [[1, 0, 0], [0, 2, 0], [0, 0, 4]]
+    K: [[20, -10, 0], [-10, 30, -20], [0, -20, 20]]
+"""
+
+
+def message(text: str, overrides: tuple[str, ...] = ()) -> str:
+    """The one-line message of the CaseError that a case raises."""
+    with pytest.raises(CaseError) as info:
+        parse_case(text, "c.yaml", ".", overrides)
+    return str(info.value)
+
+
+def frf(method: str, modal: str) -> str:
+    return THREE_DOF + (f"analysis:\n  frf: {{omega: [2.0], inputs: [P@q1], outputs: [P@q1], "
+                        f"method: {method}, modal: {modal}}}\n")
+
+
+@pytest.mark.parametrize("method", ["generalized-inverse", "null-space", "kkt"])
+@pytest.mark.parametrize("modal", ["{cutoff: 10}", "{solver: amls, cutoff: 3}", "{}"])
+def test_frf_modal_block_with_a_direct_method_is_refused(method, modal):
+    assert message(frf(method, modal)) == (
+        f"c.yaml: analysis.frf.modal: the modal block is for method: modal (or auto, which "
+        f"sums the modes on a large model); the method is {method}, got '{{...}}'")
+
+
+@pytest.mark.parametrize("method", ["modal", "auto"])
+def test_frf_modal_block_is_taken_by_modal_and_auto(method):
+    case = parse_case(frf(method, "{cutoff: 4, solver: amls}"), "c.yaml")
+    assert case.analysis.frf.modal.cutoff == 4 and case.analysis.frf.modal.solver == "amls"
+
+
+def test_frf_without_a_modal_block_keeps_any_method():
+    for method in ("generalized-inverse", "kkt", "modal", "auto"):
+        text = THREE_DOF + (f"analysis:\n  frf: {{omega: [2.0], inputs: [P@q1], "
+                            f"outputs: [P@q1], method: {method}}}\n")
+        assert parse_case(text, "c.yaml").analysis.frf.method == method
+
+
+def test_frf_modal_block_refused_when_set_makes_the_method_direct():
+    text = frf("modal", "{cutoff: 10}")
+    assert "the method is kkt" in message(text, ("analysis.frf.method=kkt",))
