@@ -53,3 +53,35 @@ def test_frf_without_a_modal_block_keeps_any_method():
 def test_frf_modal_block_refused_when_set_makes_the_method_direct():
     text = frf("modal", "{cutoff: 10}")
     assert "the method is kkt" in message(text, ("analysis.frf.method=kkt",))
+
+
+SPRING_STUDY = """
+name: spring_mass_study
+parameters: {k: 100, m: 1, c: 0.1}
+substructures:
+  - {name: s, type: fixed-free, mass: m, stiffness: k, damping: c}
+analysis:
+  modes: {count: 1}
+study:
+  grid:
+    parameters:
+      - {parameter: k, %s}
+  collect: {frequencies: 1}
+"""
+
+
+@pytest.mark.parametrize("extra,key,value", [
+    ("spacing: log", "spacing", "'log'"), ("spacing: linear", "spacing", "'linear'"),
+    ("start: 5", "start", "5.0"), ("stop: 6", "stop", "6.0"), ("num: 3", "num", "3")])
+def test_a_values_axis_refuses_the_keys_of_a_range(extra, key, value):
+    text = SPRING_STUDY % f"values: [100, 150], {extra}"
+    assert message(text) == (
+        f"c.yaml: study.grid.parameters[0].{key}: not a key of an axis given by values (start, "
+        f"stop, num and spacing make a range, without values), got {value}")
+
+
+def test_a_range_axis_takes_its_spacing():
+    case = parse_case(SPRING_STUDY % "start: 1, stop: 100, num: 3, spacing: log", "c.yaml")
+    assert case.study.grid.parameters[0].spacing == "log"
+    case = parse_case(SPRING_STUDY % "values: [100, 150]", "c.yaml")
+    assert case.study.grid.parameters[0].values == [100, 150]
