@@ -85,3 +85,40 @@ def test_a_range_axis_takes_its_spacing():
     assert case.study.grid.parameters[0].spacing == "log"
     case = parse_case(SPRING_STUDY % "values: [100, 150]", "c.yaml")
     assert case.study.grid.parameters[0].values == [100, 150]
+
+
+SPRING = """
+name: spring_mass
+substructures:
+  - {name: s, type: fixed-free, mass: 1, stiffness: 100}
+  - {name: t, type: free-free, mass: 1, stiffness: 100}
+connections:
+  - [s, t]
+constraints:
+  - {name: c, terms: {s: 1, t@mass: -1}}
+analysis:
+  modes: {count: 1}
+"""
+BOOLEANS = [("output.pictures", "pictures"), ("output.matrices", "matrices"),
+            ("constraints.c.active", "active")]
+
+
+@pytest.mark.parametrize("path,key", BOOLEANS)
+@pytest.mark.parametrize("text,shown", [('"yes"', "'yes'"), ('"no"', "'no'"), ('"off"', "'off'"),
+                                        ("0", "0"), ("1", "1"), ("null", "null"),
+                                        ('"true"', "'true'")])
+def test_a_boolean_is_a_yaml_boolean_only(path, key, text, shown):
+    assert message(SPRING, (f"{path}={text}",)) == (
+        f"c.yaml: {path}: must be true or false (set on the command line), got {shown}")
+
+
+def test_booleans_in_the_file_and_yaml_yes_no():
+    case = parse_case(SPRING + "output: {pictures: no, matrices: true}\n", "c.yaml")
+    assert case.output.pictures is False and case.output.matrices is True
+    assert message(SPRING + "output: {pictures: 'off'}\n") == (
+        "c.yaml: output.pictures: must be true or false, got 'off'")
+    study = SPRING.replace("mass: 1, stiffness: 100}", "mass: 1, stiffness: k}", 1)
+    study = "parameters: {k: 100}\n" + study + (
+        "study:\n  grid: {parameters: [{parameter: k, values: [1, 2]}]}\n"
+        "  collect: {frequencies: 1, track: 1}\n")
+    assert message(study) == "c.yaml: study.collect.track: must be true or false, got 1"
