@@ -122,3 +122,22 @@ def test_booleans_in_the_file_and_yaml_yes_no():
         "study:\n  grid: {parameters: [{parameter: k, values: [1, 2]}]}\n"
         "  collect: {frequencies: 1, track: 1}\n")
     assert message(study) == "c.yaml: study.collect.track: must be true or false, got 1"
+
+
+def test_an_unknown_key_made_by_set_says_so():
+    assert message(SPRING, ("analysis.mode.count=4",)) == (
+        "c.yaml: analysis.mode: unknown key; did you mean 'modes'? (allowed: modes, frf, "
+        "transient, random, base_frf, srs, tpa, semm) (set on the command line), got "
+        '{"count": 4}')
+    assert message(SPRING, ("outputs.pictures=false",)).startswith(
+        "c.yaml: outputs: unknown key; did you mean 'output'? (allowed: ")
+    assert message(SPRING, ("outputs.pictures=false",)).endswith(
+        '(set on the command line), got {"pictures": false}')
+    assert message(SPRING, ("substructures.s.dampin=1",)).endswith(
+        "(set on the command line), got 1")
+
+
+def test_an_unknown_key_of_the_file_does_not_blame_the_command_line():
+    text = SPRING + "outputs: {pictures: false}\n"
+    assert "(set on the command line)" not in message(text, ("analysis.modes.count=2",))
+    assert "(set on the command line)" not in message(text)
