@@ -3,6 +3,7 @@ in one line (exit 2): the modal block of a direct receptance sweep, ..."""
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from substruct.case.loader import CaseError, parse_case
@@ -141,3 +142,30 @@ def test_an_unknown_key_of_the_file_does_not_blame_the_command_line():
     text = SPRING + "outputs: {pictures: false}\n"
     assert "(set on the command line)" not in message(text, ("analysis.modes.count=2",))
     assert "(set on the command line)" not in message(text)
+
+
+def study_result(table, peaks):
+    from substruct.studies.study_run import StudyResult
+
+    table = np.asarray(table, float)
+    return StudyResult(case_name="s", kind="grid", parameters=["kc", "cc"], table=table,
+                       values={"frequency": np.outer(table[:, 0], [1.0, 2.0]),
+                               "frf_peak": np.asarray(peaks, float)[:, None]},
+                       errors=[""] * len(table), seconds=np.zeros(len(table)),
+                       peaks=["rod@200<-rod@200"])
+
+
+def test_the_tuning_map_is_drawn_for_a_product_grid_only(tmp_path):
+    from substruct.viz.study_picture import is_product, study_pictures
+
+    product = [[1, 3], [1, 4], [2, 3], [2, 4]]
+    zipped = [[1, 3], [2, 3.5], [3, 4]]
+    assert is_product(np.array(product)) and not is_product(np.array(zipped))
+    assert not is_product(np.array([[1, 3], [1, 4], [2, 3]]))  # a product with a hole
+    assert not is_product(np.array([[1, 3], [1, 3], [2, 4], [2, 4]]))  # repeated samples
+    names = [p.name for p in study_pictures(study_result(product, [4, 3, 2, 1]), tmp_path)]
+    assert names == ["s_study_frequencies.png", "s_study_tuning.png"]
+    for p in tmp_path.iterdir():
+        p.unlink()
+    names = [p.name for p in study_pictures(study_result(zipped, [3, 2, 1]), tmp_path)]
+    assert names == ["s_study_frequencies.png"]
