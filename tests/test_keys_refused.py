@@ -3,10 +3,13 @@ in one line (exit 2): the modal block of a direct receptance sweep, ..."""
 
 from __future__ import annotations
 
+import re
+from pathlib import Path
+
 import numpy as np
 import pytest
 
-from substruct.case.loader import CaseError, parse_case
+from substruct.case.loader import CaseError, load_case, parse_case
 
 THREE_DOF = """
 name: three_dof
@@ -169,3 +172,42 @@ def test_the_tuning_map_is_drawn_for_a_product_grid_only(tmp_path):
         p.unlink()
     names = [p.name for p in study_pictures(study_result(zipped, [3, 2, 1]), tmp_path)]
     assert names == ["s_study_frequencies.png"]
+
+
+# ------------------------------------------------------------------------ docs that run
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def test_the_by_point_initial_state_of_transient_md_runs_on_its_rod():
+    from substruct.run.runner import run_case
+
+    line = next(ln for ln in (ROOT / "docs" / "transient.md").read_text().splitlines()
+                if ln.strip().startswith("initial: {displacement:"))
+    value = line.split("initial:", 1)[1].split("#")[0].strip()
+    case = load_case(ROOT / "cases" / "tapered_rod_impact.yaml",
+                     [f"analysis.transient.initial={value}", "analysis.transient.t_end=0.001",
+                      "analysis.transient.check=[]", "output.pictures=false"])
+    result = run_case(case).transient
+    assert result is not None
+
+
+def test_the_quoted_flow_terms_of_case_files_md_read_as_two_points():
+    text = (ROOT / "docs" / "case-files.md").read_text()
+    flow = re.search(r'`terms: (\{"right@[^`]*\})`', text).group(1)
+    case = load_case(ROOT / "cases" / "box_beam_tmd.yaml", [f"constraints[0].terms={flow}"])
+    assert case.constraints[0].terms == {"right@1,0,0.1:z": 1.0, "right@1,0.1,0.1:z": -1.0}
+
+
+@pytest.mark.parametrize("page", ["README.md", "docs/case-files.md"])
+def test_the_tables_of_cases_name_every_case(page):
+    text = (ROOT / page).read_text()
+    shipped = sorted(p.name for p in (ROOT / "cases").iterdir()
+                     if p.suffix in (".yaml", ".bdf"))
+    assert [name for name in shipped if f"`{name}`" not in text] == []
+
+
+def test_readme_says_which_cases_make_run_runs():
+    ran = re.findall(r"substruct run cases/(\S+)", (ROOT / "Makefile").read_text())
+    said = (ROOT / "README.md").read_text().split("`make run` leaves", 1)[1].split("\n\n")[0]
+    assert ran and all(f"`{name}`" in said for name in ran)
