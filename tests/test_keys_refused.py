@@ -211,3 +211,45 @@ def test_readme_says_which_cases_make_run_runs():
     ran = re.findall(r"substruct run cases/(\S+)", (ROOT / "Makefile").read_text())
     said = (ROOT / "README.md").read_text().split("`make run` leaves", 1)[1].split("\n\n")[0]
     assert ran and all(f"`{name}`" in said for name in ran)
+
+
+# ------------------------------------------------------------------------ messages
+
+@pytest.mark.parametrize("text,number", [("200 mm", "200"), ("200mm", "200"),
+                                         ("6e6 N/mm^2", "6e6"), ("-3 kg", "-3")])
+def test_a_number_with_a_unit_says_units_are_not_accepted(text, number):
+    from substruct.case.expressions import ExpressionError, compile_expression
+
+    with pytest.raises(ExpressionError) as info:
+        compile_expression(text)
+    assert str(info.value) == (
+        f"units are not accepted in numbers: write '{number}' alone (the numbers are in the "
+        f"case's consistent units, its units: note converts nothing)")
+
+
+@pytest.mark.parametrize("text", ["2 pi", "2 x", "x x"])
+def test_a_known_name_after_a_number_is_a_plain_syntax_error(text):
+    from substruct.case.expressions import ExpressionError, compile_expression
+
+    with pytest.raises(ExpressionError, match=r"^syntax error in "):
+        compile_expression(text)
+
+
+def test_a_note_in_parentheses_says_where_a_comment_goes():
+    text = SPRING.replace("mass: 1, stiffness: 100}", 'mass: 1, stiffness: "100 (steel)"}', 1)
+    assert message(text) == (
+        "c.yaml: substructures.s.stiffness: '100' followed by parentheses in '100 (steel)': a "
+        "comment goes after # outside the quotes (100 # ...), a product needs * (2*(x + 1)), "
+        "got '100 (steel)'")
+
+
+def test_an_empty_load_table_says_so_without_a_numpy_warning(tmp_path, recwarn):
+    from substruct.case.transient_files import read_table
+
+    for text in ("", "\n\n", "# t, value\n"):
+        (tmp_path / "t.csv").write_text(text)
+        with pytest.raises(ValueError) as info:
+            read_table(tmp_path / "t.csv")
+        assert str(info.value) == ("the file is empty (or only comments): a CSV table has rows "
+                                   "t, value")
+    assert not recwarn.list
