@@ -1,5 +1,8 @@
 """Case keys that used to be accepted and ignored, or read loosely, and are now used or refused
-in one line (exit 2): the modal block of a direct receptance sweep, ..."""
+in one line (exit 2): the modal block of a direct receptance sweep, the range keys of a study
+axis given by values, booleans that are strings or numbers, an unknown key made by --set; the
+tuning map of a zip study; the docs' snippets that did not run; the messages for empty files,
+numbers with units and notes in parentheses."""
 
 from __future__ import annotations
 
