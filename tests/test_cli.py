@@ -219,14 +219,23 @@ def test_internal_error_is_exit_1_with_traceback(tmp_path, capsys, monkeypatch):
 # -------------------------------------------------------- progress, info, export, --json
 
 
-def test_progress_on_long_sweeps_unless_quiet(tmp_path, capsys):
+def test_progress_on_long_sweeps_unless_quiet(tmp_path, capsys, monkeypatch):
     args = ["run", CASES / "tapered_rod.yaml", "--out", tmp_path, "--force", *NO_PICTURES]
+    monkeypatch.setenv("SUBSTRUCT_PROGRESS", "1")
     code, out, err = run(capsys, *args)
     assert code == 0
     assert "FRF generalized-inverse: 200 frequencies done" in err and "FRF kkt" in err
     assert "rod@200 / rod@200: max |H| =" in out
     code, out, err = run(capsys, *args, "--quiet")
     assert code == 0 and out == "" and "FRF" not in err
+    # off a terminal the sweeps say nothing, as the phases (README, "While it runs")
+    for env in ("0", None):
+        if env is None:
+            monkeypatch.delenv("SUBSTRUCT_PROGRESS")
+        else:
+            monkeypatch.setenv("SUBSTRUCT_PROGRESS", env)
+        code, out, err = run(capsys, *args)
+        assert code == 0 and "max |H| =" in out and err == ""
 
 
 def test_progress_bar_on_a_terminal():

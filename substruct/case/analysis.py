@@ -187,6 +187,10 @@ class FrfAnalysis(StrictModel):
             raise FieldError("omega", "the generalized-inverse receptance (eq 15) is singular "
                              "at omega = 0: use frequencies > 0 (or method kkt for statics)",
                              float(w[w <= 0][0]))
+        if "modal" in self.model_fields_set and self.method not in ("modal", "auto"):
+            raise FieldError("modal", f"the modal block is for method: modal (or auto, which "
+                             f"sums the modes on a large model); the method is {self.method}",
+                             "{...}")
         if self.loss_factor is not None and self.method in ("modal", "auto"):
             raise FieldError("method", "a loss factor is taken by the direct formulations "
                              "only (generalized-inverse, null-space, kkt)", self.method)

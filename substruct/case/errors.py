@@ -406,7 +406,11 @@ def translate(exc: ValidationError, raw: Any, source: str, root: type[BaseModel]
                     and tuple(e["loc"][:-1]) == parent), err)
     problem, loc, value = _problem(err, tuple(err["loc"]), root, raw)
     path = field_path(loc, raw)
-    if any(path == p or path.startswith(p + ".") or path.startswith(p + "[")
-           for p in set_paths):
+    # an unknown key that --set made on the way to its value (analysis.mode of
+    # analysis.mode.count) is of the command line too
+    made = err["type"] == "extra_forbidden" and path and any(
+        p.startswith(path + ".") or p.startswith(path + "[") for p in set_paths)
+    if made or any(path == p or path.startswith(p + ".") or path.startswith(p + "[")
+                   for p in set_paths):
         problem += " (set on the command line)"
     return CaseError(source, path, problem, value)

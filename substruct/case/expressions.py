@@ -26,6 +26,7 @@ and 0 or within ``1e-30 .. 1e30`` in magnitude; so must the value of :func:`scal
 from __future__ import annotations
 
 import ast
+import re
 from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Mapping
 
@@ -43,6 +44,9 @@ FUNCTIONS: dict[str, Callable[[np.ndarray], np.ndarray]] = {
 }
 #: Named constants.
 CONSTANTS: dict[str, float] = {"pi": float(np.pi)}
+#: A number followed by a word, ``200 mm`` or ``6e6 N/mm^2``: a unit, which numbers do not take.
+_UNIT = re.compile(r"^\s*([-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?)\s*([A-Za-z_%\u00b0\u00b5]"
+                   r"[\w/^.*%\u00b0\u00b5-]*)\s*$")
 
 _BINOPS: dict[type, Callable[[Any, Any], Any]] = {
     ast.Add: np.add, ast.Sub: np.subtract, ast.Mult: np.multiply, ast.Div: np.true_divide,
@@ -141,6 +145,11 @@ def _check(node: ast.AST, text: str, allowed: frozenset[str], used: set[str],
         return
     if isinstance(node, ast.Call):
         func = node.func
+        if isinstance(func, ast.Constant):  # 0.3 (steel), 2 (x + 1)
+            raise ExpressionError(
+                f"{_piece(func, text)!r} followed by parentheses in {_at(node, text)}: a "
+                f"comment goes after # outside the quotes ({_piece(func, text)} # ...), a "
+                f"product needs * (2*(x + 1))")
         if not isinstance(func, ast.Name) or func.id not in FUNCTIONS:
             raise ExpressionError(
                 f"call of {_piece(func, text)!r} is not allowed (functions: "
@@ -195,6 +204,12 @@ def compile_expression(text: str, names: Iterable[str] = ("x", "L")) -> Expressi
     try:
         tree = ast.parse(text.strip(), mode="eval")
     except SyntaxError as err:
+        unit = _UNIT.match(text)
+        if unit and unit.group(2) not in (*names, *CONSTANTS, *FUNCTIONS):
+            raise ExpressionError(
+                f"units are not accepted in numbers: write {unit.group(1)!r} alone (the "
+                f"numbers are in the case's consistent units, its units: note converts "
+                f"nothing)") from None
         raise ExpressionError(f"syntax error in {_short(text)!r}: {err.msg}") from None
     except (RecursionError, MemoryError, ValueError):
         raise ExpressionError(f"cannot parse {text[:60]!r}") from None

@@ -21,6 +21,7 @@ from pydantic import (
     Field,
     StringConstraints,
     ValidationInfo,
+    model_validator,
 )
 
 from substruct.case.expressions import ExpressionError, scalar
@@ -199,6 +200,29 @@ class StrictModel(BaseModel):
 
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, validate_default=False,
                               defer_build=True)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _yaml_booleans(cls, data: Any) -> Any:
+        """A field typed ``bool`` takes ``true`` or ``false`` only: pydantic would also read
+        ``"yes"``, ``"off"``, ``0`` or ``1`` as a boolean."""
+        if isinstance(data, dict):
+            from substruct.case.errors import FieldError  # errors imports this module
+
+            for name in _boolean_fields(cls):
+                value = data.get(name, False)
+                if not isinstance(value, bool):
+                    raise FieldError(name, "must be true or false", value)
+        return data
+
+
+def _boolean_fields(model: type[BaseModel]) -> frozenset[str]:
+    """The fields of ``model`` typed ``bool`` (computed once per model class)."""
+    found: frozenset[str] | None = model.__dict__.get("_boolean_field_names")
+    if found is None:
+        found = frozenset(name for name, f in model.model_fields.items() if f.annotation is bool)
+        setattr(model, "_boolean_field_names", found)
+    return found
 
 
 def memory_limit() -> float:

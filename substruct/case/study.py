@@ -73,6 +73,12 @@ class GridAxis(StrictModel):
     @model_validator(mode="after")
     def _one_form(self) -> "GridAxis":
         ranged = (self.start, self.stop, self.num)
+        if self.values is not None:
+            for key in ("start", "stop", "num", "spacing"):
+                if key in self.model_fields_set:
+                    raise FieldError(key, "not a key of an axis given by values (start, stop, "
+                                     "num and spacing make a range, without values)",
+                                     getattr(self, key))
         if (self.values is None) == all(v is None for v in ranged):
             raise ValueError("give values: [...] or start, stop and num")
         if self.values is None:

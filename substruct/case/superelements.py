@@ -257,9 +257,12 @@ class SuperelementSpec(StrictModel):
             if len(parts) != 2 or not all(re.fullmatch(r"\d{1,9}", p) for p in parts):
                 if not rows and not any(c.isdigit() for c in line):
                     continue  # a header line
-                raise FieldError(("dofs", "file"), f"line {k}: expected 'grid, component' "
-                                 f"(two integers), got {line[:40]!r}", file)
+                raise FieldError(("dofs", "file"), f"line {k} of {file}: expected 'grid, "
+                                 f"component' (two integers)", line[:40])
             rows.append((int(parts[0]), int(parts[1])))
+        if not rows:
+            raise FieldError(("dofs", "file"), "no rows 'grid, component': the file is empty "
+                             "(or holds only a header or comments)", file)
         return np.asarray(rows, dtype=float).reshape(-1, 2)
 
     # -------------------------------------------------------------------- checks

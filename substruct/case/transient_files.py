@@ -80,6 +80,10 @@ def read_table(path: Path) -> tuple[np.ndarray, np.ndarray]:
     elif path.suffix == ".csv":
         if path.stat().st_size > CSV_ROW_BYTES * MAX_TABLE_ROWS:
             raise ValueError(f"more than {MAX_TABLE_ROWS} rows")
+        with open(path, encoding="utf-8", errors="replace") as fh:
+            if not any(line.split("#", 1)[0].strip() for line in fh):
+                raise ValueError("the file is empty (or only comments): a CSV table has rows "
+                                 "t, value")
         data = np.loadtxt(path, delimiter=",", ndmin=2, comments="#")
         if data.shape[1] != 2:
             raise ValueError("a CSV table has two columns, t and value")

@@ -53,8 +53,9 @@ def compute(case: Any, quiet: bool, frf_sink: Any = None, backend: Any = None,
     with collector_paused():  # loading the builder and the analyses
         import substruct.run.runner as runner
 
-    bar = ProgressBar(sys.stderr) if not quiet else None
-    events = PhaseLog(sys.stderr, phases_wanted(sys.stderr, quiet), warn=not quiet)
+    show = phases_wanted(sys.stderr, quiet)  # the sweeps' lines as the phases
+    bar = ProgressBar(sys.stderr) if show else None
+    events = PhaseLog(sys.stderr, show, warn=not quiet)
     model = runner.build_model(case, events)
     if backend is None:
         return runner.run_case(case, progress=bar, model=model, events=events,

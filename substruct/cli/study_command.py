@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from substruct.cli.errors import InputError
-from substruct.cli.progress import CountBar
+from substruct.cli.progress import CountBar, phases_wanted
 from substruct.cli.files import check_out_dir, check_targets, input_files
 
 __all__ = ["study_command", "backend_options"]
@@ -116,7 +116,9 @@ def _study_locked(args: argparse.Namespace, case: Any, backend: Any, out: Path, 
     from substruct.studies.study_run import run_study
 
     target = out / names[0]
-    show = not args.quiet and bool(getattr(sys.stderr, "isatty", lambda: False)())
+    # the bars redraw a line: on a terminal only, and not with SUBSTRUCT_PROGRESS=0
+    show = phases_wanted(sys.stderr, args.quiet) and \
+        bool(getattr(sys.stderr, "isatty", lambda: False)())
     samples = CountBar(sys.stderr, "study", "sample", show)
     parts = CountBar(sys.stderr, "reductions", "part", show)
     start = time.perf_counter()

@@ -1,10 +1,12 @@
 """Pictures of a study (matplotlib, written atomically beside the study file):
 
 * ``<name>_study_frequencies.png``: a grid's frequencies against its first parameter, one
-  curve per mode (and per value of a second parameter, lighter);
+  curve per mode (and, on a product grid, per value of a second parameter, lighter; a zip's
+  samples are one curve);
 * ``<name>_study_histogram.png``: random samples, a histogram of each collected frequency;
-* ``<name>_study_tuning.png``: a two-parameter grid with an FRF peak, the peak as a colour map
-  over the two parameters (an absorber's stiffness and damping), the smallest marked, and
+* ``<name>_study_tuning.png``: a two-parameter product grid with an FRF peak (a zip's points,
+  on one line through the plane, make no map), the peak as a colour map over the two
+  parameters (an absorber's stiffness and damping), the smallest marked, and
   optionally a closed-form optimum (Den Hartog's) marked beside it;
 * ``<name>_study_tracked.png``: the modes followed through a one-parameter study
   (:mod:`substruct.viz.tracking_picture`).
@@ -26,13 +28,24 @@ from substruct.viz.tracking_picture import tracking_figure
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-__all__ = ["frequency_figure", "histogram_figure", "tuning_figure", "study_pictures"]
+__all__ = ["frequency_figure", "histogram_figure", "tuning_figure", "study_pictures",
+           "is_product"]
 
 
 def _save(fig: "Figure", path: Path) -> Path:
     with atomic_path(path, suffix=".png.part") as tmp:
         fig.savefig(tmp, format="png")
     return path
+
+
+def is_product(table: np.ndarray) -> bool:
+    """Whether the samples ``table`` (samples x parameters) are every combination of the
+    parameters' distinct values, once each: a product grid (a zip is not, but for one sample
+    or one parameter)."""
+    if table.shape[1] < 2:
+        return True
+    size = int(np.prod([len(np.unique(column)) for column in table.T]))
+    return size == len(table) == len(np.unique(table, axis=0))
 
 
 def frequency_figure(result: StudyResult) -> "Figure":
@@ -44,7 +57,7 @@ def frequency_figure(result: StudyResult) -> "Figure":
     fig = Figure(figsize=(8, 5), dpi=110, layout="constrained")
     ax = fig.add_subplot()
     groups = [np.arange(len(x))]
-    if result.table.shape[1] > 1:
+    if result.table.shape[1] > 1 and is_product(result.table):
         others = result.table[:, 1:]
         keys = np.unique(others, axis=0)
         groups = [np.flatnonzero(np.all(others == key, axis=1)) for key in keys]
@@ -124,8 +137,8 @@ def study_pictures(result: StudyResult, folder: str | os.PathLike,
             out.append(_save(frequency_figure(result), folder / f"{stem}_frequencies.png"))
         else:
             out.append(_save(histogram_figure(result), folder / f"{stem}_histogram.png"))
-    if (result.kind == "grid" and result.table.shape[1] == 2 and "frf_peak" in result.values
-            and np.isfinite(result.values["frf_peak"]).any()):
+    if (result.kind == "grid" and result.table.shape[1] == 2 and is_product(result.table)
+            and "frf_peak" in result.values and np.isfinite(result.values["frf_peak"]).any()):
         out.append(_save(tuning_figure(result, marked=marked), folder / f"{stem}_tuning.png"))
     if isinstance(result.tracking, TrackedStudy):
         out.append(_save(tracking_figure(result.tracking, result.case_name),
