@@ -18,13 +18,14 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg as sla
+import scipy.sparse as sp
 
 from substruct.analysis.errors import AnalysisInputError
 from substruct.analysis.modes.pencil import Refine
 from substruct.analysis.results import Modes
 from substruct.linalg.constraints import independent_rows
 from substruct.linalg.nullspace import null_space_basis
-from substruct.linalg.scaling import mass_column_scale
+from substruct.linalg.scaling import mass_column_scale, rigid_eigenvalue
 from substruct.vocabulary import GENERALIZED_INVERSE
 
 __all__ = [
@@ -277,6 +278,11 @@ def classify_roots(lam: np.ndarray, U: np.ndarray, A: np.ndarray, M: np.ndarray,
         reasons.append(SPURIOUS_ZERO)
     phys_lam: list[complex] = [0j] * st.rigid.shape[1]
     phys_u: list[np.ndarray] = [st.rigid[:, j].astype(complex) for j in range(st.rigid.shape[1])]
+    # undamped: a pair of roots with |omega^2| at round-off of the matrices' scale is a rigid-body
+    # mode whose K u = 0 holds only to the input's rounding (a supplier's reduced matrices),
+    # reported at 0 as on the sparse path, not as a real pair of damping ratio +1 and -1
+    tiny = rigid_eigenvalue(sp.csr_array(K), sp.csr_array(M)) if not np.any(C) else -1.0
+    near_rigid: list[np.ndarray] = []
     for j in rest_idx:
         lj, u = complex(lam[j]), U[:, j]
         r = residual(u)
@@ -285,6 +291,9 @@ def classify_roots(lam: np.ndarray, U: np.ndarray, A: np.ndarray, M: np.ndarray,
             reasons.append(f"violates the constraints: |A u|/(|A||u|) = {r:.2e}")
             continue
         real = abs(lj.imag) <= REAL_TOL * abs(lj)
+        if abs(lj) ** 2 <= tiny:
+            near_rigid.append(u)
+            continue
         if not real and lj.imag < 0:
             continue  # the conjugate of a kept root
         if refine is not None:
@@ -294,6 +303,10 @@ def classify_roots(lam: np.ndarray, U: np.ndarray, A: np.ndarray, M: np.ndarray,
             lj = complex(lj.real, 0.0)  # real: each root is its own mode
         phys_lam.append(lj)
         phys_u.append(u)
+    if near_rigid:  # two roots a mode (+-r, or a repeated -r): one direction of their span each
+        Q = np.linalg.svd(np.array(near_rigid).T, full_matrices=False)[0]
+        phys_lam += [0j] * (len(near_rigid) // 2)
+        phys_u += list(Q[:, :len(near_rigid) // 2].T)
     for j in inf_idx:
         spurious.append(complex(lam[j]) if np.isfinite(lam[j]) else complex(np.inf))
         reasons.append(INFINITE_ROOT)
