@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 import scipy.linalg as sl
 
-from substruct.case.ansys_full import read_full
+from substruct.case.ansys_full import _INT_FLAG, _REAL_FLAG, _Records, read_full
 from substruct.case.errors import CaseError
 from substruct.case.loader import load_case
 from substruct.run.runner import run_case
@@ -26,11 +26,11 @@ FULL = DATA / "file.full"
 HEADER = 105        # the word of the FULL header's item 1 (the key -4)
 
 
-def _reference() -> tuple[np.ndarray, np.ndarray, list[tuple[int, int]]]:
+def _reference(name: str = "file") -> tuple[np.ndarray, np.ndarray, list[tuple[int, int]]]:
     """The reference's K and M (stored as one triangle, the constrained equations zero) made
     whole, without the constrained equations, and their (node, component): the file's labels
     are UX UY UZ, so the reference's 0-based index in the node is the component less 1."""
-    ref = np.load(DATA / "file_reference.npz")
+    ref = np.load(DATA / f"{name}_reference.npz")
     held = {tuple(int(x) for x in row) for row in ref["const"]}
     dof = [(int(n), int(j)) for n, j in ref["dof_ref"]]
     keep = [k for k, d in enumerate(dof) if d not in held]
@@ -46,6 +46,65 @@ def test_matrices_and_dof_map_equal_the_reference() -> None:
     # the same doubles from the same file: equal to the last bit
     assert np.array_equal(got.K.toarray(), K)
     assert np.array_equal(got.M.toarray(), M)
+
+
+def test_compressed_records_equal_the_reference() -> None:
+    """``sparse.full`` (MAPDL 20.1) writes its DOF table as a windowed-sparse integer record
+    (flags 0x90000000: 115 nodes of 3 degrees of freedom as one repeated value): read, it
+    gives the reference's matrices and DOF map."""
+    path = DATA / "sparse.full"
+    w = np.fromfile(path, "<i4")
+    assert w[24861:24869].tolist() == [5, 0x90000000 - (1 << 32), 115, 1, 0, -115, 3, 5]
+    got = read_full(path, path.name)
+    K, M, dofs = _reference("sparse")
+    assert got.dofs == dofs and len(dofs) == 345 and got.constrained == []
+    assert np.array_equal(got.K.toarray(), K)
+    assert np.array_equal(got.M.toarray(), M)
+    assert np.count_nonzero(K) > 0 and np.count_nonzero(M) > 0
+
+
+def _record(body: list[int], flags: int) -> np.ndarray:
+    """Words of a file holding one record ``body`` with ``flags``."""
+    return np.array([len(body), flags - (1 << 32) if flags >> 31 else flags, *body,
+                     len(body)], dtype="<i4")
+
+
+def _doubles(*values: float) -> list[int]:
+    return np.array(values, "<f8").view("<i4").tolist()
+
+
+def test_compressed_record_forms() -> None:
+    """The windowed-sparse and bit-sparse forms as ansys-mapdl-reader's record reader reads
+    them (one value at an index, a run, a repeated value; a mask), and their malformed
+    variants refused in one line."""
+    def read(body: list[int], flags: int, flag: int, most: int = 100) -> np.ndarray:
+        return _Records(_record(body, flags), "x.full", "<").record(0, "table", flag, most)[0]
+
+    ints = read([10, 3, 2, 7, -4, 2, 4, 5, -7, -3, 9], 0x90000000, _INT_FLAG)
+    assert ints.tolist() == [0, 0, 7, 0, 4, 5, 0, 9, 9, 9]
+    vals = np.frombuffer(read([6, 2, 1, *_doubles(2.5), -3, -3, *_doubles(-1.25)],
+                              0x10000000, _REAL_FLAG).tobytes(), "<f8")
+    assert vals.tolist() == [0, 2.5, 0, -1.25, -1.25, -1.25]
+    vals = np.frombuffer(read([5, 0b10110, *_doubles(1.5, 2.5, 3.5)], 0x08000000,
+                              _REAL_FLAG).tobytes(), "<f8")
+    assert vals.tolist() == [0, 1.5, 2.5, 0, 3.5]
+    assert read([4, 0b1001, 8, 9], 0x88000000, _INT_FLAG).tolist() == [8, 0, 0, 9]
+
+    for body, flags, most, message in [
+        ([10**9, 0], 0x90000000, 100, "1000000000 values declared; 0 to 100 are accepted"),
+        ([4, 1, -2, 3, 1, 2, 3], 0x90000000, 100, r"window 1 covers indices 2 to 4, not after "
+                                                  r"the previous window and within 0 to 3"),
+        ([4, 2, 2, 7, 1, 8], 0x90000000, 100, "window 2 covers indices 1 to 1, not after"),
+        ([4, 1, 0, 0, 5], 0x90000000, 100, r"window 1 \(at index 0\) has length 0"),
+        ([4, 1, 0, 3, 5], 0x90000000, 100, "its values run past its 5 words"),
+        ([4, 1, 1, 5, 6], 0x90000000, 100, "1 words left after its 1 windows"),
+        ([4, 0b10000, 5], 0x88000000, 100, r"mask 0x10 marks values beyond the 4 declared"),
+        ([4, 0b11, 5], 0x88000000, 100, "its values run past its 3 words"),
+        ([4, 0], 0xA0000000, 100, r"has flags 0xa0000000, not integers: a zlib-compressed "
+                                  r"record; read are plain records \(0x80000000\)"),
+    ]:
+        with pytest.raises(CaseError, match=r"^x\.full: table: .*" + message):
+            read(body, flags, _INT_FLAG, most)
 
 
 def _case(tmp: Path, sub: str, count: int) -> Path:

@@ -120,6 +120,19 @@ def test_square_small_field_form(tmp_path: Path, element_model) -> None:
     assert read_dmig(tmp_path / "k.dat", "k.dat")["KSQ"].form == 1
 
 
+def test_ncol_on_square_and_symmetric_forms_not_used() -> None:
+    """A Nastran punch file writes NCOL on IFO 1 and IFO 6 headers too, where Nastran does not
+    use it: read, with the numbers pyYeti's reader gives for this file."""
+    path = Path(__file__).parent / "data" / "nastran" / "dmig" / "matrix_factory_real.pch"
+    mats = read_dmig(path, path.name)
+    assert (mats["PATRN"].form, mats["IDENT"].form) == (1, 6)
+    dofs, got, nbytes = dmig_matrices(path, path.name, ["PATRN", "IDENT"])
+    assert dofs == [(g, c) for g in (1, 2, 3) for c in range(1, 7)] + [(10, 0), (11, 0), (12, 0)]
+    assert nbytes == 4  # IFO 1 counts as single precision for the symmetry check
+    assert np.array_equal(got["PATRN"], np.tile(np.arange(1.0, 22.0), (21, 1)))
+    assert np.array_equal(got["IDENT"], np.eye(21))
+
+
 @pytest.mark.parametrize("text,fragment", [
     ("DMIG,K,0,6,2\nDMIG,K,1,1,,1,1,2.0,\nDMIG,K,1,1,,1,2,1.0,\n",
      "line 3: DMIG K: column 1:1 of DMIG K is given twice (also on line 2)"),
@@ -127,6 +140,10 @@ def test_square_small_field_form(tmp_path: Path, element_model) -> None:
      "DMIG K is symmetric (IFO 6): give one triangle, but term (1:1, 1:2) is given in both"),
     ("DMIG,K,0,6,4\n", "DMIG K: TIN: TIN 1 and 2 (real) are read"),
     ("DMIG,K,0,2,2,,,,3\n", "DMIG K: IFO: IFO 6 (symmetric) and 1 (square) are read"),
+    ("DMIG,K,0,6,2,,,,-3\nDMIG,K,1,1,,1,1,2.0,\n", "NCOL: NCOL (not used for IFO 1 "
+     "and 6) is blank or a count of columns, not negative"),
+    ("DMIG,K,0,6,2,,,,x\nDMIG,K,1,1,,1,1,2.0,\n", "NCOL: must be an integer"),
+    ("DMIG,K,0,6,2,,,7,\nDMIG,K,1,1,,1,1,2.0,\n", "field 8 of a DMIG header is blank"),
     ("DMIG,K,1,1,,1,1,2.0,\n", "a column of DMIG K with no header entry"),
     ("DMIG,K,0,6,2\nDMIG,K,1,7,,1,1,2.0,\n", "GJ component: a component is 1-6"),
     ("DMIG,K,0,6,2\nDMIG,K,1,1,,1,1,2.0,3.0\n", "B (the imaginary part) is blank"),

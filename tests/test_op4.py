@@ -32,6 +32,15 @@ def _matrices(exponents: float = 200) -> dict:
             "SP": sp.random(9, 4, density=0.4, random_state=2, format="csc")}
 
 
+def _decimal(x: np.ndarray, digits: int) -> np.ndarray:
+    """The numbers of ``x`` as text with ``digits`` after the point, read back as float64."""
+    def one(v: float) -> float:
+        return float(f"{v:.{digits}E}")
+    if np.iscomplexobj(x):
+        return np.vectorize(lambda z: one(z.real) + 1j * one(z.imag))(x).astype(complex)
+    return np.vectorize(one)(x).astype(float)
+
+
 LAYOUTS = [(False, "<", 4)] + [(True, o, i) for o in "<>" for i in (4, 8)]
 
 
@@ -52,6 +61,8 @@ def test_round_trip_bit_for_bit(tmp_path: Path, binary: bool, order: str, isz: i
         want = want.toarray() if sp.issparse(want) else want
         if precision == "single":  # the file holds the float32 values, read exactly
             want = want.astype(np.complex64 if np.iscomplexobj(want) else np.float32)
+            if not binary:  # ... as the 10 significant digits written, kept in float64
+                want = _decimal(want, 9)
         m = got[name]
         assert m.storage == storage and (m.rows, m.cols) == want.shape
         assert m.type == (4 if np.iscomplexobj(want) else 2) - (precision == "single")
@@ -196,3 +207,82 @@ def test_limit_refuses_before_reading(tmp_path: Path) -> None:
     with pytest.raises(Op4Error, match=r"k\.op4: matrix 'KAA' \(100 x 100, dense\) would "
                        r"need about 0\.08 MB"):
         read_op4(tmp_path / "k.op4", limit=50_000)
+
+
+# ------------------------------------------------------- files of other writers (pyyeti's tests)
+
+DATA = Path(__file__).parent / "data" / "op4"
+
+
+def test_text_single_precision_keeps_the_digits_written(tmp_path: Path) -> None:
+    """A type 1 (or 3) text matrix holds the decimals written; they are read as float64, not
+    rounded to float32.  Text written at 17 digits from a binary single file reads as that
+    file, bit for bit."""
+    text = ("       2       2       6       1KAA     1P,3E23.16\n"
+            "       1       1       1\n 1.2345678901234567E+00\n"
+            "       2       2       1\n 9.8765432109876543E-01\n"
+            "       3       1       1\n 1.0000000000000000E+00\n"
+            "       1       1       2       3C        1P,3E23.16\n"
+            "       1       1       2\n 1.2345678901234567E+00-2.2222222222222222E-01\n"
+            "       2       1       1\n 1.0000000000000000E+00\n")
+    (tmp_path / "t.op4").write_text(text)
+    got = read_op4(tmp_path / "t.op4")
+    assert got["KAA"].type == 1 and got["C"].type == 3
+    assert got["KAA"].dense()[0, 0] == 1.2345678901234567  # not 1.2345678806304932
+    assert got["KAA"].dense()[1, 1] == 0.98765432109876543
+    assert got["C"].dense()[0, 0] == 1.2345678901234567 - 0.22222222222222222j
+
+    A = np.random.default_rng(5).standard_normal((4, 3))
+    write_op4(tmp_path / "b.op4", {"A": A}, binary=True, precision="single")
+    write_op4(tmp_path / "a.op4", {"A": A}, binary=False, precision="single", digits=16)
+    binary, ascii_ = read_op4(tmp_path / "b.op4")["A"], read_op4(tmp_path / "a.op4")["A"]
+    assert binary.type == ascii_.type == 1
+    assert np.array_equal(ascii_.dense(), binary.dense())
+    assert np.array_equal(binary.dense(), A.astype(np.float32))
+
+
+def test_text_closing_column_counted_in_words() -> None:
+    """Nastran's text files declare the closing column's one number as 2 words for a double
+    matrix (``double_nonbigmat_ascii.op4.other``, ``cdbin_ascii_sparse_bigmat.op4``) or as
+    1: both are read, and give the numbers of the binary files of the same matrices to the
+    digits written."""
+    a = read_op4(DATA / "double_nonbigmat_ascii.op4.other")
+    b = read_op4(DATA / "double_nonbigmat_be.op4.other")
+    assert list(a) == list(b) == ["KAA", "MAA"]
+    for k in a:
+        assert a[k].type == 2 and a[k].storage == "sparse" and a[k].dense().shape == (16, 16)
+        A, B = a[k].dense(), b[k].dense()
+        assert np.array_equal(A != 0, B != 0)
+        assert np.all(np.abs(A - B) <= 0.5e-9 * np.abs(B))  # 1P,5E16.9: 10 digits
+    assert a["KAA"].dense()[0, 0] == 2.136230469e-03 and b["KAA"].dense()[0, 0] == 0.00213623046875
+    assert a["MAA"].dense()[6, 6] == 1.0
+
+    c = read_op4(DATA / "cdbin_ascii_sparse_bigmat.op4")
+    d = read_op4(DATA / "cdbin.op4")
+    assert list(c) == list(d) == ["C1", "C2", "C3", "C4", "C5"]
+    for k in c:
+        C, D = c[k].dense(), d[k].dense()
+        assert c[k].type == 4 and C.shape == D.shape
+        assert np.all(np.abs(C - D) <= 0.5e-15 * np.abs(D) + 1e-300)  # 1P,3E22.15
+    assert c["C1"].storage == "bigmat" and c["C1"].dense().shape == (5, 6)
+    assert c["C1"].dense()[0, 0] == 1.233140833282189 - 1.364201536870681j
+    assert c["C3"].dense()[0, 0] == 3 + 7j
+
+
+def test_repeated_names_refused_only_when_asked_for() -> None:
+    """A nas2cam file writes ``SE_START`` once per superelement: the file is read, and only a
+    name asked for that is written more than once is refused, naming its occurrences."""
+    path = DATA / "inboard_nas2cam.op4"
+    assert op4_names(path) == ["SE_START", "LAMBDA", "MAA", "KAA", "SE_START", "LOOP_END"]
+    got = read_op4(path, ["maa", "KAA", "lambda"])
+    assert sorted(got) == ["KAA", "LAMBDA", "MAA"]
+    K, M, lam = got["KAA"].dense(), got["MAA"].dense(), got["LAMBDA"].dense()
+    assert K.shape == M.shape == (84, 84) and lam.shape == (60, 1)
+    assert K[0, 0] == 434961.12333316356 and K[0, 1] == 1584010.9166389694
+    assert M[0, 0] == 6.354653044080377
+    assert lam[0, 0] == 1483.1597900390625
+    assert np.abs(K - K.T).max() <= 1e-10 * np.abs(K).max()
+    for names in (["KAA", "se_start"], None):
+        with pytest.raises(Op4Error, match=r"^inboard_nas2cam\.op4: matrix 'SE_START' is "
+                           r"written 2 times \(matrices 1 and 5 of the file\)"):
+            read_op4(path, names)

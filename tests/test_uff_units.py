@@ -8,6 +8,9 @@ are not known in a file that is not SI, units exponents that contradict the data
 
 from __future__ import annotations
 
+import re
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -129,6 +132,35 @@ def test_exponents_that_agree_with_the_data_type_are_read(tmp_path):
     a = read_frf_file(_file(tmp_path, _units164(), _cs2420(), _nodes2411(), *base, name="a.uff"))[2]
     b = read_frf_file(_file(tmp_path, _units164(), _cs2420(), _nodes2411(), *given, name="b.uff"))[2]
     np.testing.assert_array_equal(a, b)
+
+
+def test_testlab_blank_temperature_mode_is_not_given():
+    """LMS Test.Lab leaves dataset 164 record 1 field 3 (temperature mode) blank: read as not
+    given (substruct uses no temperature); the rest of the file as pyuff reads it."""
+    path = Path(__file__).parent / "data" / "uff" / "testlab_161_164_18_15_82.uff"
+    read = read_uff_records(path)
+    u = read.units
+    assert u is not None and u.temperature_mode is None
+    assert (u.code, u.description, u.length, u.force, u.temperature,
+            u.temperature_offset) == (9, "USER_DEFINED", 1.0, 1.0, 1.0, -273.15)
+    assert len(read.node_table) == 36
+    # pyuff 2.5.8's dataset 15 of the file: nodes 1-3
+    for label, xyz in ((1, (-2.4, -0.95, 0.0)), (2, (-2.6, 2.05, 0.0)), (3, (2.6, 2.05, 0.0))):
+        assert read.node_table[label].xyz == xyz and read.node_table[label].def_cs == 0
+
+
+@pytest.mark.parametrize("mode, message", [
+    ("         x", "record 1 field 3, temperature mode 'x': not an integer"),
+    ("       1.5", "record 1 field 3, temperature mode '1.5': not an integer"),
+])
+def test_temperature_mode_text_refused(tmp_path, mode, message):
+    units = _units164().replace(f"{'Foot (pound f)':<20}{2:10d}", f"{'Foot (pound f)':<20}{mode}")
+    assert units != _units164()
+    with pytest.raises(ValueError, match=re.escape(message)):
+        read_uff_records(_file(tmp_path, units, _nodes2411(), *_functions()))
+    blank = _units164().replace(f"{'Foot (pound f)':<20}{2:10d}", f"{'Foot (pound f)':<20}")
+    assert read_uff_records(_file(tmp_path, blank, _nodes2411(), *_functions(),
+                                  name="b.uff")).units.temperature_mode is None
 
 
 @pytest.mark.parametrize("parts, message", [

@@ -3,7 +3,14 @@ writes (``Jobname.FULL``), with the map of their equations by node and degree of
 
 The file is a sequence of Fortran-style binary records, each
 ``[n] [flags] [n 4-byte words] [n]``: ``n`` counts the data's 4-byte words, ``flags`` has its
-top bit set for integers and is 0 for double-precision reals. What is read:
+top bit set for integers and is 0 for double-precision reals. MAPDL may write a record
+compressed, flagged in the top byte: ``0x10000000`` windowed sparse (the count of values, the
+count of windows, each window one value at an index, a run of values, or one value repeated),
+``0x08000000`` bit sparse (at most 32 values and a mask of the non-zero ones); both are
+expanded, their sizes checked before anything is allocated (a record of
+``0x90000000``, integers in windows, holds the DOF table of ``sparse.full``, for instance).
+Zlib-compressed (``0x20000000``) and single-precision (``0x40000000``) records are refused,
+naming their flags. What is read:
 
 1. the standard header (100 integers; item 1, the file number, is 4 for a FULL file);
 2. the FULL header: item 1 ``-4``, ``neqn`` (equations), ``wfmax`` (longest column), ``lenbac`` (nodes), ``numdof`` (degrees of freedom a node), ``ntermK`` (terms of
@@ -26,7 +33,8 @@ Refused, in one line naming the file, the record and the problem: a file that is
 file (standard-header file number, FULL header key), a lumped mass (``lumpm``), unsymmetric
 matrices (``keyuns``), the frontal and other layouts (``extopt`` 3 and 4), constraint
 equations (``ncefull``), a damping matrix (``ptrDMP``), values that are not real double
-precision (complex or single, by the record flags), a node whose degrees of freedom differ
+precision (complex or single, by the record flags), zlib-compressed records, a compressed
+record whose windows or mask disagree with its words or its declared count, a node whose degrees of freedom differ
 from ``numdof``, a label outside 1-6, a record whose length or end marker disagree with the
 file or with the header, a row number outside ``1..neqn``, a term given twice, a value that is
 not finite. Sizes are checked before anything is allocated: the file (2 GB), the equations
@@ -51,6 +59,10 @@ MAX_FULL_FILE = 2_000_000_000
 FULL_LABELS = {1: "UX", 2: "UY", 3: "UZ", 4: "ROTX", 5: "ROTY", 6: "ROTZ"}
 _INT_FLAG = -2**31      # 0x80000000: an integer record
 _REAL_FLAG = 0          # a double-precision real record
+_SINGLE = 0x40000000    # single precision (short integers)
+_ZLIB = 0x20000000      # zlib-compressed
+_WSPARSE = 0x10000000   # windowed sparse: windows of values or of one repeated value
+_BSPARSE = 0x08000000   # bit sparse: at most 32 values, a bit for each non-zero
 
 
 class FullMatrices:
@@ -76,8 +88,10 @@ class _Records:
     def error(self, where: str, problem: str) -> CaseError:
         return CaseError(self.name, where, problem)
 
-    def record(self, pos: int, what: str, flag: int) -> tuple[np.ndarray, int]:
-        """The data of the record at word ``pos`` and the position after it."""
+    def record(self, pos: int, what: str, flag: int,
+               most: int = MAX_MATRIX_SIZE) -> tuple[np.ndarray, int]:
+        """The data of the record at word ``pos`` (a compressed record expanded, to at most
+        ``most`` values) and the position after it."""
         w = self.w
         if pos < 0 or pos + 2 > len(w):
             raise self.error(what, f"record at word {pos} lies beyond the end of the file "
@@ -89,12 +103,96 @@ class _Records:
         if int(w[pos + 2 + n]) != n:
             raise self.error(what, f"record at word {pos} declares {n} words but ends with "
                              f"the length {int(w[pos + 2 + n])}: wrong record length")
-        if int(w[pos + 1]) != flag:
-            kind = "integers" if flag == _INT_FLAG else "double-precision reals"
-            raise self.error(what, f"record at word {pos} has flags "
-                             f"{int(w[pos + 1]) & 0xFFFFFFFF:#x}, not {kind} (complex or "
-                             "single-precision values are not read)")
-        return w[pos + 2:pos + 2 + n], pos + 3 + n
+        flags = int(w[pos + 1]) & 0xFFFFFFFF
+        want = flag & 0xFFFFFFFF
+        kind = "integers" if flag == _INT_FLAG else "double-precision reals"
+        data = w[pos + 2:pos + 2 + n]
+        if flags == want:
+            return data, pos + 3 + n
+        form = flags & ~0x80000000
+        if flags & 0x80000000 == want and form in (_WSPARSE, _BSPARSE):
+            return self._expand(data, pos, what, form, flag == _INT_FLAG, most), pos + 3 + n
+        problem = ("a zlib-compressed record" if flags & _ZLIB else
+                   "a single-precision record" if flags & _SINGLE else
+                   "an integer record" if flags & 0x80000000 else "a real record"
+                   if flags & ~0x80000000 in (0, _WSPARSE, _BSPARSE) else "an unknown form")
+        raise self.error(what, f"record at word {pos} has flags {flags:#x}, not {kind}: "
+                         f"{problem}; read are plain records ({want:#x}) and the compressed "
+                         f"forms windowed sparse ({want | _WSPARSE:#x}) and bit sparse "
+                         f"({want | _BSPARSE:#x})")
+
+    def _expand(self, data: np.ndarray, pos: int, what: str, form: int, ints: bool,
+                most: int) -> np.ndarray:
+        """The values of a compressed record, as the words a plain record would hold.
+
+        Both forms start with the count of values ``size``.  Windowed sparse
+        (``0x10000000``): then the count of windows, each either ``i > 0`` and one value
+        at 0-based index ``i``, or ``-start`` and ``length``: ``length`` values from
+        ``start`` on, or (``length < 0``) one value repeated ``-length`` times.  Bit sparse
+        (``0x08000000``): then a 32-bit mask, bit ``k`` set for each stored value ``k``
+        (so ``size <= 32``).  Values not stored are 0."""
+        step = 1 if ints else 2          # words of a value
+        where = f"{form | (0x80000000 if ints else 0):#x} record at word {pos}"
+
+        def bad(problem: str) -> CaseError:
+            return self.error(what, f"{where}: {problem}")
+
+        if len(data) < 2:
+            raise bad(f"{len(data)} words, fewer than its 2-word head")
+        size = int(data[0])
+        if not 0 <= size <= most:
+            raise bad(f"{size} values declared; 0 to {most} are accepted here")
+        out = np.zeros(size * step, dtype=data.dtype)
+
+        def values(at: int, count: int) -> np.ndarray:
+            if at + count * step > len(data):
+                raise bad(f"its values run past its {len(data)} words")
+            return data[at:at + count * step]
+
+        if form == _BSPARSE:
+            if size > 32:
+                raise bad(f"{size} values declared, a 32-bit mask holds at most 32")
+            mask = int(data[1]) & 0xFFFFFFFF
+            if mask >> size:
+                raise bad(f"mask {mask:#x} marks values beyond the {size} declared")
+            at = 2
+            for k in range(size):
+                if mask >> k & 1:
+                    out[k * step:(k + 1) * step] = values(at, 1)
+                    at += step
+            if at != len(data):
+                raise bad(f"{len(data) - at} words left after its values")
+            return out
+        nwin = int(data[1])
+        if not 0 <= nwin <= len(data):
+            raise bad(f"{nwin} windows declared in {len(data)} words")
+        at, end = 2, 0                   # end: the first index after the last window
+        for k in range(nwin):
+            if at >= len(data):
+                raise bad(f"window {k + 1} of {nwin} lies past its {len(data)} words")
+            loc = int(data[at])
+            at += 1
+            if loc > 0:                  # one value at index loc
+                start, count, repeat = loc, 1, False
+            else:
+                if at >= len(data):
+                    raise bad(f"window {k + 1} has no length")
+                start, length = -loc, int(data[at])
+                at += 1
+                if length == 0:
+                    raise bad(f"window {k + 1} (at index {start}) has length 0")
+                count, repeat = abs(length), length < 0
+            if start < end or start + count > size:
+                raise bad(f"window {k + 1} covers indices {start} to {start + count - 1}, "
+                          f"not after the previous window and within 0 to {size - 1}")
+            got = values(at, 1 if repeat else count)
+            at += len(got)
+            block = np.tile(got, count) if repeat else got
+            out[start * step:(start + count) * step] = block
+            end = start + count
+        if at != len(data):
+            raise bad(f"{len(data) - at} words left after its {nwin} windows")
+        return out
 
 
 def _long(low: int, high: int) -> int:
@@ -107,14 +205,15 @@ def _triangle(rec: _Records, ptr: int, neqn: int, nterm: int, wfmax: int,
     if not 0 < ptr < len(rec.w):
         raise rec.error(f"{what} pointer", f"word {ptr} lies outside the file "
                         f"({len(rec.w)} words)")
-    if nterm > len(rec.w) // 3:   # each term takes a row word and two value words
+    if nterm > len(rec.w):   # each term takes at least its row word (values may be compressed)
         raise rec.error(f"{what} terms", f"{nterm} terms declared, more than the file's "
                         f"{len(rec.w)} words can hold")
+    most = min(wfmax, neqn)  # values a column's (compressed) record may expand to
     rows, vals, counts = [], [], np.empty(neqn, np.int64)
     pos, total = ptr, 0
     for j in range(neqn):
-        idx, pos = rec.record(pos, f"{what} column {j + 1} rows", _INT_FLAG)
-        raw, pos = rec.record(pos, f"{what} column {j + 1} values", _REAL_FLAG)
+        idx, pos = rec.record(pos, f"{what} column {j + 1} rows", _INT_FLAG, most)
+        raw, pos = rec.record(pos, f"{what} column {j + 1} values", _REAL_FLAG, most)
         if len(raw) != 2 * len(idx):
             raise rec.error(f"{what} column {j + 1} values", f"{len(raw) // 2} values for "
                             f"{len(idx)} rows")
@@ -209,11 +308,11 @@ def read_full(path: Path, name: str) -> FullMatrices:
     if len(nodes) != nnodes or nodes.min() < 1 or len(np.unique(nodes)) != nnodes:
         raise rec.error("nodal equivalence table", f"{nnodes} distinct positive node numbers "
                         f"expected, got {len(nodes)} entries")
-    ndof, pos = rec.record(_long(item[35], item[36]), "DOF table", _INT_FLAG)
+    ndof, pos = rec.record(_long(item[35], item[36]), "DOF table", _INT_FLAG, nnodes)
     if len(ndof) != nnodes or np.any(ndof != numdof):
         raise rec.error("DOF table", f"every one of the {nnodes} nodes must have the "
                         f"{numdof} degrees of freedom of the header")
-    const, pos = rec.record(pos, "constraint table", _INT_FLAG)
+    const, pos = rec.record(pos, "constraint table", _INT_FLAG, neqn)
     if len(const) != neqn:
         raise rec.error("constraint table", f"{len(const)} entries for {neqn} equations")
     K = _triangle(rec, _long(item[18], item[19]), neqn, _long(item[8], item[9]), item[5], "K")

@@ -11,7 +11,9 @@ triangle is given, each off-diagonal term once, and the other is filled in) and 
 every term as given).  Rows and columns are ``(grid, component)`` pairs: components 1-6 of a
 grid, 0 of a scalar point.  Complex (``TIN`` 3, 4), rectangular (``IFO`` 2, 9), diagonal and
 polar forms are refused, as is any card but ``DMIG`` (and ``PARAM`` is not read either: the
-file holds the matrices only).  A term given twice, a column given on two entries, a symmetric
+file holds the matrices only).  ``NCOL`` is used by Nastran for ``IFO`` 9 only; on the forms
+read it is not used (as in Nastran, whose punch files write it there too): it must be blank or
+an integer of at least 0, and is otherwise ignored.  A term given twice, a column given on two entries, a symmetric
 matrix given with both triangles or a missing header is an error naming the line.
 
 :func:`dmig_matrices` gathers the named matrices on one set of coordinates, the union of
@@ -82,7 +84,15 @@ def _header(card: RawCard) -> DmigMatrix:
         raise card.error("TOUT is blank, 0, 1 or 2 (real)", tout, "TOUT")
     if card.text(5) not in ("", "0"):
         raise card.error("POLAR is blank or 0 (real matrices)", card.text(5), "POLAR")
-    card.blank_after(6, "NCOL belongs to the rectangular forms, which are not read")
+    if card.text(6):
+        raise card.error("field 8 of a DMIG header is blank", card.text(6), "field 8")
+    # NCOL (field 9) is used by Nastran for IFO 9 only; its punch files write it for the
+    # square and symmetric forms too, where it is not used: an integer, checked, not used.
+    ncol = card.integer(7, "NCOL", 0)
+    if ncol < 0:
+        raise card.error("NCOL (not used for IFO 1 and 6) is blank or a count of columns, "
+                         "not negative", ncol, "NCOL")
+    card.blank_after(8, "a DMIG header is one line")
     return DmigMatrix(card.text(0), ifo, tin, card.line)
 
 

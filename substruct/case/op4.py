@@ -16,7 +16,16 @@ and a count of words, closed by a column ``cols + 1``:
   header's rows negative or 65536 and more), ``L`` its count of words;
 * type 1 real single, 2 real double, 3 complex single, 4 complex double (a complex number is
   two numbers, real then imaginary); a double counts two words in text sparse strings and in
-  4-byte binary files, one word in 8-byte files (where singles are stored as doubles too).
+  4-byte binary files, one word in 8-byte files (where singles are stored as doubles too);
+* text numbers are read as float64 whatever the type: a text file holds the digits written,
+  and they are kept (a type 1 or 3 code then says how the writing program held the matrix,
+  not what the text carries).  Binary singles are the float32 bytes of the file;
+* the closing column ``cols + 1`` holds one number, read and not kept; in text its count is
+  written as words (2 for a double) by some writers, as one number by others: both are read.
+
+A file may write a name more than once (nas2cam writes ``SE_START`` once per superelement):
+it is read through; only a name asked for, or any name when all matrices are taken, that
+occurs more than once is refused, naming its occurrences.
 
 Forms 1 (square), 2 (rectangular), 4, 5 (triangular) and 6 (symmetric) are stored in full and
 read as they are; a form whose storage is not the full matrix (3 diagonal, 8 identity, 9
@@ -183,7 +192,8 @@ def read_op4(path: str | os.PathLike, names: Sequence[str] | None = None,
 
     Args:
         path: the file (text or binary, detected from its first bytes).
-        names: the matrices wanted; each must be in the file.
+        names: the matrices wanted; each must be in the file, once (all of them must be
+            written once when ``names`` is ``None``).
         limit: bytes allowed for the matrices kept (:data:`MEMORY_LIMIT` if ``None``).
 
     Raises:
@@ -192,17 +202,40 @@ def read_op4(path: str | os.PathLike, names: Sequence[str] | None = None,
     want = None if names is None else {n.upper() for n in names}
     out: dict[str, Op4Matrix] = {}
     seen: dict[str, str] = {}
-    for m in _matrices(path, lambda n: want is None or n.upper() in want, limit):
-        if m.name.upper() in seen:
-            raise Op4Error(f"{Path(path).name}: matrix {m.name!r} is written twice")
-        seen[m.name.upper()] = m.name
-        if want is None or m.name.upper() in want:
-            out[m.name] = m
+    where: dict[str, list[int]] = {}  # the 1-based positions of each name in the file
+    count = 0
+
+    def wanted(name: str) -> bool:
+        """Keep the first occurrence of a name asked for (a repeat is refused below)."""
+        nonlocal count
+        count += 1
+        where.setdefault(name.upper(), []).append(count)
+        return (want is None or name.upper() in want) and len(where[name.upper()]) == 1
+
+    for m in _matrices(path, wanted, limit):
+        key = m.name.upper()
+        if key not in seen:
+            seen[key] = m.name
+            if want is None or key in want:
+                out[m.name] = m
+    asked = list(where) if want is None else [n for n in where if n in want]
+    for key in asked:
+        if len(where[key]) > 1:
+            places = where[key]
+            raise Op4Error(f"{Path(path).name}: matrix {seen[key]!r} is written "
+                           f"{len(places)} times (matrices {_and(places)} of the file): "
+                           f"which one is meant is ambiguous")
     missing = [n for n in (names or []) if n.upper() not in seen]
     if missing:
         raise Op4Error(f"{Path(path).name}: no matrix {missing[0]!r} (it has "
-                       f"{', '.join(seen.values()) or 'none'})")
+                       f"{', '.join(dict.fromkeys(seen.values())) or 'none'})")
     return out
+
+
+def _and(numbers: Sequence[int]) -> str:
+    """``1, 4 and 9``."""
+    text = [str(n) for n in numbers]
+    return ", ".join(text[:-1]) + " and " + text[-1] if len(text) > 1 else text[0]
 
 
 def op4_names(path: str | os.PathLike) -> list[str]:

@@ -109,22 +109,24 @@ def read_text(fp: BinaryIO, file: str, wanted: Callable[[str], bool],
                 raise Op4Error(f"{m.where}: line {lines.number}: number format {fmt!r} is "
                                f"not like 1P,3E23.16")
             per, width = int(got.group(1)), int(got.group(2))
+        # Words per number in sparse strings and the closing column (a double is two
+        # single-precision words).  The numbers themselves are read as float64 whatever the
+        # type: the digits written are what a text file holds, and the type code says how the
+        # matrix was held by the program that wrote it.
         wper = 1 if mtype in (1, 3) else 2
-
-        def single(x: np.ndarray, cast: bool = mtype in (1, 3)) -> np.ndarray:
-            """Text numbers of a single-precision matrix are the nearest float32."""
-            return x.astype(np.float32).astype(np.float64) if cast else x
 
         while True:
             icol, irow, nwords = lines.integers(m.where, (8, 8, 8))
             if not m.begin(icol, irow):
-                lines.numbers(m.where, max(nwords, 0), per, width)
+                # The closing column's words: one number of the matrix's precision, declared
+                # as its words (2 for a double) or as one number (1); read, not kept.
+                lines.numbers(m.where, -(-max(nwords, 0) // wper), per, width)
                 break
             if nwords < 1:
                 raise Op4Error(f"{m.where}: column {icol} declares {nwords} words")
             if irow > 0:  # dense text columns count numbers, not words
                 m.numbers(nwords, f"column {icol}")
-                m.put(icol, irow, single(lines.numbers(m.where, nwords, per, width)),
+                m.put(icol, irow, lines.numbers(m.where, nwords, per, width),
                       f"column {icol}")
                 continue
 
@@ -132,7 +134,7 @@ def read_text(fp: BinaryIO, file: str, wanted: Callable[[str], bool],
                 return lines.integers(m.where, (8, 8)) if k == 2 else lines.whole(m.where)
 
             def words(at: int, n: int) -> np.ndarray:
-                return single(lines.numbers(m.where, n, per, width))
+                return lines.numbers(m.where, n, per, width)
 
             column_strings(m, icol, words, ints, nwords, wper)
         yield m.done()

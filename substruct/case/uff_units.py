@@ -13,6 +13,8 @@ milli newton; 6 CM: cm, centi newton; 7 IN: inch, pound force; 8 GM: mm, kilogra
 user defined; 10 MN: mm, newton), field 2 a description, field 3 the temperature mode (1
 absolute, 2 relative); record 2 ``FORMAT(3D25.17)``, four factors "for converting universal
 file units to SI: divide by the factor": length, force, temperature, temperature offset.  A
+blank temperature mode (as LMS Test.Lab writes it) is read as not given; any other text but 1
+or 2 is refused.  A
 length :math:`x` of the file is :math:`x / f_L` m.  The factors of a named system (any code
 but 9) must be its own to :data:`UNIT_RTOL` and are then replaced by its own exactly (files
 print them rounded); code 9 takes the file's, positive and finite.
@@ -107,7 +109,7 @@ class UffUnits:
 
     code: int
     description: str
-    temperature_mode: int
+    temperature_mode: int | None  # None: left blank (not used by substruct)
     length: float
     force: float
     temperature: float
@@ -141,8 +143,8 @@ def parse_164(rows: list[str], where: str) -> UffUnits:
     """The units of the records ``rows`` (module docstring), every field checked.
 
     Raises:
-        ValueError: a units code not 1..10, a temperature mode not 1 or 2, not four factors,
-            a factor that is not a positive finite number, or the factors of a named unit
+        ValueError: a units code not 1..10, a temperature mode not blank, 1 or 2, not four
+            factors, a factor that is not a positive finite number, or the factors of a named unit
             system (codes other than 9) off its own by more than :data:`UNIT_RTOL` (within
             it, the length and force factors kept are the system's own).
     """
@@ -157,14 +159,16 @@ def parse_164(rows: list[str], where: str) -> UffUnits:
     if code not in UNIT_SYSTEMS:
         raise ValueError(f"{where}: record 1 field 1, units code {code}: not one of 1..10 ("
                          + ", ".join(f"{k} {v[0]}" for k, v in UNIT_SYSTEMS.items()) + ")")
-    try:
-        mode = int(head[30:40])
-    except ValueError:
-        raise ValueError(f"{where}: record 1 field 3, temperature mode "
-                         f"{head[30:40].strip()!r}: not an integer") from None
-    if mode not in (1, 2):
-        raise ValueError(f"{where}: record 1 field 3, temperature mode {mode}: not 1 "
-                         "(absolute) or 2 (relative)")
+    mode: int | None = None  # blank: not given (LMS Test.Lab); substruct does not use it
+    if head[30:40].strip():
+        try:
+            mode = int(head[30:40])
+        except ValueError:
+            raise ValueError(f"{where}: record 1 field 3, temperature mode "
+                             f"{head[30:40].strip()!r}: not an integer") from None
+        if mode not in (1, 2):
+            raise ValueError(f"{where}: record 1 field 3, temperature mode {mode}: not 1 "
+                             "(absolute) or 2 (relative)")
     words = " ".join(rows[1:]).split()
     if len(words) != 4:
         raise ValueError(f"{where}: record 2 holds {len(words)} numbers, the four factors "
