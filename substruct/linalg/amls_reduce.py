@@ -52,8 +52,8 @@ process so is a large condensation, until its parent has read it.  On a cluster 
 have a memory limit, a block whose task would hold more than :data:`LOCAL_FRACTION` of it
 (:func:`~substruct.linalg.amls_block.task_bytes`: the top separators of a large compact
 solid) is reduced in this process instead, with every block above it (:func:`reduced_here`),
-after the tasks are submitted: a worker would be stopped by its limit where this process,
-with the machine's memory, is not.
+after every task is done: a worker would be stopped by its limit where this process, with the
+machine's memory, is not, and on one machine the two would not fit side by side.
 """
 
 from __future__ import annotations
@@ -306,15 +306,17 @@ def amls_reduce(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, root: 
         del both
         collect([j for j in kept if run.done(kept[j])])
 
-    # the tasks first (none of them waits for a block reduced here), then the blocks too
-    # large for a worker, in post-order here, each as soon as its children are done
+    # the tasks first (none of them waits for a block reduced here); once every one is done,
+    # the blocks too large for a worker, in post-order here: on one machine the workers'
+    # peaks and this process's would otherwise add up (a 10^6-coordinate solid on two
+    # workers: this process stopped by the system at 15.5 GB while both workers were busy)
     for i, b in enumerate(order):
         if not here[i]:
             reduce(i, b, run)
+    collect(list(kept))
     for i, b in enumerate(order):
         if here[i]:
             reduce(i, b, IN_PROCESS)
-    collect(list(kept))
     red = _assemble(K, order, bounds, results, n, factorization)
     red.scratch = scratch
     red.blocks_here = sum(here)
