@@ -16,8 +16,8 @@ import numpy as np
 
 from substruct.case.bdf_fields import RawCard, nastran_int, nastran_real
 
-__all__ = ["components", "GridCard", "Coord", "Rod", "Bar", "Mat1", "Conm2", "read_grid",
-           "read_cord2r", "read_prod", "read_pbar", "read_pbarl", "read_mat1",
+__all__ = ["components", "GridCard", "Rod", "Bar", "Mat1", "Conm2", "read_grid",
+           "read_prod", "read_pbar", "read_pbarl", "read_mat1",
            "read_rod", "read_bar", "read_conm2"]
 
 
@@ -40,18 +40,6 @@ class GridCard:
     cp: int
     x: tuple[float, float, float]
     ps: str
-    line: int
-
-
-@dataclass(frozen=True)
-class Coord:
-    """CORD2R: ``A`` origin, ``B`` on the z axis, ``C`` in the x-z plane, in system ``rid``."""
-
-    id: int
-    rid: int
-    a: np.ndarray
-    b: np.ndarray
-    c: np.ndarray
     line: int
 
 
@@ -130,17 +118,6 @@ def read_grid(c: RawCard) -> GridCard:
     c.blank_after(8, "GRID has one line")
     x = (c.real(2, "X1", 0.0), c.real(3, "X2", 0.0), c.real(4, "X3", 0.0))
     return GridCard(gid, c.integer(1, "CP", 0), x, components(c, 6, "PS", blank_ok=True), c.line)
-
-
-def read_cord2r(c: RawCard) -> Coord:
-    """CORD2R CID RID A1 A2 A3 B1 B2 B3 / C1 C2 C3."""
-    cid = c.integer(0, "CID")
-    if cid <= 0:
-        raise c.error("coordinate system ids are positive", cid, "CID")
-    c.blank_after(11, "CORD2R has eleven fields")
-    pts = [np.array([c.real(k, f"{p}{j + 1}") for j, k in enumerate(range(s, s + 3))])
-           for p, s in (("A", 2), ("B", 5), ("C", 8))]
-    return Coord(cid, c.integer(1, "RID", 0), pts[0], pts[1], pts[2], c.line)
 
 
 def read_prod(c: RawCard) -> tuple[int, int, float, float, float]:
