@@ -34,13 +34,15 @@ def components(card: RawCard, i: int, name: str, blank_ok: bool = False) -> str:
 
 @dataclass(frozen=True)
 class GridCard:
-    """GRID: id, position in coordinate system ``cp``, permanent constraints ``ps``."""
+    """GRID: id, position in coordinate system ``cp``, permanent constraints ``ps`` (in
+    ``cd``), displacement coordinate system ``cd``."""
 
     id: int
     cp: int
     x: tuple[float, float, float]
     ps: str
     line: int
+    cd: int = 0
 
 
 @dataclass(frozen=True)
@@ -110,14 +112,14 @@ def read_grid(c: RawCard) -> GridCard:
     if gid <= 0:
         raise c.error("grid ids are positive", gid, "ID")
     cd = c.integer(5, "CD", 0)
-    if cd != 0:
-        raise c.error("displacement coordinate systems other than basic are not supported",
-                      cd, "CD")
+    if cd < 0:
+        raise c.error("CD is 0 (basic) or a coordinate system id", cd, "CD")
     if c.integer(7, "SEID", 0) != 0:
         raise c.error("superelements are not supported", c.text(7), "SEID")
     c.blank_after(8, "GRID has one line")
     x = (c.real(2, "X1", 0.0), c.real(3, "X2", 0.0), c.real(4, "X3", 0.0))
-    return GridCard(gid, c.integer(1, "CP", 0), x, components(c, 6, "PS", blank_ok=True), c.line)
+    return GridCard(gid, c.integer(1, "CP", 0), x, components(c, 6, "PS", blank_ok=True), c.line,
+                    cd)
 
 
 def read_prod(c: RawCard) -> tuple[int, int, float, float, float]:

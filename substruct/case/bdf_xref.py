@@ -92,6 +92,16 @@ def cross_reference(cards: Cards) -> BulkData:
     out = BulkData(source)
     for gr in grids.values():
         out.grids[gr.id] = where[gr.id]
+        if gr.cd != 0:
+            if gr.cd not in systems:
+                raise BdfError(source, "no such coordinate system", gr.cd, gr.line, "GRID",
+                               gr.id, "CD")
+            frame = systems[gr.cd].frame(where[gr.id])
+            if frame is None:
+                raise BdfError(source, "the grid is on the axis of its cylindrical or "
+                               "spherical CD system, where the directions are undefined",
+                               gr.cd, gr.line, "GRID", gr.id, "CD")
+            out.frames[gr.id] = frame
         if gr.ps:
             out.spc.setdefault(gr.id, set()).update(int(c) - 1 for c in gr.ps)
 
