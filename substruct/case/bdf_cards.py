@@ -71,6 +71,7 @@ class Bar:
     wa: tuple[float, float, float]
     wb: tuple[float, float, float]
     line: int
+    offt: str = "GGG"
 
 
 @dataclass(frozen=True)
@@ -226,7 +227,7 @@ def read_bar(c: RawCard) -> Bar:
     wa = (c.real(10, "W1A", 0.0), c.real(11, "W2A", 0.0), c.real(12, "W3A", 0.0))
     wb = (c.real(13, "W1B", 0.0), c.real(14, "W2B", 0.0), c.real(15, "W3B", 0.0))
     return Bar(c.name, eid, c.integer(1, "PID", eid), (c.integer(2, "GA"), c.integer(3, "GB")), v, g0,
-               pins[0], pins[1], wa, wb, c.line)
+               pins[0], pins[1], wa, wb, c.line, offt)
 
 
 def read_conm2(c: RawCard) -> Conm2:

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from substruct.case.bdf_cards import Conm2, GridCard, Mat1
+from substruct.case.bdf_cards import Bar, Conm2, GridCard, Mat1
 from substruct.case.bdf_control import param, select_sets
 from substruct.case.bdf_coords import CoordCard, CoordSystem, place_grids
 from substruct.case.bdf_fields import BdfError, RawCard
@@ -140,7 +140,7 @@ def cross_reference(cards: Cards) -> BulkData:
             if bar.g0 is not None:
                 grid(card, bar.g0, "G0")
             prop = ("PBAR", "PBARL") if kind == "CBAR" else ("PBEAM", "PBEAML")
-            out.bars.append((bar, section(card, bar.pid, prop)))
+            out.bars.append((_bar_in_basic(bar, out.frames), section(card, bar.pid, prop)))
     for card, m in by.get("CONM2", []):
         grid(card, m.g, "G")
         if m.cid not in systems and m.cid != -1:
@@ -190,7 +190,7 @@ def cross_reference(cards: Cards) -> BulkData:
             axes = _rectangular(card, systems[b.cid], b.cid, "CID")
         else:
             assert b.gb is not None
-            v = np.asarray(b.v) if b.g0 is None else \
+            v = out.frames.get(b.ga, np.eye(3)) @ np.asarray(b.v) if b.g0 is None else \
                 out.grids[grid(card, b.g0, "GO")] - out.grids[b.ga]
             if np.linalg.norm(out.grids[b.gb] - out.grids[b.ga]) == 0:
                 raise card.error("GA and GB are at the same place: give CID for the axes",
@@ -266,6 +266,21 @@ def cross_reference(cards: Cards) -> BulkData:
                 f"{control['lines']['AUTOSPC']}) disagree", params["AUTOSPC"][1], "V1")
         out.autospc = control["AUTOSPC"]
     return out
+
+
+def _bar_in_basic(bar: Bar, frames: dict[int, np.ndarray]) -> Bar:
+    """``bar`` with its orientation vector and offsets in basic: OFFT's ``G`` puts them in
+    the displacement system (GRID CD) of GA (the vector, the offset at A) and GB (the offset
+    at B), :math:`w_{basic} = F w`."""
+    if not frames or not (bar.nodes[0] in frames or bar.nodes[1] in frames):
+        return bar
+    ga, gb = (frames.get(g, np.eye(3)) for g in bar.nodes)
+
+    def turn(F: np.ndarray, w: Any, letter: str) -> Any:
+        return w if w is None or letter == "B" else tuple(float(a) for a in F @ np.asarray(w))
+
+    return replace(bar, v=turn(ga, bar.v, bar.offt[0]), wa=turn(ga, bar.wa, bar.offt[1]),
+                   wb=turn(gb, bar.wb, bar.offt[2]))
 
 
 def _rectangular(card: RawCard, system: CoordSystem, cid: int, name: str) -> np.ndarray:

@@ -1,6 +1,7 @@
 r"""Substructures made from Nastran bulk data (:class:`~substruct.case.bdf.BulkData`): grids
 with six coordinates each, labelled ``"<grid>:<component>"`` with Nastran's components
-``1`` - ``6`` (``"12:3"`` is grid 12's ``T3``, ``"12:4"`` its ``R1``), in basic axes.
+``1`` - ``6`` (``"12:3"`` is grid 12's ``T3``, ``"12:4"`` its ``R1``), in basic axes, or in
+the grid's displacement system for a GRID ``CD`` (:mod:`substruct.models.nastran_cd`).
 
 .. math::  K = \sum_e E_e^T T_e^T K_e T_e E_e + \sum_s k_s\, d_s d_s^T, \qquad
            M = w \Bigl(\sum_e E_e^T T_e^T M_e T_e E_e + \sum_c E_c^T M_c E_c\Bigr)
