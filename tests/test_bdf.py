@@ -206,7 +206,7 @@ def test_rigid_elements_and_mpc_are_the_library_rows(tmp_path):
     ("GRID,1,,0,0.,0.", "line 1: GRID 1: X1: must be a real number with a decimal point"),
     ("SOL 103\nCEND\nSPC = 1\nBEGIN BULK\nGRID,1,,0.,0.,0.\nSPC1,2,1,1",
      "SPC: the case control chooses SPC set 1, which the bulk data does not have"),
-    ("GRID,1,,0.,0.,0.,3", "line 1: GRID 1: CD: displacement coordinate systems"),
+    ("GRID,1,,0.,0.,0.,3", "line 1: GRID 1: CD: no such coordinate system, got 3"),
     ("GRID,1,,0.,0.,0.\nGRID,2,,1.,0.,0.\nGRID,3,,0.,1.,0.\nGRID,4,,1.,1.,0.\n"
      "CROD,1,1,1,2\nCROD,2,1,2,3\nPROD,1,1,1.\nMAT1,1,1.,,.3\nRBE2,8,1,123,4\n"
      "RBE3,9,,4,12,1.,123,1,2,3\nEIGRL,1,,,2",

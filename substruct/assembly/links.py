@@ -45,8 +45,8 @@ from substruct.assembly.stack import LinearConstraint, PointRef
 from substruct.models.frame import FRAME_COMPONENTS, frame_component, frame_components
 from substruct.substructure import PointError, Substructure
 
-__all__ = ["LinkError", "NodeRef", "Link", "rigid_link", "interpolation_link", "mpc",
-           "link_constraints"]
+__all__ = ["LinkError", "NodeRef", "Link", "rigid_link", "interpolation_link",
+           "interpolation_matrix", "mpc", "link_constraints"]
 
 #: Relative size of the eigenvalues of the scaled normal matrix of an interpolation link that
 #: count as zero (the matrix is dimensionless, its eigenvalues of order 1 for a spread set).
@@ -240,6 +240,27 @@ def interpolation_link(substructures: Mapping[str, Substructure] | Sequence[Subs
                         f"got {weights!r}")
     xr = _position(subs, reference, name)
     offsets = np.array([_position(subs, nd, name) - xr for nd in nodes])
+    G = interpolation_matrix(offsets, w, own, comps, f"{name}: ", f" {reference}")
+    rows = []
+    for c in comps:
+        terms = [(reference.point(c), 1.0)]
+        terms += [(nd.point(k), -G[c, j * len(own) + m])
+                  for j, nd in enumerate(nodes) for m, k in enumerate(own)]
+        rows.append((reference.point(c), terms,
+                     f"{name}: {reference} {FRAME_COMPONENTS[c]} interpolated"))
+    return _link(subs, name, "interpolation", rows)
+
+
+def interpolation_matrix(offsets: np.ndarray, w: np.ndarray, own: Sequence[int],
+                         comps: Sequence[int], name: str = "", reference: str = ""
+                         ) -> np.ndarray:
+    r"""``G`` (6 x ``len(own) n``): the reference node's motion
+    :math:`(u_r, \theta_r) = G u` fitted to the components ``own`` of ``n`` nodes at
+    ``offsets`` (n x 3) from it with weights ``w`` (:func:`interpolation_link`).
+
+    Raises:
+        LinkError: a component of ``comps`` the nodes do not determine.
+    """
     dist = np.linalg.norm(offsets, axis=1)
     Lc = float(dist.mean()) if dist.max() > 0 else 1.0
     S = np.vstack([np.hstack([np.eye(3), -_skew(r / Lc)])[own] for r in offsets])
@@ -250,20 +271,13 @@ def interpolation_link(substructures: Mapping[str, Substructure] | Sequence[Subs
     for c in comps:
         if np.abs(null[c]).max(initial=0.0) > 1e-6:
             raise LinkError(
-                f"{name}: the nodes do not determine component {FRAME_COMPONENTS[c]} of the "
-                f"reference node {reference} (collinear or too few nodes for it), got "
-                f"{len(nodes)} nodes")
+                f"{name}the nodes do not determine component {FRAME_COMPONENTS[c]} of the "
+                f"reference node{reference} (collinear or too few nodes for it), got "
+                f"{len(offsets)} nodes")
     rank = lam > LINK_RANK_TOL * lam.max()
     G = (V[:, rank] / lam[rank]) @ V[:, rank].T @ (S.T * Wd)  # (6, len(own) * len(nodes))
     G[3:] /= Lc
-    rows = []
-    for c in comps:
-        terms = [(reference.point(c), 1.0)]
-        terms += [(nd.point(k), -G[c, j * len(own) + m])
-                  for j, nd in enumerate(nodes) for m, k in enumerate(own)]
-        rows.append((reference.point(c), terms,
-                     f"{name}: {reference} {FRAME_COMPONENTS[c]} interpolated"))
-    return _link(subs, name, "interpolation", rows)
+    return G
 
 
 def mpc(substructures: Mapping[str, Substructure] | Sequence[Substructure],

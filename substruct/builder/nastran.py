@@ -10,16 +10,19 @@ from typing import Any, Collection, Mapping
 
 import numpy as np
 import scipy.sparse as sp
+from scipy.linalg import block_diag
 
 from substruct.assembly.links import (
     Link, LinkError, NodeRef, interpolation_link, mpc, rigid_link,
 )
+from substruct.builder.nastran_cd_links import has_frames, rbe2_cd_link, rbe3_cd_link
 from substruct.builder.nastran_rbar import rbar_link
 from substruct.case.bdf import BulkData
 from substruct.case.bdf_fields import BdfError
 from substruct.case.errors import CaseError
 from substruct.case.nastran import BDF_SUFFIXES, NastranSpec
 from substruct.models.nastran import nastran_matrices, nastran_substructure
+from substruct.models.nastran_cd import grid_frames6
 from substruct.substructure import Substructure
 
 __all__ = ["build_nastran", "bulk_error", "bulk_links", "rigid_element_grids", "autospc"]
@@ -78,8 +81,11 @@ def bulk_links(name: str, bulk: BulkData, subs: Mapping[str, Substructure]
             raise BdfError(bulk.source, "GN is also a dependent grid", r.gn, r.line, "RBE2",
                            r.id, "GM")
         try:
-            link = rigid_link(subs, node(r.gn), [node(g) for g in r.gm], r.cm,
-                              name=f"{name}: RBE2 {r.id}")
+            if has_frames(bulk, (r.gn, *r.gm)):  # GRID CD (substruct.builder.nastran_cd_links)
+                link = rbe2_cd_link(subs, name, bulk, r, f"{name}: RBE2 {r.id}")
+            else:
+                link = rigid_link(subs, node(r.gn), [node(g) for g in r.gm], r.cm,
+                                  name=f"{name}: RBE2 {r.id}")
         except LinkError as err:
             raise fail(err, r.line, "RBE2", r.id) from None
         out.append((link, r.line, "RBE2", r.id))
@@ -95,15 +101,23 @@ def bulk_links(name: str, bulk: BulkData, subs: Mapping[str, Substructure]
             raise BdfError(bulk.source, "a grid appears twice (or is the reference grid)",
                            grids, r3.line, "RBE3", r3.id, "G")
         try:
-            link = interpolation_link(subs, node(r3.ref), [node(g) for g in grids], weights,
-                                      r3.refc, next(iter(comps)), name=f"{name}: RBE3 {r3.id}")
+            if has_frames(bulk, (r3.ref, *grids)):
+                link = rbe3_cd_link(subs, name, bulk, r3, grids, weights, next(iter(comps)),
+                                    f"{name}: RBE3 {r3.id}")
+            else:
+                link = interpolation_link(subs, node(r3.ref), [node(g) for g in grids],
+                                          weights, r3.refc, next(iter(comps)),
+                                          name=f"{name}: RBE3 {r3.id}")
         except LinkError as err:
             raise fail(err, r3.line, "RBE3", r3.id, "REFC") from None
         out.append((link, r3.line, "RBE3", r3.id))
     for rb in bulk.rbar:
         try:
+            frames = block_diag(grid_frames6(bulk.frames, rb.ga),
+                                grid_frames6(bulk.frames, rb.gb)) \
+                if has_frames(bulk, (rb.ga, rb.gb)) else None
             link = rbar_link(subs, name, rb, np.array([bulk.grids[rb.ga], bulk.grids[rb.gb]]),
-                             f"{name}: RBAR {rb.id}")
+                             f"{name}: RBAR {rb.id}", frames)
         except LinkError as err:
             raise fail(err, rb.line, "RBAR", rb.id, "CNA") from None
         out.append((link, rb.line, "RBAR", rb.id))

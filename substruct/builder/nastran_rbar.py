@@ -48,9 +48,12 @@ def rbar_rows(r: np.ndarray) -> np.ndarray:
 
 
 def rbar_link(subs: Mapping[str, Substructure], name: str, rb: Rbar, positions: np.ndarray,
-              link_name: str) -> Link:
+              link_name: str, frames: np.ndarray | None = None) -> Link:
     """The link of RBAR ``rb`` in substructure ``name`` (module docstring); ``positions``:
-    the places of GA and GB (2 x 3, basic).
+    the places of GA and GB (2 x 3, basic); ``frames``: ``diag(F_A, F_A, F_B, F_B)`` (12 x
+    12) when a grid has a displacement system (GRID ``CD``,
+    :mod:`substruct.models.nastran_cd`): the twelve coordinates are then
+    :math:`F^T R q` and CNA, CNB, CMA, CMB are in the grids' CD systems.
 
     Raises:
         LinkError: CNA and CNB that do not determine the rigid motion, a component a grid
@@ -58,11 +61,11 @@ def rbar_link(subs: Mapping[str, Substructure], name: str, rb: Rbar, positions: 
     """
     ends = (NodeRef(name, {"node": rb.ga}), NodeRef(name, {"node": rb.gb}))
     for k in (0, 1):  # all six independent at one grid: the RBE2 rows from it
-        if (rb.cna, rb.cnb)[k] == "123456":
+        if (rb.cna, rb.cnb)[k] == "123456" and frames is None:
             return rigid_link(subs, ends[k], [ends[1 - k]], (rb.cma, rb.cmb)[1 - k],
                               name=link_name)
     r = positions[1] - positions[0]
-    R = rbar_rows(r)
+    R = rbar_rows(r) if frames is None else frames.T @ rbar_rows(r)
     indep = [int(d) - 1 for d in rb.cna] + [6 + int(d) - 1 for d in rb.cnb]
     dep = [int(d) - 1 for d in rb.cma] + [6 + int(d) - 1 for d in rb.cmb]
     length = max(float(np.linalg.norm(r)), 1e-300)

@@ -35,13 +35,14 @@ from pathlib import Path
 from typing import Any, Callable
 
 from substruct.case.bdf_cards import (
-    read_bar, read_conm2, read_cord2r, read_grid, read_mat1, read_pbar, read_pbarl, read_prod,
+    read_bar, read_conm2, read_grid, read_mat1, read_pbar, read_pbarl, read_prod,
     read_rod,
 )
 from substruct.case.bdf_constraints import read_mpc, read_rbar, read_rbe2, read_rbe3, \
     read_spc, read_spc1, read_spcadd
 from substruct.case.bdf_control import CASE_CONTROL, OUTPUT_PARAMS, PARAM_TABLE, PARAMS, \
     read_control, read_eigrl, read_static_load, read_uset
+from substruct.case.bdf_coords import COORD_CARDS, read_cord1, read_cord2
 from substruct.case.bdf_fields import RawCard, split_bdf
 from substruct.case.bdf_include import bdf_lines
 from substruct.case.bdf_model import BulkData, BdfSection
@@ -56,7 +57,7 @@ __all__ = ["BulkData", "BdfSection", "read_bulk", "parse_bulk", "CARDS", "PARAMS
            "CASE_CONTROL"]
 
 #: Bulk data cards read (docs/structures.md has what is read of each).
-CARDS = ("GRID", "CORD2R", "CROD", "PROD", "CBAR", "PBAR", "PBARL", "CBEAM", "PBEAM",
+CARDS = ("GRID", *COORD_CARDS, "CROD", "PROD", "CBAR", "PBAR", "PBARL", "CBEAM", "PBEAM",
          "PBEAML", "USET", "CQUAD4", "CTRIA3", "PSHELL", "PCOMP", "CHEXA", "CPENTA", "CTETRA",
          "PSOLID", "CONM2", "CELAS1", "CELAS2", "PELAS", "CBUSH", "PBUSH", "RBE2", "RBE3",
          "RBAR", "MPC", "SPC", "SPC1", "SPCADD", "MAT1", "EIGRL", "PARAM", "LOAD", "FORCE")
@@ -107,10 +108,10 @@ def parse_bulk(text: str | list[tuple[str, int, str]], source: str) -> BulkData:
             g = read_grid(card)
             rd.unique("grid", g.id, card)
             grids[g.id] = g
-        elif name == "CORD2R":
-            c = read_cord2r(card)
-            rd.unique("coordinate system", c.id, card)
-            coords[c.id] = c
+        elif name in COORD_CARDS:
+            for c in [read_cord2(card)] if name[4] == "2" else read_cord1(card):
+                rd.unique("coordinate system", c.id, card)
+                coords[c.id] = c
         elif name in ("PROD", "PBAR", "PBEAM", "PBARL", "PBEAML"):
             values: tuple[Any, ...] = {"PROD": read_prod, "PBAR": read_pbar,
                                        "PBEAM": read_pbeam, "PBARL": read_pbarl,

@@ -16,8 +16,8 @@ import numpy as np
 
 from substruct.case.bdf_fields import RawCard, nastran_int, nastran_real
 
-__all__ = ["components", "GridCard", "Coord", "Rod", "Bar", "Mat1", "Conm2", "read_grid",
-           "read_cord2r", "read_prod", "read_pbar", "read_pbarl", "read_mat1",
+__all__ = ["components", "GridCard", "Rod", "Bar", "Mat1", "Conm2", "read_grid",
+           "read_prod", "read_pbar", "read_pbarl", "read_mat1",
            "read_rod", "read_bar", "read_conm2"]
 
 
@@ -34,25 +34,15 @@ def components(card: RawCard, i: int, name: str, blank_ok: bool = False) -> str:
 
 @dataclass(frozen=True)
 class GridCard:
-    """GRID: id, position in coordinate system ``cp``, permanent constraints ``ps``."""
+    """GRID: id, position in coordinate system ``cp``, permanent constraints ``ps`` (in
+    ``cd``), displacement coordinate system ``cd``."""
 
     id: int
     cp: int
     x: tuple[float, float, float]
     ps: str
     line: int
-
-
-@dataclass(frozen=True)
-class Coord:
-    """CORD2R: ``A`` origin, ``B`` on the z axis, ``C`` in the x-z plane, in system ``rid``."""
-
-    id: int
-    rid: int
-    a: np.ndarray
-    b: np.ndarray
-    c: np.ndarray
-    line: int
+    cd: int = 0
 
 
 @dataclass(frozen=True)
@@ -81,6 +71,7 @@ class Bar:
     wa: tuple[float, float, float]
     wb: tuple[float, float, float]
     line: int
+    offt: str = "GGG"
 
 
 @dataclass(frozen=True)
@@ -122,25 +113,14 @@ def read_grid(c: RawCard) -> GridCard:
     if gid <= 0:
         raise c.error("grid ids are positive", gid, "ID")
     cd = c.integer(5, "CD", 0)
-    if cd != 0:
-        raise c.error("displacement coordinate systems other than basic are not supported",
-                      cd, "CD")
+    if cd < 0:
+        raise c.error("CD is 0 (basic) or a coordinate system id", cd, "CD")
     if c.integer(7, "SEID", 0) != 0:
         raise c.error("superelements are not supported", c.text(7), "SEID")
     c.blank_after(8, "GRID has one line")
     x = (c.real(2, "X1", 0.0), c.real(3, "X2", 0.0), c.real(4, "X3", 0.0))
-    return GridCard(gid, c.integer(1, "CP", 0), x, components(c, 6, "PS", blank_ok=True), c.line)
-
-
-def read_cord2r(c: RawCard) -> Coord:
-    """CORD2R CID RID A1 A2 A3 B1 B2 B3 / C1 C2 C3."""
-    cid = c.integer(0, "CID")
-    if cid <= 0:
-        raise c.error("coordinate system ids are positive", cid, "CID")
-    c.blank_after(11, "CORD2R has eleven fields")
-    pts = [np.array([c.real(k, f"{p}{j + 1}") for j, k in enumerate(range(s, s + 3))])
-           for p, s in (("A", 2), ("B", 5), ("C", 8))]
-    return Coord(cid, c.integer(1, "RID", 0), pts[0], pts[1], pts[2], c.line)
+    return GridCard(gid, c.integer(1, "CP", 0), x, components(c, 6, "PS", blank_ok=True), c.line,
+                    cd)
 
 
 def read_prod(c: RawCard) -> tuple[int, int, float, float, float]:
@@ -247,7 +227,7 @@ def read_bar(c: RawCard) -> Bar:
     wa = (c.real(10, "W1A", 0.0), c.real(11, "W2A", 0.0), c.real(12, "W3A", 0.0))
     wb = (c.real(13, "W1B", 0.0), c.real(14, "W2B", 0.0), c.real(15, "W3B", 0.0))
     return Bar(c.name, eid, c.integer(1, "PID", eid), (c.integer(2, "GA"), c.integer(3, "GB")), v, g0,
-               pins[0], pins[1], wa, wb, c.line)
+               pins[0], pins[1], wa, wb, c.line, offt)
 
 
 def read_conm2(c: RawCard) -> Conm2:

@@ -45,6 +45,9 @@ class BulkData:
 
     Attributes:
         grids: grid id -> position in basic coordinates.
+        frames: grid id -> ``F`` (3 x 3) of a grid whose GRID ``CD`` is not basic: its
+            coordinates are along the columns of ``F`` (basic), :math:`u_{basic} = F u_{CD}`
+            (:mod:`substruct.case.bdf_coords`).
         rods, bars: elements with their :class:`BdfSection`.
         plates: CQUAD4 and CTRIA3 with their :class:`ShellSection`.
         bushes: CBUSH with their stiffness and axes (:class:`BushSpring`).
@@ -59,6 +62,7 @@ class BulkData:
 
     source: str
     grids: dict[int, np.ndarray] = field(default_factory=dict)
+    frames: dict[int, np.ndarray] = field(default_factory=dict)
     rods: list[tuple[Rod, BdfSection]] = field(default_factory=list)
     bars: list[tuple[Bar, BdfSection]] = field(default_factory=list)
     masses: list[Conm2] = field(default_factory=list)

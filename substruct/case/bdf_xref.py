@@ -1,5 +1,6 @@
 """A Nastran file's cards cross-referenced into a :class:`~substruct.case.bdf.BulkData`:
-grids placed in basic coordinates (CORD2R chains resolved), elements joined to their
+grids placed in basic coordinates (coordinate systems resolved,
+:mod:`substruct.case.bdf_coords`), elements joined to their
 properties and materials, masses and springs to their grids, the chosen SPC, MPC and EIGRL
 sets and the PARAM values applied.  A reference to something missing is an error naming the
 card, its id and the field.
@@ -12,8 +13,9 @@ from typing import Any
 
 import numpy as np
 
-from substruct.case.bdf_cards import Conm2, GridCard, Mat1
+from substruct.case.bdf_cards import Bar, Conm2, GridCard, Mat1
 from substruct.case.bdf_control import param, select_sets
+from substruct.case.bdf_coords import CoordCard, CoordSystem, place_grids
 from substruct.case.bdf_fields import BdfError, RawCard
 from substruct.case.bdf_model import BulkData, BushSpring, BdfSection, ShellSection
 from substruct.case.bdf_pcomp import COUPLING_TOLERANCE, Pcomp, laminate
@@ -26,7 +28,7 @@ from substruct.case.bdf_solids import (
 )
 from substruct.case.fields import MAX_ELEMENTS, MAX_MATRIX_SIZE
 
-__all__ = ["ELEMENTS", "ELEMENT_TABLES", "Cards", "coordinate_systems", "cross_reference"]
+__all__ = ["ELEMENTS", "ELEMENT_TABLES", "Cards", "cross_reference"]
 
 #: Cards that are elements, by id table.  Nastran keeps structural elements, mass elements
 #: (CONM2) and rigid elements (RBE2, RBE3, RBAR) in separate tables, as pyNastran does
@@ -52,7 +54,7 @@ class Cards:
     control: dict[str, Any]
     by: dict[str, list[Any]] = field(default_factory=dict)
     grids: dict[int, GridCard] = field(default_factory=dict)
-    coords: dict[int, Any] = field(default_factory=dict)
+    coords: dict[int, CoordCard] = field(default_factory=dict)
     props: dict[int, tuple[RawCard, tuple[Any, ...]]] = field(default_factory=dict)
     pshell: dict[int, tuple[RawCard, Pshell]] = field(default_factory=dict)
     pbush: dict[int, tuple[RawCard, tuple[float, ...]]] = field(default_factory=dict)
@@ -66,38 +68,6 @@ class Cards:
     spc1: list[tuple[RawCard, int, str, Any]] = field(default_factory=list)
     spc_first: dict[int, RawCard] = field(default_factory=dict)
 
-
-
-def coordinate_systems(coords: dict[int, Any], src: str
-                       ) -> dict[int, tuple[np.ndarray, np.ndarray]]:
-    """Coordinate system id -> ``(origin, R)`` in basic, ``R`` rows the axes (CORD2R)."""
-    done: dict[int, tuple[np.ndarray, np.ndarray]] = {0: (np.zeros(3), np.eye(3))}
-
-    def resolve(cid: int, chain: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
-        if cid in done:
-            return done[cid]
-        if cid not in coords:
-            raise BdfError(src, "no such coordinate system", cid, coords[chain[-1]].line,
-                           "CORD2R", chain[-1], "RID")
-        if cid in chain:
-            raise BdfError(src, "coordinate systems refer to each other in a loop",
-                           list(chain), coords[cid].line, "CORD2R", cid, "RID")
-        c = coords[cid]
-        o, R = resolve(c.rid, chain + (cid,))
-        a, b, p = (o + R.T @ v for v in (c.a, c.b, c.c))
-        ez = b - a
-        ey = np.cross(ez, p - a)
-        if float(np.linalg.norm(ez)) == 0 or float(np.linalg.norm(ey)) <= \
-                1e-12 * float(np.linalg.norm(ez)) * max(float(np.linalg.norm(p - a)), 1e-300):
-            raise BdfError(src, "A, B and C do not define axes (coincident or collinear)",
-                           line=c.line, card="CORD2R", ident=cid)
-        ez, ey = ez / np.linalg.norm(ez), ey / np.linalg.norm(ey)
-        done[cid] = (a, np.vstack([np.cross(ey, ez), ey, ez]))
-        return done[cid]
-
-    for cid in coords:
-        resolve(cid, ())
-    return done
 
 
 def cross_reference(cards: Cards) -> BulkData:
@@ -118,14 +88,20 @@ def cross_reference(cards: Cards) -> BulkData:
     n_el = sum(len(v) for k, v in by.items() if k in ELEMENTS)
     if n_el > MAX_ELEMENTS:
         raise BdfError(source, f"{n_el} elements; at most {MAX_ELEMENTS} are accepted", n_el)
-    systems = coordinate_systems(cards.coords, source)
+    systems, where = place_grids(cards.coords, grids, source)
     out = BulkData(source)
     for gr in grids.values():
-        if gr.cp not in systems:
-            raise BdfError(source, "no such coordinate system", gr.cp, gr.line, "GRID", gr.id,
-                           "CP")
-        o, R = systems[gr.cp]
-        out.grids[gr.id] = o + R.T @ np.asarray(gr.x)
+        out.grids[gr.id] = where[gr.id]
+        if gr.cd != 0:
+            if gr.cd not in systems:
+                raise BdfError(source, "no such coordinate system", gr.cd, gr.line, "GRID",
+                               gr.id, "CD")
+            frame = systems[gr.cd].frame(where[gr.id])
+            if frame is None:
+                raise BdfError(source, "the grid is on the axis of its cylindrical or "
+                               "spherical CD system, where the directions are undefined",
+                               gr.cd, gr.line, "GRID", gr.id, "CD")
+            out.frames[gr.id] = frame
         if gr.ps:
             out.spc.setdefault(gr.id, set()).update(int(c) - 1 for c in gr.ps)
 
@@ -164,7 +140,7 @@ def cross_reference(cards: Cards) -> BulkData:
             if bar.g0 is not None:
                 grid(card, bar.g0, "G0")
             prop = ("PBAR", "PBARL") if kind == "CBAR" else ("PBEAM", "PBEAML")
-            out.bars.append((bar, section(card, bar.pid, prop)))
+            out.bars.append((_bar_in_basic(bar, out.frames), section(card, bar.pid, prop)))
     for card, m in by.get("CONM2", []):
         grid(card, m.g, "G")
         if m.cid not in systems and m.cid != -1:
@@ -172,7 +148,7 @@ def cross_reference(cards: Cards) -> BulkData:
         if m.cid == -1:
             x, inertia = m.x - out.grids[m.g], m.inertia
         else:
-            _, R = systems[m.cid]
+            R = _rectangular(card, systems[m.cid], m.cid, "CID")
             x, inertia = R.T @ m.x, R.T @ m.inertia @ R
         out.masses.append(Conm2(m.id, m.g, 0, m.m, x, inertia, m.line))
     for card, s in by.get("CELAS1", []) + by.get("CELAS2", []):
@@ -211,10 +187,10 @@ def cross_reference(cards: Cards) -> BulkData:
         if b.cid is not None:
             if b.cid not in systems:
                 raise card.error("no such coordinate system", b.cid, "CID")
-            axes = systems[b.cid][1]
+            axes = _rectangular(card, systems[b.cid], b.cid, "CID")
         else:
             assert b.gb is not None
-            v = np.asarray(b.v) if b.g0 is None else \
+            v = out.frames.get(b.ga, np.eye(3)) @ np.asarray(b.v) if b.g0 is None else \
                 out.grids[grid(card, b.g0, "GO")] - out.grids[b.ga]
             if np.linalg.norm(out.grids[b.gb] - out.grids[b.ga]) == 0:
                 raise card.error("GA and GB are at the same place: give CID for the axes",
@@ -290,6 +266,30 @@ def cross_reference(cards: Cards) -> BulkData:
                 f"{control['lines']['AUTOSPC']}) disagree", params["AUTOSPC"][1], "V1")
         out.autospc = control["AUTOSPC"]
     return out
+
+
+def _bar_in_basic(bar: Bar, frames: dict[int, np.ndarray]) -> Bar:
+    """``bar`` with its orientation vector and offsets in basic: OFFT's ``G`` puts them in
+    the displacement system (GRID CD) of GA (the vector, the offset at A) and GB (the offset
+    at B), :math:`w_{basic} = F w`."""
+    if not frames or not (bar.nodes[0] in frames or bar.nodes[1] in frames):
+        return bar
+    ga, gb = (frames.get(g, np.eye(3)) for g in bar.nodes)
+
+    def turn(F: np.ndarray, w: Any, letter: str) -> Any:
+        return w if w is None or letter == "B" else tuple(float(a) for a in F @ np.asarray(w))
+
+    return replace(bar, v=turn(ga, bar.v, bar.offt[0]), wa=turn(ga, bar.wa, bar.offt[1]),
+                   wb=turn(gb, bar.wb, bar.offt[2]))
+
+
+def _rectangular(card: RawCard, system: CoordSystem, cid: int, name: str) -> np.ndarray:
+    """The axes (rows, basic) of a rectangular system; a cylindrical or spherical one is
+    refused (offsets and axes in them are not supported)."""
+    if system.kind != "R":
+        raise card.error("the system must be rectangular (offsets and axes in cylindrical or "
+                         "spherical systems are not supported)", cid, name)
+    return system.axes
 
 
 def _spc_sets(cards: Cards) -> set[int]:

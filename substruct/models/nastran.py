@@ -1,6 +1,7 @@
 r"""Substructures made from Nastran bulk data (:class:`~substruct.case.bdf.BulkData`): grids
 with six coordinates each, labelled ``"<grid>:<component>"`` with Nastran's components
-``1`` - ``6`` (``"12:3"`` is grid 12's ``T3``, ``"12:4"`` its ``R1``), in basic axes.
+``1`` - ``6`` (``"12:3"`` is grid 12's ``T3``, ``"12:4"`` its ``R1``), in basic axes, or in
+the grid's displacement system for a GRID ``CD`` (:mod:`substruct.models.nastran_cd`).
 
 .. math::  K = \sum_e E_e^T T_e^T K_e T_e E_e + \sum_s k_s\, d_s d_s^T, \qquad
            M = w \Bigl(\sum_e E_e^T T_e^T M_e T_e E_e + \sum_c E_c^T M_c E_c\Bigr)
@@ -49,6 +50,7 @@ from substruct.case.bdf import BulkData, BdfSection
 from substruct.case.bdf_fields import BdfError
 from substruct.models.frame import frame_component
 from substruct.models.nastran_bars import bar_blocks, bar_matrices
+from substruct.models.nastran_cd import grid_transform
 from substruct.models.nastran_bounds import check_element, check_elements, check_solid_block
 from substruct.models.nastran_shells import bush_matrices, plate_matrices
 from substruct.models.selection import node_tolerance
@@ -188,12 +190,6 @@ def nastran_matrices(bulk: BulkData) -> NastranMatrices:
         Mm = conm2_matrix(m.m, m.x, m.inertia)
         check_element(bulk, "CONM2", m.id, m.line, None, Mm)
         add(6 * index[m.g] + np.arange(6), np.zeros((6, 6)), Mm)
-    for _, k, ea, eb in bulk.springs:
-        if eb is None:
-            add(np.array([6 * index[ea[0]] + ea[1]]), np.array([[k]]), np.zeros((1, 1)))
-        else:
-            d = np.array([6 * index[ea[0]] + ea[1], 6 * index[eb[0]] + eb[1]])
-            add(d, k * np.array([[1.0, -1.0], [-1.0, 1.0]]), np.zeros((2, 2)))
 
     def coo(values: list[np.ndarray]) -> sp.csr_array:
         if not values:
@@ -204,6 +200,19 @@ def nastran_matrices(bulk: BulkData) -> NastranMatrices:
         return sp.csr_array((mat + mat.T) / 2)
 
     K, M = coo(kv), coo(mv) * bulk.wtmass
+    if bulk.frames:  # GRID CD: K and M in the grids' CD systems (substruct.models.nastran_cd)
+        T = grid_transform(ids, bulk.frames)
+        K, M = (sp.csr_array(T.T @ X @ T) for X in (K, M))
+        K, M = (sp.csr_array((X + X.T) / 2) for X in (K, M))
+    if bulk.springs:  # CELAS: on the grids' coordinates (in CD)
+        rows, cols, kv = [], [], []
+        for _, k, ea, eb in bulk.springs:
+            if eb is None:
+                add(np.array([6 * index[ea[0]] + ea[1]]), np.array([[k]]), np.zeros((1, 1)))
+            else:
+                d = np.array([6 * index[ea[0]] + ea[1], 6 * index[eb[0]] + eb[1]])
+                add(d, k * np.array([[1.0, -1.0], [-1.0, 1.0]]), np.zeros((2, 2)))
+        K = sp.csr_array(K + coo(kv))
     held = np.zeros(N, dtype=bool)
     for g, comps in bulk.spc.items():
         held[6 * index[g] + np.asarray(sorted(comps), dtype=int)] = True
@@ -287,6 +296,11 @@ def nastran_substructure(name: str, mats: NastranMatrices,
     ok = col[trans] >= 0
     interp = sp.csr_array((np.ones(int(ok.sum())), (drawn[ok], col[trans][ok])),
                           shape=(drawn.size, n))
+    rotations = _rotations(col, len(mats.ids), n)
+    if mats.bulk.frames:  # drawn in basic: u_basic = T u_CD (substruct.models.nastran_cd)
+        T = grid_transform(mats.ids, mats.bulk.frames)
+        interp = sp.csr_array(T[trans][:, free])
+        rotations = sp.csr_array(T[trans + 3][:, free])
     cells = [("line", np.asarray(mats.elements, dtype=np.int64).reshape(-1, 2))] \
         if mats.elements else []
     cells += [(kind, np.asarray(f, dtype=np.int64)) for kind, f in mats.faces.items()]
@@ -301,5 +315,5 @@ def nastran_substructure(name: str, mats: NastranMatrices,
         name=name, M=as_csr(mats.M[free][:, free]), K=as_csr(mats.K[free][:, free]),
         C=as_csr(None, n), dof_labels=tuple(labels[d] for d in free), locate=locate,
         kind="nastran", geometry=Geometry(points=mats.xyz, cells=cells, interp=interp,
-                                          rotations=_rotations(col, len(mats.ids), n)),
+                                          rotations=rotations),
         meta=meta, position=position)
