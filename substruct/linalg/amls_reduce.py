@@ -274,10 +274,17 @@ def amls_reduce(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, root: 
                      f"block(s) of {coords} coordinates, {modes} modes kept "
                      f"({spent:.1f} s)")
 
+    parent = {index[id(c)]: i for i, b in enumerate(order) for c in b.children}
+
     def collect(positions: list[int]) -> None:
         for k, value in run.completed([kept[i] for i in positions]):
-            keep(positions[k], value)
-            del kept[positions[k]]
+            i = positions[k]
+            keep(i, value)
+            del kept[i]
+            if i in parent and here[parent[i]] and not here[i]:
+                # its parent is reduced here: the condensation brought here at once, onto
+                # disk when large, so that the workers do not hold it until then
+                up[i] = _on_disk_if_large(next(iter(run.completed([up[i]])))[1], scratch)
 
     def reduce(i: int, b: DissectionNode, where: TaskRunner) -> None:
         if b.is_leaf:
@@ -287,10 +294,7 @@ def amls_reduce(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, root: 
             kids = [index[id(c)] for c in b.children]
             job = _separator_job(K, M, b.dofs, bounds[i], lam_cut, [bounds[j] for j in kids],
                                  free_shift)
-            inputs = [up.pop(j) for j in kids]
-            if where is not run:        # a task's condensation brought here
-                inputs = [c if here[j] else next(iter(run.completed([c])))[1]
-                          for j, c in zip(kids, inputs)]
+            inputs = [up.pop(j) for j in kids]  # here: values (collect brought the tasks')
             both = where.submit(reduce_separator, job, *inputs)
             for c in inputs:            # in this process: read, no longer needed
                 if isinstance(c, Condensation):
@@ -309,7 +313,9 @@ def amls_reduce(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, root: 
     # the tasks first (none of them waits for a block reduced here); once every one is done,
     # the blocks too large for a worker, in post-order here: on one machine the workers'
     # peaks and this process's would otherwise add up (a 10^6-coordinate solid on two
-    # workers: this process stopped by the system at 15.5 GB while both workers were busy)
+    # workers: this process stopped by the system at 15.5 GB while both workers were busy);
+    # meanwhile their children's condensations wait on this process's disk, not in the
+    # workers (there they had a worker restarted at 10^6 coordinates)
     for i, b in enumerate(order):
         if not here[i]:
             reduce(i, b, run)
