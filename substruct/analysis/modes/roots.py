@@ -278,9 +278,11 @@ def classify_roots(lam: np.ndarray, U: np.ndarray, A: np.ndarray, M: np.ndarray,
         reasons.append(SPURIOUS_ZERO)
     phys_lam: list[complex] = [0j] * st.rigid.shape[1]
     phys_u: list[np.ndarray] = [st.rigid[:, j].astype(complex) for j in range(st.rigid.shape[1])]
-    # undamped: a pair of roots with |omega^2| at round-off of the matrices' scale is a rigid-body
-    # mode whose K u = 0 holds only to the input's rounding (a supplier's reduced matrices),
-    # reported at 0 as on the sparse path, not as a real pair of damping ratio +1 and -1
+    # undamped: a real pair of roots (omega^2 < 0, which no stiffness gives) with |omega^2| at
+    # round-off of the matrices' scale is a rigid-body mode whose K u = 0 holds only to the
+    # input's rounding (a supplier's reduced matrices): reported at 0, not as a real pair of
+    # damping ratios +1 and -1.  A small positive omega^2 stays: it may be a soft mode (a
+    # unit spring in series with a 1e12 one has omega^2 below 1e-12 tr K / tr M)
     tiny = rigid_eigenvalue(sp.csr_array(K), sp.csr_array(M)) if not np.any(C) else -1.0
     near_rigid: list[np.ndarray] = []
     for j in rest_idx:
@@ -291,7 +293,7 @@ def classify_roots(lam: np.ndarray, U: np.ndarray, A: np.ndarray, M: np.ndarray,
             reasons.append(f"violates the constraints: |A u|/(|A||u|) = {r:.2e}")
             continue
         real = abs(lj.imag) <= REAL_TOL * abs(lj)
-        if abs(lj) ** 2 <= tiny:
+        if real and abs(lj) ** 2 <= tiny:
             near_rigid.append(u)
             continue
         if not real and lj.imag < 0:
