@@ -95,6 +95,14 @@ class Link:
     dependent: tuple[tuple[str, Any], ...]
     labels: tuple[str, ...]
 
+    @classmethod
+    def joined(cls, name: str, kind: str, parts: Sequence["Link"]) -> "Link":
+        """One link of the rows of ``parts`` (each a link of a few rows, e.g. one
+        :func:`mpc` per dependent component), in order."""
+        return cls(name, kind, tuple(c for p in parts for c in p.constraints),
+                   tuple(d for p in parts for d in p.dependent),
+                   tuple(lab for p in parts for lab in p.labels))
+
 
 def _subs(substructures: Mapping[str, Substructure] | Sequence[Substructure]
           ) -> Mapping[str, Substructure]:

@@ -66,9 +66,7 @@ def relation_link(subs: Mapping[str, Substructure], name: str, link_name: str, k
         terms += [(node[g], str(k + 1), -float(a)) for (g, k), a in zip(cols, row)
                   if abs(a) > DROP * top]
         parts.append(mpc(subs, terms, name=link_name))
-    return Link(link_name, kind, tuple(c for p in parts for c in p.constraints),
-                tuple(d for p in parts for d in p.dependent),
-                tuple(lab for p in parts for lab in p.labels))
+    return Link.joined(link_name, kind, parts)
 
 
 def rbe2_cd_link(subs: Mapping[str, Substructure], name: str, bulk: BulkData, r: Rbe2,
@@ -80,9 +78,7 @@ def rbe2_cd_link(subs: Mapping[str, Substructure], name: str, bulk: BulkData, r:
         G = rbar_rows(bulk.grids[g] - bulk.grids[r.gn])[6:]
         parts.append(relation_link(subs, name, link_name, "rigid", g, r.cm,
                                    [(r.gn, range(6))], G, bulk.frames))
-    return Link(link_name, "rigid", tuple(c for p in parts for c in p.constraints),
-                tuple(d for p in parts for d in p.dependent),
-                tuple(lab for p in parts for lab in p.labels))
+    return Link.joined(link_name, "rigid", parts)
 
 
 def rbe3_cd_link(subs: Mapping[str, Substructure], name: str, bulk: BulkData, r3: Rbe3,

@@ -83,6 +83,4 @@ def rbar_link(subs: Mapping[str, Substructure], name: str, rb: Rbar, positions: 
         terms += [(ends[n // 6], str(n % 6 + 1), -float(a)) for n, a in zip(indep, coef[i])
                   if a != 0.0]
         parts.append(mpc(subs, terms, name=link_name))
-    return Link(link_name, "rigid", tuple(c for p in parts for c in p.constraints),
-                tuple(d for p in parts for d in p.dependent),
-                tuple(lab for p in parts for lab in p.labels))
+    return Link.joined(link_name, "rigid", parts)
