@@ -89,7 +89,7 @@ def main(argv: list[str] | None = None) -> None:
 
 def run(args: argparse.Namespace, tasks: object) -> None:
     """The measurement of ``main`` (``tasks``: the Dask session, or ``None``)."""
-    from substruct.linalg.amls import (AUTO, SHIFT_FRACTION, expand_modes, reduced_eigenpairs,
+    from substruct.linalg.amls import (AUTO, expand_modes, free_shift, reduced_eigenpairs,
                                        relative_residuals)
     from substruct.linalg.amls_reduce import amls_reduce
     from substruct.linalg.amls_tree import dissection_tree
@@ -113,7 +113,7 @@ def run(args: argparse.Namespace, tasks: object) -> None:
     lam_w = args.omega_guess ** 2
     t = time.perf_counter()
     red = amls_reduce(K, M, tree, (args.cutoff * args.omega_guess) ** 2, AUTO, say, tasks,
-                      SHIFT_FRACTION * lam_w)
+                      free_shift(K, M, lam_w))
     times["reduce"] = time.perf_counter() - t
     n_reduced = red.size
     if args.reduce_only:

@@ -55,18 +55,33 @@ from substruct.linalg.amls_reduce import ReducedModel, amls_reduce
 from substruct.linalg.amls_tree import DissectionNode, dissection_tree
 from substruct.linalg.definite import definite_factorization
 from substruct.linalg.factorize import factorizer
-from substruct.linalg.scaling import rigid_eigenvalue
+from substruct.linalg.scaling import rigid_modes, stiffness_over_mass
 from substruct.linalg.scratch_arrays import ScratchArrays
 from substruct.linalg.task_runner import TaskRunner
 from substruct.machine import available_memory
 
-__all__ = ["AMLSModes", "RITZ_ON_DISK", "amls_modes", "expand_modes", "iterated_vectors",
-           "reduced_eigenpairs", "relative_residuals"]
+__all__ = ["AMLSModes", "RITZ_ON_DISK", "amls_modes", "expand_modes", "free_shift",
+           "iterated_vectors", "reduced_eigenpairs", "relative_residuals"]
 
 #: The shift of the subspace iteration and of the blocks with no boundary, as a fraction of
 #: the wanted eigenvalue :math:`\omega_{max}^2` (negative: ``K - sigma M`` is positive
 #: definite for a free body, whatever the rank of ``M``).
 SHIFT_FRACTION = -1e-3
+
+#: ... and at least this fraction of the stiffness's scale :math:`\operatorname{tr} K /
+#: \operatorname{tr} M` (a wanted frequency far below a stiff body's first flexible one would
+#: otherwise leave ``K - sigma M`` singular to working precision on its rigid-body modes).
+SHIFT_FLOOR = 1e-5
+
+
+def free_shift(K: sp.sparray, M: sp.sparray, lam_w: float) -> float:
+    r"""The shift :math:`\sigma` of the blocks with no boundary, the reduced pencil of a free body
+    and the subspace iteration:
+    :math:`\sigma = f \max(\omega_{max}^2, 10^{-5} \operatorname{tr} K / \operatorname{tr} M)`,
+    :math:`f` = :data:`SHIFT_FRACTION`, so that :math:`K - \sigma M` is positive definite to
+    working precision for a free body at any wanted frequency (its rigid-body modes'
+    eigenvalue :math:`-\sigma` is at least :math:`10^{-8}` of the stiffness's scale)."""
+    return SHIFT_FRACTION * max(lam_w, SHIFT_FLOOR * stiffness_over_mass(K, M))
 
 
 @dataclass
@@ -137,14 +152,15 @@ DENSE_REDUCED = 3000
 LANCZOS_FRACTION = 0.1
 
 
-def reduced_eigenpairs(red: ReducedModel, lam_max: float) -> tuple[np.ndarray, np.ndarray]:
+def reduced_eigenpairs(red: ReducedModel, lam_max: float, shift: float | None = None
+                       ) -> tuple[np.ndarray, np.ndarray]:
     r"""Every eigenpair of :math:`\operatorname{diag}(\Lambda) y = \lambda M_r y` with
     :math:`\lambda \le` ``lam_max``, ``M_r``-normalized.
 
     A singular :math:`\Lambda` (a free body's rigid modes): dense, in the inverse form
     :math:`M_r y = \mu (\Lambda - \sigma M_r) y`, :math:`\lambda = \sigma + 1/\mu`,
-    :math:`\sigma` = :data:`SHIFT_FRACTION` ``lam_max`` (positive definite on the right
-    whatever the rank of :math:`M_r`).  Otherwise, with :math:`\Lambda > 0` diagonal, the
+    :math:`\sigma` = ``shift`` (:func:`free_shift`; by default :data:`SHIFT_FRACTION`
+    ``lam_max``; positive definite on the right whatever the rank of :math:`M_r`).  Otherwise, with :math:`\Lambda > 0` diagonal, the
     pencil is the standard symmetric problem
 
     .. math::  \hat M z = \mu z, \qquad \hat M = \Lambda^{-1/2} M_r \Lambda^{-1/2}, \qquad
@@ -160,7 +176,7 @@ def reduced_eigenpairs(red: ReducedModel, lam_max: float) -> tuple[np.ndarray, n
     if red.size == 0:
         return np.zeros(0), np.zeros((0, 0))
     if red.lam.min() <= 0:
-        sigma = SHIFT_FRACTION * lam_max
+        sigma = SHIFT_FRACTION * lam_max if shift is None else shift
         Mr = red.M.toarray(order="F")
         Ks = -sigma * Mr
         Ks[np.diag_indices(red.size)] += red.lam
@@ -268,8 +284,8 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
         tree: the dissection of ``K`` (:func:`~substruct.linalg.amls_tree.dissection_tree`
             with ``leaf_size``), if already made (another wanted frequency of the same model).
 
-    A free body's rigid-body modes (:math:`|\lambda| \le`
-    :func:`~substruct.linalg.scaling.rigid_eigenvalue`, round-off) come back at 0, their
+    A free body's rigid-body modes (:func:`~substruct.linalg.scaling.rigid_modes`: strain
+    energy at round-off) come back at 0, their
     residual measured by :func:`relative_residuals` against :math:`|K|\,|u|`.
     """
     if not (np.isfinite(omega_max) and omega_max > 0):
@@ -290,12 +306,13 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
     times["tree"] = time.perf_counter() - t
     say(f"AMLS tree: {n_blocks} blocks, {max(b.level for b in root.postorder()) + 1} levels")
     t = time.perf_counter()
-    red = amls_reduce(K, M, root, lam_c, AUTO, say, tasks, SHIFT_FRACTION * lam_w)
+    shift = free_shift(K, M, lam_w)
+    red = amls_reduce(K, M, root, lam_c, AUTO, say, tasks, shift)
     times["reduce"] = time.perf_counter() - t
     say(f"AMLS reduced: {red.size} coordinates from {red.n}")
     t = time.perf_counter()
     bound = min(ritz_ratio ** 2, cutoff ** 2) * lam_w if iterations else lam_w
-    lam, Y = reduced_eigenpairs(red, bound)
+    lam, Y = reduced_eigenpairs(red, bound, shift)
     times["reduced"] = time.perf_counter() - t
     t = time.perf_counter()
     scratch = ScratchArrays("substruct-modes-")
@@ -309,7 +326,7 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
         huge = isinstance(U, np.memmap)
         W = iterated_vectors(U, scratch)
         del U        # on disk now, or W itself
-        sigma = SHIFT_FRACTION * lam_w
+        sigma = shift
         solve = definite_factorization(factorizer(AUTO), sp.csc_array(K - sigma * M))
         filter_steps(M, W, solve, chebyshev_shifts(iterations, sigma, np.sqrt(bound * lam_c)),
                      say)
@@ -322,7 +339,7 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
     times["improve"] = time.perf_counter() - t
     found = int(np.searchsorted(lam, lam_w, side="right"))   # lam ascending
     lam, U = lam[:found], U[:, :found]
-    lam = np.where(np.abs(lam) <= rigid_eigenvalue(K, M), 0.0, lam)
+    lam = np.where(rigid_modes(lam, U, K, M), 0.0, lam)
     t = time.perf_counter()
     res = relative_residuals(K, M, lam, U)
     times["residual"] = time.perf_counter() - t

@@ -25,7 +25,7 @@ from substruct.analysis.modes.pencil import Refine
 from substruct.analysis.results import Modes
 from substruct.linalg.constraints import independent_rows
 from substruct.linalg.nullspace import null_space_basis
-from substruct.linalg.scaling import mass_column_scale, rigid_eigenvalue
+from substruct.linalg.scaling import RIGID_ENERGY_TOL, mass_column_scale, rigid_eigenvalue
 from substruct.vocabulary import GENERALIZED_INVERSE
 
 __all__ = [
@@ -58,9 +58,6 @@ REAL_TOL = 1e-6
 #: Singular-value threshold for rigid-body motions: ``[D K D; A D]`` (``D = diag(K)^{-1/2}``,
 #: rows of ``A D`` of unit norm) has singular values below this on ``null(K) & null(A)``.
 RIGID_SINGULAR_TOL = 1e-9
-#: ... and its strain energy ``u^T K u`` is below this fraction of ``|u|^T |K| |u|`` (rounding is
-#: a few ``eps`` of it; a ``1e12`` spring in series with a ``1`` leaves ``2.5e-13``).
-RIGID_ENERGY_TOL = 3e-14
 #: A rigid-body mode counts as undamped (a double zero root) when ``u^T C u / u^T M u`` is
 #: below this fraction of the root scale ``max(sqrt(K_ii / M_jj), C_ii / M_jj)``.
 RIGID_DAMPING_TOL = 1e-8

@@ -68,7 +68,7 @@ from substruct.linalg.definite import SingularPencil, definite_factorization
 from substruct.linalg.factorize import Factorize, Solve, factorizer
 from substruct.linalg.lanczos import shift_invert_lanczos_deflated
 from substruct.linalg.nullspace import Elimination
-from substruct.linalg.scaling import massless_coordinates
+from substruct.linalg.scaling import massless_coordinates, rigid_modes
 from substruct.vocabulary import FORMULATIONS, GENERALIZED_INVERSE, KKT, NULL_SPACE
 
 __all__ = [
@@ -93,8 +93,9 @@ def _finish(lam: np.ndarray, U: np.ndarray, K: sp.csr_array, M: sp.csr_array,
     lam, U = lam[order], U[:, order]
     scale = max(abs(lam).max(initial=0.0), 1e-300)
     lam = np.where(lam < 0, np.where(lam > -1e-8 * scale, 0.0, lam), lam)
-    # a rigid-body mode's omega^2 is round-off: zero, as the dense path reports it
-    lam = np.where(lam <= rigid_eigenvalue(K, M), 0.0, lam)
+    # a rigid-body mode's omega^2 is round-off: zero, as the dense path reports it; a soft
+    # mode below the same level (a stiff body on soft springs) keeps its frequency
+    lam = np.where(rigid_modes(lam, U, K, M), 0.0, lam)
     big = np.argmax(np.abs(U), axis=0)
     U = U * np.sign(U[big, np.arange(U.shape[1])])
     U = U / np.sqrt(np.einsum("ij,ij->j", U, M @ U))
