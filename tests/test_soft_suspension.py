@@ -21,6 +21,7 @@ from substruct.analysis.api import modes
 from substruct.analysis.modes.sparse import DENSE_FREE
 from substruct.linalg.amls import amls_modes
 from substruct.linalg.scaling import rigid_eigenvalue, stiffness_over_mass
+from substruct.models.craig_bampton import fixed_interface_modes
 from substruct.models.solid import BoxGrid, solid_box
 
 H = 1e-3  # element size, m
@@ -74,3 +75,23 @@ def test_the_free_body_still_has_six_rigid_body_modes_at_zero():
     assert res.omega[6] > 1e5
     amls = amls_modes(K, M, 1.0, cutoff=5, leaf_size=400)
     assert amls.lam.size == 6 and np.all(amls.lam == 0.0)
+
+
+def test_craig_bampton_of_a_part_on_soft_springs_keeps_its_suspension_modes():
+    """The box held at its last node (the boundary) and by the springs: 60 fixed-interface
+    modes reach 3e6 rad/s while the three lowest are the body's rotations about that node on
+    the springs, 18 to 49 rad/s. A test relative to the highest mode kept (``1e-10`` of it)
+    refused the part as not held; they are the ``3 x 3`` pencil of those rotations."""
+    K, M = free_box()
+    n = K.shape[0]
+    Ks = springs(n, 0.1)
+    Kt = sp.csr_array(K + Ks)
+    boundary = np.arange(n - 3, n)
+    interior = np.setdiff1d(np.arange(n), boundary)
+    _, lam, _ = fixed_interface_modes("box", Kt, M, interior, 60)
+    _, R = sla.eigh(K.toarray(), M.toarray(), subset_by_index=[0, 5])
+    R = R @ sla.null_space(R[boundary])       # the rigid motions that hold the node still
+    exact = sla.eigh(R.T @ (Ks @ R), R.T @ (M @ R), eigvals_only=True)
+    atol = np.finfo(float).eps * stiffness_over_mass(Kt, M)
+    np.testing.assert_allclose(lam[:3], exact, rtol=1e-9, atol=atol)
+    assert lam[59] > 1e10 * lam[0]   # beyond the ratio that was refused
