@@ -13,6 +13,15 @@ their centroid; a warp (largest distance from that plane over the shorter diagon
 :data:`MAX_WARP` is refused.  The element's matrices are :math:`T^T K T` with
 ``T = diag(R, ..., R)``, the rows of ``R`` being :math:`e_x, e_y, e_z`.
 
+**Warped quadrilaterals.** The flat element lies on the mean plane, its corners
+:math:`p_k = x_k - h_k e_z` at the heights :math:`h_k = (x_k - c) \cdot e_z` of the nodes
+above it.  Each corner is joined to its node by a rigid offset,
+:math:`u(p_k) = u_k + \theta_k \times (p_k - x_k)` (:func:`warp_offsets`), so that the stiffness
+is :math:`W^T K W`: a rigid motion of the nodes themselves is a rigid motion of the flat
+element and stores no energy (without it, a rotation of a warped quadrilateral about an axis
+in its plane would, and a free structure would lose rigid-body modes).  The mass is left at
+the corners (a rigid offset of at most :data:`MAX_WARP` of the diagonal).
+
 **Membrane.** Triangles: the constant-strain triangle (CST).  Quadrilaterals: the bilinear
 element with Wilson's incompatible modes :math:`1 - \xi^2, 1 - \eta^2` in the form of Taylor,
 Beresford and Wilson (QM6: their derivatives are taken with the Jacobian at the centre and
@@ -61,7 +70,7 @@ from substruct.models.plate_bending import (
 )
 
 __all__ = ["MAX_WARP", "DRILL_PENALTY", "SHELL_MASSES", "ShellTerms", "shell_axes",
-           "membrane_matrices", "shell_matrices"]
+           "membrane_matrices", "shell_matrices", "warp_offsets"]
 
 #: Largest warp of a quadrilateral (distance of a corner from the mean plane over the shorter
 #: diagonal) accepted for a flat facet.
@@ -169,6 +178,25 @@ def _membrane_mass(xy: np.ndarray, mu: float, rot: float) -> np.ndarray:
     return M
 
 
+def warp_offsets(X: np.ndarray, ez: np.ndarray) -> np.ndarray:
+    r"""The rigid offsets ``W`` ``(m, 6n, 6n)`` from the nodes ``X`` ``(m, n, 3)`` of ``m``
+    elements to their corners on the mean planes (normals ``ez`` ``(m, 3)``, through the
+    centroids): ``u(p_k) = u_k + theta_k x (p_k - x_k)``, ``theta(p_k) = theta_k``, with
+    ``p_k - x_k = -h_k e_z`` (module docstring).  The identity for a flat element."""
+    X = np.asarray(X, dtype=float)
+    m, n = X.shape[:2]
+    h = np.einsum("mkc,mc->mk", X - X.mean(axis=1, keepdims=True), ez)
+    d = -h[:, :, None] * ez[:, None, :]  # p_k - x_k
+    W = np.tile(np.eye(6 * n), (m, 1, 1))
+    for k in range(n):  # theta x d = -[d]_x theta
+        dx, dy, dz = d[:, k, 0], d[:, k, 1], d[:, k, 2]
+        r, c = 6 * k, 6 * k + 3
+        W[:, r, c + 1], W[:, r, c + 2] = dz, -dy
+        W[:, r + 1, c], W[:, r + 1, c + 2] = -dz, dx
+        W[:, r + 2, c], W[:, r + 2, c + 1] = dy, -dx
+    return W
+
+
 def _area(xy: np.ndarray) -> float:
     x, y = xy[:, 0], xy[:, 1]
     return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
@@ -241,4 +269,5 @@ def shell_matrices(X: np.ndarray, E: float, nu: float, t: float, rho: float,
         A = _area(xy)
         M[np.arange(6 * n), np.arange(6 * n)] = np.tile([mu * A / n] * 3 + [rot * A / n] * 3, n)
     T = np.kron(np.eye(2 * n), R)
-    return T.T @ K @ T, T.T @ M @ T
+    W = warp_offsets(X[None], R[None, 2])[0]
+    return W.T @ (T.T @ K @ T) @ W, T.T @ M @ T

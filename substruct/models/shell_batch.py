@@ -13,7 +13,9 @@ with the same quadrature: arrays carry a leading element axis and the products a
   there);
 * membrane (CST/QM6, the incompatible modes condensed by a batched solve) and the drilling
   penalty :math:`\gamma t \sum_q w_q \det J_q\, g_q g_q^T`;
-* global axes blockwise: :math:`K^{(ab)} = R^T K_{loc}^{(ab)} R` for each pair of corners.
+* global axes blockwise: :math:`K^{(ab)} = R^T K_{loc}^{(ab)} R` for each pair of corners;
+* the rigid offsets of a warped quadrilateral's nodes to its mean plane, :math:`W^T K W`
+  (:func:`substruct.models.shell.warp_offsets`).
 
 The per-element function stays the reference; the two agree to round-off.  An element that
 the per-element function refuses is refused with its message: on any failed check the batch
@@ -27,7 +29,7 @@ import numpy as np
 from substruct.models.mindlin_plate import mindlin_matrices_batch
 from substruct.models.plate_bending import corner_shapes, plane_stress, tabulated
 from substruct.models.shell import (
-    DRILL_PENALTY, MAX_WARP, SHELL_MASSES, ShellTerms, shell_matrices,
+    DRILL_PENALTY, MAX_WARP, SHELL_MASSES, ShellTerms, shell_matrices, warp_offsets,
 )
 
 __all__ = ["shell_matrices_batch"]
@@ -270,4 +272,5 @@ def shell_matrices_batch(X: np.ndarray, E: float, nu: float, t: float, rho: floa
     else:
         diag = np.tile([mu / n] * 3 + [rot / n] * 3, n)
         M[:, np.arange(2 * s), np.arange(2 * s)] = area[:, None] * diag
-    return _to_global(K, R), _to_global(M, R)
+    W = warp_offsets(X, R[:, 2])
+    return np.einsum("mji,mjk,mkl->mil", W, _to_global(K, R), W), _to_global(M, R)
