@@ -301,6 +301,44 @@ def test_gmsh_version_4_headers_are_read_ascii_and_binary(tmp_path):
     assert mesh_file_problem(ROOT / "meshes" / "plate.msh") is None
 
 
+def test_xdmf_data_items_read_only_files_beside_the_xdmf_file(tmp_path):
+    """An XDMF file names the files its arrays are in: an HDF5 file by '../' or an absolute
+    path, or a raw Binary file (which meshio opens from the working directory, and which may
+    be a device or a FIFO), was read; now only an HDF5 file beside the XDMF file is."""
+    import meshio
+
+    pts = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1],
+                    [1, 1, 1], [0, 1, 1]], dtype=float)
+    case = tmp_path / "case"
+    case.mkdir()
+    meshio.write(case / "m.xdmf", meshio.Mesh(pts, [("hexahedron", np.arange(8)[None])]))
+    assert mesh_file_problem(case / "m.xdmf") is None
+    assert read_mesh_file(case / "m.xdmf").points.shape == (8, 3)
+    text = (case / "m.xdmf").read_text()
+    assert "m.h5:/data0" in text
+    (tmp_path / "outside.h5").write_bytes((case / "m.h5").read_bytes())
+    (2 * pts).tofile(tmp_path / "points.bin")
+    for name, shown in (("../outside.h5", "'../outside.h5:/data0'"),
+                        (str(tmp_path / "outside.h5"), "'/"),
+                        ("nope.h5", "'nope.h5:/data0': no such regular file")):
+        (case / "bad.xdmf").write_text(text.replace("m.h5:/data0", f"{name}:/data0"))
+        problem = mesh_file_problem(case / "bad.xdmf")
+        assert problem is not None and problem.startswith(f"an XDMF data item names {shown}"), \
+            problem
+        with pytest.raises(MeshFileError, match="an XDMF data item names"):
+            read_mesh_file(case / "bad.xdmf")
+    if hasattr(os, "symlink"):
+        os.symlink(tmp_path / "outside.h5", case / "link.h5")
+        (case / "bad.xdmf").write_text(text.replace("m.h5:/data0", "link.h5:/data0"))
+        assert "a link leads out of it" in (mesh_file_problem(case / "bad.xdmf") or "")
+    binary = text.replace('Format="HDF" Precision="8">m.h5:/data0',
+                          f'Format="Binary" Precision="8">{tmp_path / "points.bin"}')
+    assert "Binary" in binary
+    (case / "bad.xdmf").write_text(binary)
+    assert (mesh_file_problem(case / "bad.xdmf") or "").startswith(
+        "an XDMF data item of format 'Binary'")
+
+
 def test_meshio_exit_is_an_error_and_prints_nothing(tmp_path, capsys):
     from substruct.models.mesh_io import read_mesh
 

@@ -9,7 +9,10 @@ A solid's ``mesh:`` is any file that meshio reads.  Before a byte of its data is
 * a header that declares more than :data:`MAX_MESH_POINTS` points or :data:`MAX_MESH_CELLS`
   cells (Gmsh ``.msh``, VTK XML ``.vtu``, legacy ``.vtk``: the counts are read from the
   first :data:`MESH_HEADER` bytes, with at most 12 digits each, before anything is
-  allocated).
+  allocated);
+* an XDMF file whose data items name files outside its directory: an HDF5 file by an absolute
+  path, ``..`` or a link leading out, or a raw ``Binary`` file (meshio opens it from the
+  working directory, and a device or FIFO named there is read without end).
 
 :func:`read_mesh_file` then reads it with meshio: with its printing silenced, its
 ``sys.exit(1)`` on a file it cannot read (an empty or malformed VTU) turned into the error,
@@ -30,7 +33,7 @@ import re
 import stat
 import struct
 import warnings
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 from typing import Any, Iterator
 
 import numpy as np
@@ -134,6 +137,50 @@ def _vtk_counts(head: bytes) -> tuple[int | None, int | None]:
 _COUNTERS = {"gmsh": _gmsh_counts, "vtu": _vtu_counts, "vtk": _vtk_counts}
 
 
+def _inside(folder: Path, name: str) -> str | None:
+    """What keeps the file ``name``, read from a mesh file in ``folder``, from being a regular
+    file inside that folder (``None`` when it is one)."""
+    parts = PurePosixPath(name.replace("\\", "/")).parts
+    if not name or any(ord(ch) < 32 for ch in name) or name.startswith(("/", "\\", "~")) or \
+            re.match(r"^[A-Za-z]:", name) or ".." in parts:
+        return "a file named by a mesh file is named relative to it, inside its directory " \
+               "(no absolute path, drive or '..')"
+    base = folder.resolve()
+    try:
+        (base / name).resolve().relative_to(base)
+    except (OSError, ValueError):
+        return "a file named by a mesh file stays inside its directory (a link leads out of it)"
+    if not (base / name).is_file():
+        return "no such regular file beside the mesh file"
+    return None
+
+
+def _xdmf_problem(path: Path) -> str | None:
+    """A data item of an XDMF file that reads from a file it may not name: HDF items name an
+    HDF5 file that must lie beside the XDMF file (:func:`_inside`); Binary items are refused
+    (meshio opens their raw file from the working directory, not beside the XDMF file, and
+    a device or FIFO named there would be read without end)."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        for _, item in ET.iterparse(path):
+            if item.tag.rsplit("}", 1)[-1] != "DataItem":
+                continue
+            fmt = item.attrib.get("Format", "XML")
+            if fmt == "XML":
+                continue
+            text = " ".join((item.text or "").split())[:80]
+            if fmt != "HDF":
+                return (f"an XDMF data item of format {fmt!r} ({text!r}): only XML and HDF "
+                        f"data items are read")
+            problem = _inside(path.parent, text.split(":", 1)[0])
+            if problem is not None:
+                return f"an XDMF data item names {text!r}: {problem}"
+    except ET.ParseError as err:
+        return f"not an XDMF file: its XML cannot be read ({err})"
+    return None
+
+
 def mesh_file_problem(path: Path) -> str | None:
     """What makes ``path`` unreadable as a mesh file, found without reading its data; ``None``
     when it may be read.  The message does not name the file (the caller does)."""
@@ -157,6 +204,8 @@ def mesh_file_problem(path: Path) -> str | None:
     if fmt is None:
         return (f"unknown mesh format {path.suffix or '(no extension)'!r}: a mesh file is one "
                 f"that meshio reads (.msh, .vtu, .vtk, .xdmf, .mesh, .inp, ...)")
+    if fmt == "xdmf":
+        return _xdmf_problem(path)
     counter = _COUNTERS.get(fmt)
     if counter is None:
         return None
