@@ -339,6 +339,37 @@ def test_xdmf_data_items_read_only_files_beside_the_xdmf_file(tmp_path):
         "an XDMF data item of format 'Binary'")
 
 
+def test_abaqus_includes_read_only_files_beside_the_including_file(tmp_path, monkeypatch):
+    """meshio reads an Abaqus *INCLUDE by any path (absolute, '..', first from the working
+    directory): such a mesh was read from outside its directory; now only a file beside the
+    including file is, once, and not through a loop."""
+    nodes = "".join(f"{k + 1}, {x:.1f}, {y:.1f}, {z:.1f}\n" for k, (x, y, z) in enumerate(
+        [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (1, 1, 1),
+         (0, 1, 1)]))
+    part = f"*NODE\n{nodes}*ELEMENT, TYPE=C3D8, ELSET=ALL\n1, 1, 2, 3, 4, 5, 6, 7, 8\n"
+    case, other = tmp_path / "case", tmp_path / "other"
+    case.mkdir()
+    other.mkdir()
+    (case / "part.inp").write_text(part)
+    (tmp_path / "part.inp").write_text(part.replace("1.0", "2.0"))
+    main = case / "m.inp"
+    main.write_text("*HEADING\n*INCLUDE, INPUT=part.inp\n")
+    assert mesh_file_problem(main) is None
+    assert read_mesh_file(main).points.max() == 1.0
+    for name in ("../part.inp", str(tmp_path / "part.inp")):
+        main.write_text(f"*HEADING\n*include,input={name}\n")
+        assert (mesh_file_problem(main) or "").startswith(
+            f"m.inp: line 2: *INCLUDE names {name!r}: a file named by a mesh file is named "
+            "relative to it, inside its directory"), mesh_file_problem(main)
+    main.write_text("*HEADING\n*INCLUDE, INPUT=part.inp\n")
+    monkeypatch.chdir(tmp_path)  # meshio would take ./part.inp, the one with 2.0
+    assert "meshio would read the file of that name in the working directory" in \
+        (mesh_file_problem(main) or "")
+    monkeypatch.chdir(other)
+    (case / "part.inp").write_text("*INCLUDE, INPUT=m.inp\n")
+    assert mesh_file_problem(main) == "m.inp includes itself (through its *INCLUDE lines)"
+
+
 def test_meshio_exit_is_an_error_and_prints_nothing(tmp_path, capsys):
     from substruct.models.mesh_io import read_mesh
 

@@ -10,6 +10,8 @@ A solid's ``mesh:`` is any file that meshio reads.  Before a byte of its data is
   cells (Gmsh ``.msh``, VTK XML ``.vtu``, legacy ``.vtk``: the counts are read from the
   first :data:`MESH_HEADER` bytes, with at most 12 digits each, before anything is
   allocated);
+* an Abaqus ``.inp`` file whose ``*INCLUDE`` names a file outside its directory (or one
+  meshio would take from the working directory), includes itself or nests too deep;
 * an XDMF file whose data items name files outside its directory: an HDF5 file by an absolute
   path, ``..`` or a link leading out, or a raw ``Binary`` file (meshio opens it from the
   working directory, and a device or FIFO named there is read without end).
@@ -42,6 +44,7 @@ from substruct.case.fields import gigabytes
 from substruct.case.numbers import array_problem
 
 __all__ = ["MAX_MESH_FILE", "MAX_MESH_POINTS", "MAX_MESH_CELLS", "MESH_HEADER",
+           "MAX_MESH_INCLUDE_DEPTH",
            "MESH_READ_MEMORY", "DEGENERATE", "MeshFileError", "mesh_file_problem",
            "read_mesh_file", "mesh_format"]
 
@@ -152,6 +155,42 @@ def _inside(folder: Path, name: str) -> str | None:
         return "a file named by a mesh file stays inside its directory (a link leads out of it)"
     if not (base / name).is_file():
         return "no such regular file beside the mesh file"
+    if (base / name).stat().st_size > MAX_MESH_FILE:
+        return f"more than the {MAX_MESH_FILE} bytes of a mesh file"
+    return None
+
+
+#: Deepest nesting of ``*INCLUDE`` in an Abaqus mesh file.
+MAX_MESH_INCLUDE_DEPTH = 8
+_ABAQUS_INCLUDE = re.compile(rb"^\s*\*\s*INCLUDE\b", re.IGNORECASE)
+
+
+def _abaqus_problem(path: Path, chain: tuple[Path, ...] = ()) -> str | None:
+    """An ``*INCLUDE, INPUT=name`` of an Abaqus mesh file (or of a file it includes) that
+    meshio may not read: a name outside the including file's directory (:func:`_inside`),
+    one that meshio would take from the working directory instead (it looks there first), a
+    file that includes itself, or includes nested more than :data:`MAX_MESH_INCLUDE_DEPTH`
+    deep."""
+    here = path.resolve()
+    if here in chain:
+        return f"{path.name} includes itself (through its *INCLUDE lines)"
+    if len(chain) >= MAX_MESH_INCLUDE_DEPTH:
+        return f"*INCLUDE lines nest more than {MAX_MESH_INCLUDE_DEPTH} deep"
+    with open(path, "rb") as fp:
+        for k, raw in enumerate(fp, start=1):
+            if not _ABAQUS_INCLUDE.match(raw):
+                continue
+            name = raw.decode("latin-1").split("=")[-1].strip()
+            where = f"{path.name}: line {k}: *INCLUDE names {name[:80]!r}"
+            problem = _inside(path.parent, name)
+            if problem is None and Path(name).exists() and \
+                    Path(name).resolve() != (path.parent / name).resolve():
+                problem = "meshio would read the file of that name in the working directory"
+            if problem is not None:
+                return f"{where}: {problem}"
+            problem = _abaqus_problem(path.parent / name, chain + (here,))
+            if problem is not None:
+                return problem
     return None
 
 
@@ -206,6 +245,8 @@ def mesh_file_problem(path: Path) -> str | None:
                 f"that meshio reads (.msh, .vtu, .vtk, .xdmf, .mesh, .inp, ...)")
     if fmt == "xdmf":
         return _xdmf_problem(path)
+    if fmt == "abaqus":
+        return _abaqus_problem(path)
     counter = _COUNTERS.get(fmt)
     if counter is None:
         return None
