@@ -63,6 +63,9 @@ def test_csv_and_yaml_read_normalised_and_written_back(tmp_path):
     (GOOD.replace("S1x,", "S 1x,"), "ch.csv: line 2.name: a name of at most"),
     (GOOD.replace("0.03,0.02,0.0,1,0,0,sensor", "0.03,0.02,0.0,1,0,0"),
      "ch.csv: line 2: 9 values expected, got 8"),
+    # a field beyond the csv module's limit of 131072 characters
+    (GOOD.replace("S1x,101,", "S1x,101" + " " * 200_000 + ",", 1),
+     "ch.csv: line 2: not a CSV row (field larger than field limit"),
 ])
 def test_bad_rows_are_refused_in_one_line(tmp_path, text, message):
     with pytest.raises(CaseError) as err:

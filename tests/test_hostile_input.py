@@ -301,6 +301,75 @@ def test_gmsh_version_4_headers_are_read_ascii_and_binary(tmp_path):
     assert mesh_file_problem(ROOT / "meshes" / "plate.msh") is None
 
 
+def test_xdmf_data_items_read_only_files_beside_the_xdmf_file(tmp_path):
+    """An XDMF file names the files its arrays are in: an HDF5 file by '../' or an absolute
+    path, or a raw Binary file (which meshio opens from the working directory, and which may
+    be a device or a FIFO), was read; now only an HDF5 file beside the XDMF file is."""
+    import meshio
+
+    pts = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1],
+                    [1, 1, 1], [0, 1, 1]], dtype=float)
+    case = tmp_path / "case"
+    case.mkdir()
+    meshio.write(case / "m.xdmf", meshio.Mesh(pts, [("hexahedron", np.arange(8)[None])]))
+    assert mesh_file_problem(case / "m.xdmf") is None
+    assert read_mesh_file(case / "m.xdmf").points.shape == (8, 3)
+    text = (case / "m.xdmf").read_text()
+    assert "m.h5:/data0" in text
+    (tmp_path / "outside.h5").write_bytes((case / "m.h5").read_bytes())
+    (2 * pts).tofile(tmp_path / "points.bin")
+    for name, shown in (("../outside.h5", "'../outside.h5:/data0'"),
+                        (str(tmp_path / "outside.h5"), "'/"),
+                        ("nope.h5", "'nope.h5:/data0': no such regular file")):
+        (case / "bad.xdmf").write_text(text.replace("m.h5:/data0", f"{name}:/data0"))
+        problem = mesh_file_problem(case / "bad.xdmf")
+        assert problem is not None and problem.startswith(f"an XDMF data item names {shown}"), \
+            problem
+        with pytest.raises(MeshFileError, match="an XDMF data item names"):
+            read_mesh_file(case / "bad.xdmf")
+    if hasattr(os, "symlink"):
+        os.symlink(tmp_path / "outside.h5", case / "link.h5")
+        (case / "bad.xdmf").write_text(text.replace("m.h5:/data0", "link.h5:/data0"))
+        assert "a link leads out of it" in (mesh_file_problem(case / "bad.xdmf") or "")
+    binary = text.replace('Format="HDF" Precision="8">m.h5:/data0',
+                          f'Format="Binary" Precision="8">{tmp_path / "points.bin"}')
+    assert "Binary" in binary
+    (case / "bad.xdmf").write_text(binary)
+    assert (mesh_file_problem(case / "bad.xdmf") or "").startswith(
+        "an XDMF data item of format 'Binary'")
+
+
+def test_abaqus_includes_read_only_files_beside_the_including_file(tmp_path, monkeypatch):
+    """meshio reads an Abaqus *INCLUDE by any path (absolute, '..', first from the working
+    directory): such a mesh was read from outside its directory; now only a file beside the
+    including file is, once, and not through a loop."""
+    nodes = "".join(f"{k + 1}, {x:.1f}, {y:.1f}, {z:.1f}\n" for k, (x, y, z) in enumerate(
+        [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (1, 1, 1),
+         (0, 1, 1)]))
+    part = f"*NODE\n{nodes}*ELEMENT, TYPE=C3D8, ELSET=ALL\n1, 1, 2, 3, 4, 5, 6, 7, 8\n"
+    case, other = tmp_path / "case", tmp_path / "other"
+    case.mkdir()
+    other.mkdir()
+    (case / "part.inp").write_text(part)
+    (tmp_path / "part.inp").write_text(part.replace("1.0", "2.0"))
+    main = case / "m.inp"
+    main.write_text("*HEADING\n*INCLUDE, INPUT=part.inp\n")
+    assert mesh_file_problem(main) is None
+    assert read_mesh_file(main).points.max() == 1.0
+    for name in ("../part.inp", str(tmp_path / "part.inp")):
+        main.write_text(f"*HEADING\n*include,input={name}\n")
+        assert (mesh_file_problem(main) or "").startswith(
+            f"m.inp: line 2: *INCLUDE names {name!r}: a file named by a mesh file is named "
+            "relative to it, inside its directory"), mesh_file_problem(main)
+    main.write_text("*HEADING\n*INCLUDE, INPUT=part.inp\n")
+    monkeypatch.chdir(tmp_path)  # meshio would take ./part.inp, the one with 2.0
+    assert "meshio would read the file of that name in the working directory" in \
+        (mesh_file_problem(main) or "")
+    monkeypatch.chdir(other)
+    (case / "part.inp").write_text("*INCLUDE, INPUT=m.inp\n")
+    assert mesh_file_problem(main) == "m.inp includes itself (through its *INCLUDE lines)"
+
+
 def test_meshio_exit_is_an_error_and_prints_nothing(tmp_path, capsys):
     from substruct.models.mesh_io import read_mesh
 

@@ -202,6 +202,36 @@ def test_bad_text(tmp_path: Path) -> None:
              r"multiple of 2 within the column's 3 words")
 
 
+def test_text_column_header_with_more_than_its_integers(tmp_path: Path) -> None:
+    """A column header is three integers of 8 characters: a fourth, or a number wider than
+    its field (a count of 12 digits), was cut off and the rest read as if it were not there."""
+    write_op4(tmp_path / "t.op4", {"KAA": 2 * np.eye(2)})
+    lines = (tmp_path / "t.op4").read_text().splitlines(keepends=True)
+    assert lines[1] == f"{1:8}{1:8}{1:8}\n"  # the first column: 1 number from row 1
+    for tail in ("       7", "9999"):
+        bad = list(lines)
+        bad[1] = lines[1].rstrip("\n") + tail + "\n"
+        _refused(tmp_path, "".join(bad).encode(), r"matrix 'KAA': line 2: expected 3 integers "
+                 r"of 8 characters, but the line holds more")
+
+
+def test_text_count_the_file_does_not_hold_allocates_nothing(tmp_path: Path) -> None:
+    """A dense column declaring 99,999,999 numbers in a file of a few lines: refused as
+    truncated without the 800 MB array of the declared count being allocated first."""
+    import tracemalloc
+
+    write_op4(tmp_path / "t.op4", {"KAA": 2 * np.eye(2)})
+    lines = (tmp_path / "t.op4").read_text().splitlines(keepends=True)
+    lines[1] = f"{1:8}{1:8}{99_999_999:8}\n"
+    tracemalloc.start()
+    try:
+        _refused(tmp_path, "".join(lines).encode(), r"matrix 'KAA': line 3: expected 3 numbers")
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 10_000_000, peak
+
+
 def test_limit_refuses_before_reading(tmp_path: Path) -> None:
     write_op4(tmp_path / "k.op4", {"KAA": np.ones((100, 100))}, binary=True)
     with pytest.raises(Op4Error, match=r"k\.op4: matrix 'KAA' \(100 x 100, dense\) would "

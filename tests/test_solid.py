@@ -178,6 +178,30 @@ def test_mesh_file_errors_name_the_path(tmp_path):
         solid_from_mesh("x", lines, E, NU, RHO)
 
 
+def test_cells_of_the_solid_dimension_not_read_are_refused_not_dropped(tmp_path):
+    """A hexahedron beside a wedge (a prism): the wedge was left out of the solid, which then
+    had the 8 nodes of the hexahedron only.  A pyramid alone has no cell that is read."""
+    pts = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1],
+                    [1, 1, 1], [0, 1, 1], [2, 0, 0], [2, 1, 0], [2, 0, 1], [2, 1, 1]], float)
+    hexwedge = tmp_path / "hexwedge.vtu"
+    meshio.write(hexwedge, meshio.Mesh(pts, [("hexahedron", np.array([[0, 1, 2, 3, 4, 5, 6, 7]])),
+                                              ("wedge", np.array([[1, 8, 2, 5, 10, 6]]))]))
+    assert len(meshio.read(hexwedge).cells) == 2
+    with pytest.raises(ValueError, match=r"hexwedge.vtu: 1 cell\(s\) of type wedge beside the "
+                       r"hexahedron cells are not read"):
+        solid_from_mesh("x", hexwedge, E, NU, RHO)
+    pyramid = tmp_path / "pyramid.vtu"
+    meshio.write(pyramid, meshio.Mesh(pts[:5], [("pyramid", np.array([[0, 1, 2, 3, 4]])),
+                                                 ("line", np.array([[0, 1]]))]))
+    with pytest.raises(ValueError, match="no supported cells"):
+        solid_from_mesh("x", pyramid, E, NU, RHO)
+    # faces beside the volume cells (a Gmsh boundary) are lower-dimensional: still read
+    faces = tmp_path / "faces.vtu"
+    meshio.write(faces, meshio.Mesh(pts[:8], [("hexahedron", np.array([[0, 1, 2, 3, 4, 5, 6, 7]])),
+                                              ("quad", np.array([[0, 1, 2, 3]]))]))
+    assert solid_from_mesh("x", faces, E, NU, RHO).K.shape == (24, 24)
+
+
 # ---------------------------------------------------------------------------- convergence
 
 L_BEAM = 1.0

@@ -208,3 +208,28 @@ analysis:
                                         .replace("a@mode:2", "a@mode:9"))
     with pytest.raises(CaseError, match=r"superelement 'a' has no coordinate 'mode:9'"):
         run_case(load_case(tmp_path / "case.yaml"))
+
+
+@pytest.mark.parametrize("table, message", [
+    # a complex part was dropped and truth values read as ids 1 and 0
+    (np.array([[1, 1], [2, 1]]) + 1j, r"dofs\.key: a DOF map is n x 2 integers \(grid, "
+     r"component\), got complex128 entries"),
+    (np.array([[True, True], [True, False]]), r"got bool entries"),
+    # a value beyond int64 was shown as -9223372036854775808, the integer it was cast to
+    (np.array([[1, 1], [2, 1e300]]), r"dofs\.key: row 2: component 1e\+300 is not 0-6"),
+    (np.array([[1, 1], [1e12, 1]]), r"dofs\.key: row 2: grid 1e\+12 is not 1 to 999999999"),
+])
+def test_dof_map_member_of_numbers_that_are_not_ids(tmp_path: Path, table, message) -> None:
+    np.savez(tmp_path / "a.npz", K=np.array([[2.0, -1.0], [-1.0, 2.0]]), M=np.eye(2),
+             DOFS=table)
+    (tmp_path / "case.yaml").write_text("""name: one
+substructures:
+  - {name: a, type: superelement, file: a.npz, M: M, K: K, dofs: {key: DOFS}, free: false}
+analysis:
+  modes: {count: 2}
+""")
+    with pytest.raises(CaseError, match=message):
+        load_case(tmp_path / "case.yaml")
+    np.savez(tmp_path / "a.npz", K=np.array([[2.0, -1.0], [-1.0, 2.0]]), M=np.eye(2),
+             DOFS=np.array([[1, 1], [2, 1]]))
+    assert load_case(tmp_path / "case.yaml").substructures[0].dof_labels() == ["1:ux", "2:ux"]

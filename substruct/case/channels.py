@@ -22,7 +22,8 @@ A channel table is a plain CSV file (a header row, then one channel a row) or a 
 Every check names the row and the column: a column missing or unknown, a value missing or not
 a finite number, a name repeated, a direction of zero length, two channels of the same kind
 at the same place in the same direction (one would be a copy of the other), more than
-:data:`MAX_CHANNELS` rows.  Errors are :class:`~substruct.case.errors.CaseError`:
+:data:`MAX_CHANNELS` rows, a line that is not a CSV row (a field beyond the csv module's
+limit of 131072 characters).  Errors are :class:`~substruct.case.errors.CaseError`:
 ``<file>: line 4.dx: <problem>, got <value>`` (CSV) or ``<file>: channels.2.dx: ...`` (YAML).
 """
 
@@ -247,7 +248,10 @@ def read_channel_table(path: str | os.PathLike) -> ChannelTable:
         raise CaseError(source, "", "a channel file is .csv, .yaml, .yml, .uff or .unv",
                         p.suffix)
     reader = csv.reader(io.StringIO(text))
-    lines = [(reader.line_num, r) for r in reader if any(c.strip() for c in r)]
+    try:  # a field beyond csv's limit (131072 characters) is a csv.Error
+        lines = [(reader.line_num, r) for r in reader if any(c.strip() for c in r)]
+    except csv.Error as err:
+        raise CaseError(source, f"line {reader.line_num}", f"not a CSV row ({err})") from None
     if not lines:
         raise CaseError(source, "", "no header row (" + ",".join(COLUMNS) + ")")
     header = [h.strip() for h in lines[0][1]]

@@ -9,7 +9,12 @@ A solid's ``mesh:`` is any file that meshio reads.  Before a byte of its data is
 * a header that declares more than :data:`MAX_MESH_POINTS` points or :data:`MAX_MESH_CELLS`
   cells (Gmsh ``.msh``, VTK XML ``.vtu``, legacy ``.vtk``: the counts are read from the
   first :data:`MESH_HEADER` bytes, with at most 12 digits each, before anything is
-  allocated).
+  allocated);
+* an Abaqus ``.inp`` file whose ``*INCLUDE`` names a file outside its directory (or one
+  meshio would take from the working directory), includes itself or nests too deep;
+* an XDMF file whose data items name files outside its directory: an HDF5 file by an absolute
+  path, ``..`` or a link leading out, or a raw ``Binary`` file (meshio opens it from the
+  working directory, and a device or FIFO named there is read without end).
 
 :func:`read_mesh_file` then reads it with meshio: with its printing silenced, its
 ``sys.exit(1)`` on a file it cannot read (an empty or malformed VTU) turned into the error,
@@ -36,15 +41,14 @@ from typing import Any, Iterator
 import numpy as np
 
 from substruct.case.fields import gigabytes
+from substruct.case.mesh_references import MAX_MESH_FILE, referenced_file_problem
 from substruct.case.numbers import array_problem
 
 __all__ = ["MAX_MESH_FILE", "MAX_MESH_POINTS", "MAX_MESH_CELLS", "MESH_HEADER",
+
            "MESH_READ_MEMORY", "DEGENERATE", "MeshFileError", "mesh_file_problem",
            "read_mesh_file", "mesh_format"]
 
-#: Largest mesh file read (bytes): the largest solid accepted (4 GB, about 100k coordinates in
-#: 3D, 600k in 2D) comes from a Gmsh file of a few tens of MB.
-MAX_MESH_FILE = 200_000_000
 #: Most points a mesh file may declare (far above the largest solid accepted).
 MAX_MESH_POINTS = 2_000_000
 #: Most cells (of every dimension, boundary faces included) a mesh file may declare.
@@ -157,6 +161,8 @@ def mesh_file_problem(path: Path) -> str | None:
     if fmt is None:
         return (f"unknown mesh format {path.suffix or '(no extension)'!r}: a mesh file is one "
                 f"that meshio reads (.msh, .vtu, .vtk, .xdmf, .mesh, .inp, ...)")
+    if fmt in ("xdmf", "abaqus"):
+        return referenced_file_problem(path, fmt)
     counter = _COUNTERS.get(fmt)
     if counter is None:
         return None

@@ -1,6 +1,8 @@
 r"""The text form of OP4 files (``1P,3E23.16``-style fixed-width numbers, ``%8d`` integer lines;
 ``|I16`` for 16-character integers), read a line at a time, each line at most
-:data:`~substruct.case.op4_matrix.MAX_OP4_LINE` characters (:mod:`substruct.case.op4`)."""
+:data:`~substruct.case.op4_matrix.MAX_OP4_LINE` characters (:mod:`substruct.case.op4`).  A line
+holding more than its fields is refused, and numbers are kept as their lines are read (a
+count the file does not hold allocates nothing)."""
 
 from __future__ import annotations
 
@@ -49,6 +51,10 @@ class _Lines:
                 raise Op4Error(f"{where}: line {self.number}: expected {len(widths)} integers "
                                f"of {w} characters: {line[:60]!r}")
             out.append(int(field))
+        if line[at:].strip():  # a number wider than its field, or one too many
+            raise Op4Error(f"{where}: line {self.number}: expected {len(widths)} integers "
+                           f"of {widths[0]} characters, but the line holds more: "
+                           f"{line[:60]!r}")
         return out
 
     def whole(self, where: str) -> list[int]:
@@ -60,7 +66,9 @@ class _Lines:
         return [int(line)]
 
     def numbers(self, where: str, count: int, per: int, width: int) -> np.ndarray:
-        out = np.empty(count)
+        """``count`` numbers, ``per`` a line of ``width`` characters: kept as the lines are
+        read, so that a count the file does not hold allocates nothing."""
+        out: list[float] = []
         for start in range(0, count, per):
             line = self.next(where) or ""
             k = min(per, count - start)
@@ -69,12 +77,11 @@ class _Lines:
                 raise Op4Error(f"{where}: line {self.number}: expected {k} numbers of "
                                f"{width} characters, but the line holds more: {line[:60]!r}")
             try:
-                out[start:start + k] = [float(f.replace("D", "E").replace("d", "e"))
-                                        for f in fields]
+                out.extend(float(f.replace("D", "E").replace("d", "e")) for f in fields)
             except ValueError:
                 raise Op4Error(f"{where}: line {self.number}: expected {k} numbers of "
                                f"{width} characters: {line[:60]!r}") from None
-        return out
+        return np.array(out, dtype=np.float64)
 
 
 def read_text(fp: BinaryIO, file: str, wanted: Callable[[str], bool],

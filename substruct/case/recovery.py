@@ -128,6 +128,9 @@ def _labels(spec: RecoverySpec, base: Path, member: Any, loc: tuple) -> list[str
     table = np.asarray(member)
     if table.dtype.kind == "U":
         return [_label(v, where) for v in table.ravel().tolist()]
+    if table.dtype.kind not in "iuf":  # a complex part or a truth value is not an id
+        raise FieldError(where, "a label member is n x 2 (grid, component) or an array of "
+                         f"strings, got {table.dtype} entries", value["key"])
     if table.ndim != 2 or table.shape[1] != 2 or not np.all(np.isfinite(table)):
         raise FieldError(where, "a label member is n x 2 (grid, component) or an array of "
                          f"strings, got {' x '.join(map(str, table.shape))}", value["key"])
@@ -179,7 +182,13 @@ def load_recovery(specs: list[RecoverySpec], base: Path, default_file: str | Non
             raise FieldError((*loc, "labels"), f"{len(labels)} labels for the {R.shape[0]} "
                              f"rows of matrix {spec.matrix!r}", _shown(spec.labels))
         if len(set(labels)) != len(labels):
-            twice = next(lab for k, lab in enumerate(labels) if lab in labels[:k])
+            met: set[str] = set()  # the first label met again (in one pass: up to 10^6 rows)
+            twice = ""
+            for lab in labels:
+                if lab in met:
+                    twice = lab
+                    break
+                met.add(lab)
             raise FieldError((*loc, "labels"), f"label {twice!r} names two rows",
                              _shown(spec.labels))
         spec._matrix, spec._labels = R, labels

@@ -219,9 +219,13 @@ class SuperelementSpec(StrictModel):
                              "file>} or a list of [grid, components] and {modes: count}",
                              value)
         if "key" in value:
-            table = np.asarray(member, dtype=float)
             where: Any = ("dofs", "key")
             shown = value["key"]
+            raw = np.asarray(member)
+            if raw.dtype.kind in "bc":  # a complex part or a truth value is not an id
+                raise FieldError(where, f"a DOF map is n x 2 integers (grid, component), got "
+                                 f"{raw.dtype} entries", shown)
+            table = np.asarray(raw, dtype=float)
         else:
             table, where, shown = self._csv(base, value["file"]), ("dofs", "file"), \
                 value["file"]
@@ -230,10 +234,13 @@ class SuperelementSpec(StrictModel):
             raise FieldError(where, f"a DOF map is n x 2 integers (grid, component), got "
                              f"{' x '.join(map(str, table.shape))}", shown)
         out = []
-        for k, (g, c) in enumerate(table.astype(np.int64).tolist()):
+        for k, (g, c) in enumerate(table.tolist()):  # checked before it becomes an integer
             if not 0 <= c <= 6:
-                raise FieldError(where, f"row {k + 1}: component {c} is not 0-6", shown)
-            out.append((0 if c == 0 else _grid(g, where), int(c)))
+                raise FieldError(where, f"row {k + 1}: component {c:g} is not 0-6", shown)
+            if c and not 1 <= g <= 999_999_999:
+                raise FieldError(where, f"row {k + 1}: grid {g:g} is not 1 to 999999999",
+                                 shown)
+            out.append((0 if c == 0 else int(g), int(c)))
         return out
 
     def _csv(self, base: Path, file: str) -> np.ndarray:

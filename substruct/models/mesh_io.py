@@ -3,9 +3,10 @@ a meshio mesh or a scikit-fem mesh.
 
 The cells of highest dimension are used (hexahedra or tetrahedra, else quadrilaterals or
 triangles; second-order cells through their vertices, i.e. straight-sided); points that no
-such cell uses are dropped.  Named sets (meshio ``cell_sets`` and ``point_sets``, Gmsh
-physical groups through ``field_data``, scikit-fem ``boundaries`` and ``subdomains``) become
-sets of vertex indices.
+such cell uses are dropped.  A cell of that dimension of another type (a wedge, a pyramid, a
+cubic cell) is refused, never left out of the solid.  Named sets (meshio ``cell_sets`` and
+``point_sets``, Gmsh physical groups through ``field_data``, scikit-fem ``boundaries`` and
+``subdomains``) become sets of vertex indices.
 """
 
 from __future__ import annotations
@@ -42,6 +43,7 @@ def read_mesh(source: str | os.PathLike | meshio.Mesh | Mesh
     """
     if isinstance(source, Mesh):
         return source, _skfem_sets(source)
+    label = mesh_label(source)
     if isinstance(source, (str, os.PathLike)):
         path = os.fspath(source)
         if not os.path.isfile(path):
@@ -54,16 +56,35 @@ def read_mesh(source: str | os.PathLike | meshio.Mesh | Mesh
     if not isinstance(source, meshio.Mesh):
         raise ValueError(f"a mesh must be a file path, a meshio.Mesh or a skfem Mesh, "
                          f"got {type(source).__name__}")
-    return _from_meshio(source, mesh_label(source))
+    return _from_meshio(source, label)
+
+
+def _dimension(cell_type: str) -> int:
+    """The dimension of a meshio cell type: 3 for volumes, 2 for faces, else 1 or less."""
+    name = cell_type.lower()
+    if any(k in name for k in ("tetra", "hexahedron", "wedge", "pyramid", "polyhedron")):
+        return 3
+    if any(k in name for k in ("triangle", "quad", "polygon")):
+        return 2
+    return 1
 
 
 def _from_meshio(m: meshio.Mesh, label: str) -> tuple[Mesh, dict[str, np.ndarray]]:
     types = [c.type for c in m.cells]
-    table = _VOLUME if any(t in _VOLUME for t in types) else _PLANAR
+    top = max((_dimension(t) for t in types), default=0)
+    table = _VOLUME if top == 3 else _PLANAR
     blocks = [(i, c) for i, c in enumerate(m.cells) if c.type in table]
     if not blocks:
         raise ValueError(f"mesh {label}: no supported cells (found {sorted(set(types))}; "
                          f"supported: {sorted(_VOLUME) + sorted(_PLANAR)})")
+    # cells of the solid's dimension that are not read (wedges, pyramids, cubic cells...)
+    # would leave a part of the solid out: refused, never dropped
+    other = sorted({t for t in types if _dimension(t) == top and t not in table})
+    if other:
+        count = sum(len(c.data) for c in m.cells if c.type in other)
+        raise ValueError(f"mesh {label}: {count} cell(s) of type {', '.join(other)} beside the "
+                         f"{' and '.join(sorted({c.type for _, c in blocks}))} cells are not "
+                         f"read (supported: {sorted(table)}); a solid is meshed in one of them")
     kinds = {table[c.type] for _, c in blocks}
     if len(kinds) > 1:
         raise ValueError(f"mesh {label}: mixed cell types {sorted({c.type for _, c in blocks})}"
