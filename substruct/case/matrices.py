@@ -15,6 +15,8 @@ must be a regular file (not a FIFO or a device).
 
 from __future__ import annotations
 
+from collections import Counter
+
 import os
 import re
 import stat
@@ -337,7 +339,8 @@ class MatrixSpec(StrictModel):
             if len(self.labels) != n:
                 raise FieldError("labels", f"{len(self.labels)} labels for {n} coordinates",
                                  self.labels)
-            dupes = sorted({lab for lab in self.labels if self.labels.count(lab) > 1})
+            counts = Counter(self.labels)
+            dupes = sorted(lab for lab, c in counts.items() if c > 1)
             if dupes:
                 raise FieldError("labels", f"duplicate label {dupes[0]!r}", self.labels)
         self._matrices = mats
