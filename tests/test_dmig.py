@@ -149,6 +149,8 @@ def test_ncol_on_square_and_symmetric_forms_not_used() -> None:
     ("DMIG,K,0,6,2\nDMIG,K,1,1,,1,1,2.0,3.0\n", "B (the imaginary part) is blank"),
     ("DMIG,K,0,6,2\nGRID,1,,0.,0.,0.\n", "card GRID is not read from a file of DMIG matrices"),
     ("DMIG,KX,0,6,2\nDMIG,KX,1,1,,1,1,2.0,\n", "no DMIG 'K' (it has KX)"),
+    ("DMIG,K,0,6,2\nDMIG,K,5,0,,5,0,2.0,\nDMIG,K,5,1,,5,1,2.0,\n",
+     "id 5 is named as a scalar point (component 0) and as a grid (components 1-6)"),
 ])
 def test_bad_dmig_is_one_line(tmp_path: Path, text: str, fragment: str) -> None:
     (tmp_path / "m.bdf").write_text(text)

@@ -187,6 +187,11 @@ def dmig_matrices(path: str | Path, source: str, names: Sequence[str]
     for m in mats.values():
         union |= m.dofs()
     dofs = sorted(union)
+    scalar = {g for g, c in dofs if c == 0}
+    both = sorted(g for g, c in dofs if c != 0 and g in scalar)
+    if both:   # Nastran's ids of grids and scalar points are one set
+        raise BdfError(source, f"id {both[0]} is named as a scalar point (component 0) and as "
+                       "a grid (components 1-6) by the DMIG matrices: one id is one or the other")
     n = len(dofs)
     if n > MAX_MATRIX_SIZE:
         raise BdfError(source, f"the DMIG matrices name {n} coordinates, more than the "
