@@ -9,6 +9,7 @@ from typing import Annotated, Any, Literal, Sequence
 import numpy as np
 from pydantic import Discriminator, Field, Tag, model_validator
 
+from substruct.case.check_list import refuse_idle_checks
 from substruct.case.errors import FieldError
 from substruct.case.fields import (
     MAX_FREQUENCIES,
@@ -154,6 +155,7 @@ class RandomAnalysis(BaseDrivenResponse):
                              "(forces), a base acceleration PSD (base) or several (bases), one "
                              "of the three")
         self.check_named_once(self.bases)
+        refuse_idle_checks(self.method, self.check)
         if self.modal is not None and self.method != "modal":
             raise FieldError("modal", f"the modal block is for method: modal; the method is "
                              f"{self.method}", "{...}")
@@ -209,6 +211,7 @@ class BaseFrfAnalysis(BaseDrivenResponse):
             raise FieldError("bases" if self.bases else "base", "give one base input (base) "
                              "or several (bases), one of the two")
         self.check_named_once(self.bases)
+        refuse_idle_checks(self.method, self.check)
         w = self.omega.grid()
         if np.any(w <= 0):
             raise FieldError("omega", "must be > 0 (the response per unit base acceleration "
