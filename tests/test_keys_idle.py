@@ -1,0 +1,148 @@
+"""Keys and values that were accepted and then not used, now refused in one line (exit 2): a
+check naming the analysis's own method or named twice (dropped: the check never ran),
+``modal_count`` of a transient without the modal form, a ``field_every`` that the recorded
+steps do not hold (the fields were kept every ``lcm(every, field_every)`` steps), and
+``export --format uff --transient`` (the option was ignored)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from substruct import cli
+from substruct.case.loader import CaseError, parse_case
+
+THREE_DOF = """
+name: three_dof
+substructures:
+  - name: P
+    type: matrices
+    M: [[1, 0, 0], [0, 2, 0], [0, 0, 4]]
+    K: [[20, -10, 0], [-10, 30, -20], [0, -20, 20]]
+    C: [[1, 0, 0], [0, 0, 0], [0, 0, 0]]
+constraints:
+  - {name: c1, terms: {P@q1: 1, P@q2: -1, P@q3: 2}}
+output: {pictures: false}
+"""
+
+ANALYSES = {
+    "modes": "modes: {count: 2, method: METHOD, check: CHECK}",
+    "frf": "frf: {omega: [2.0], inputs: [P@q1], outputs: [P@q1], method: METHOD, check: CHECK}",
+    "base_frf": "base_frf: {omega: [2.0], base: {at: [P@q3]}, outputs: [P@q1], method: METHOD, "
+                "check: CHECK}",
+    "random": "random: {frequencies: [1, 2], forces: [{at: P@q1, psd: [[1, 1], [2, 1]]}], "
+              "outputs: [P@q1], method: METHOD, check: CHECK}",
+    "transient": "transient: {t_end: 0.1, dt: 0.01, loads: [{point: P@q1, amplitude: 1}], "
+                 "outputs: [P@q1], method: METHOD, check: CHECK}",
+}
+
+
+def message(text: str, overrides: tuple[str, ...] = ()) -> str:
+    with pytest.raises(CaseError) as info:
+        parse_case(text, "c.yaml", ".", overrides)
+    return str(info.value)
+
+
+def case(kind: str, method: str, check: str, extra: str = "") -> str:
+    block = ANALYSES[kind].replace("METHOD", method).replace("CHECK", check)
+    text = THREE_DOF + f"analysis:\n  {block}\n" + extra
+    if kind == "base_frf":  # the base moves a grounded support
+        text = text.replace("constraints:\n", "constraints:\n  - {name: g, terms: {P@q3: 1}}\n")
+    return text
+
+
+@pytest.mark.parametrize("kind", sorted(ANALYSES))
+def test_a_check_naming_the_method_is_refused(kind):
+    assert message(case(kind, "null-space", "[generalized-inverse, null-space]")) == (
+        f"c.yaml: analysis.{kind}.check[1]: a formulation does not check itself: null-space is "
+        f"the method; name another formulation or leave it out, got 'null-space'")
+
+
+@pytest.mark.parametrize("kind", sorted(ANALYSES))
+def test_a_check_named_twice_is_refused(kind):
+    twice = "[generalized-inverse, generalized-inverse]"
+    assert message(case(kind, "null-space", twice)) == (
+        f"c.yaml: analysis.{kind}.check[1]: a check named twice (each runs once), got "
+        f"'generalized-inverse'")
+
+
+@pytest.mark.parametrize("kind", sorted(ANALYSES))
+def test_distinct_checks_other_than_the_method_are_taken(kind):
+    other = "modal" if kind == "transient" else "kkt"
+    parsed = parse_case(case(kind, "null-space", f"[{other}, generalized-inverse]"), "c.yaml")
+    assert getattr(parsed.analysis, kind).check == [other, "generalized-inverse"]
+
+
+def test_a_method_set_on_the_command_line_that_the_checks_name_is_refused():
+    text = case("modes", "generalized-inverse", "[kkt]")
+    assert "check[0]: a formulation does not check itself: kkt is the method" in message(
+        text, ("analysis.modes.method=kkt",))
+
+
+def test_each_check_asked_for_runs_and_agrees(tmp_path):
+    """The checks named are the checks computed (the refusal above is the only way one is
+    left out): every one has its agreement, within the tolerance."""
+    import substruct
+
+    text = case("frf", "generalized-inverse", "[null-space, kkt]")
+    result = substruct.run_case(substruct.load_case(text))
+    assert sorted(result.frf.agreement) == ["kkt", "null-space"]
+    assert max(result.frf.agreement.values()) < 1e-12
+
+
+TRANSIENT = THREE_DOF + """analysis:
+  transient:
+    t_end: 1.0
+    dt: 0.01
+    loads: [{point: P@q1, amplitude: 1, shape: half-sine, duration: 0.1}]
+    outputs: [P@q1]
+"""
+
+
+@pytest.mark.parametrize("setting", [(), ("analysis.transient.check=[null-space]",)])
+def test_modal_count_without_the_modal_form_is_refused(setting):
+    assert message(TRANSIENT, ("analysis.transient.modal_count=2", *setting)) == (
+        "c.yaml: analysis.transient.modal_count: the modes of the modal form, which this run "
+        "does not use: give method: modal or check: [modal], or leave modal_count out (set on "
+        "the command line), got 2")
+
+
+@pytest.mark.parametrize("setting", ["analysis.transient.check=[modal]",
+                                     "analysis.transient.method=modal"])
+def test_modal_count_with_the_modal_form_is_taken(setting):
+    parsed = parse_case(TRANSIENT, "c.yaml", ".", ("analysis.transient.modal_count=2", setting))
+    assert parsed.analysis.transient.modal_count == 2
+
+
+@pytest.mark.parametrize("every,field_every", [(5, 7), (2, 3), (4, 2)])
+def test_field_every_that_the_recorded_steps_do_not_hold_is_refused(every, field_every):
+    assert message(TRANSIENT, (f"analysis.transient.every={every}",
+                               f"analysis.transient.field_every={field_every}")) == (
+        f"c.yaml: analysis.transient.field_every: the fields are kept at recorded steps: a "
+        f"multiple of every ({every}), or 0 (set on the command line), got {field_every}")
+
+
+@pytest.mark.parametrize("every,field_every", [(5, 10), (3, 3), (1, 7), (5, 0)])
+def test_the_fields_are_kept_every_field_every_steps(every, field_every):
+    import substruct
+
+    text = TRANSIENT + f"    every: {every}\n    field_every: {field_every}\n"
+    result = substruct.run_case(substruct.load_case(text))
+    steps = 100  # t_end / dt
+    want = [0.01 * k for k in range(0, steps + 1, field_every)] if field_every else []
+    np.testing.assert_allclose(result.transient.snapshot_t, want, rtol=0, atol=1e-12)
+
+
+def test_export_uff_refuses_transient(tmp_path, capsys):
+    case_file = tmp_path / "c.yaml"
+    case_file.write_text(case("modes", "generalized-inverse", "[kkt]"))
+    assert cli.main(["run", str(case_file), "--out", str(tmp_path / "r")]) == 0
+    capsys.readouterr()
+    out = tmp_path / "u"
+    code = cli.main(["export", str(tmp_path / "r" / "three_dof.h5"), "--format", "uff",
+                     "--transient", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err == ("substruct: error: --format uff writes every mode and the receptances: no "
+                   "--modes, --variant or --transient\n")
+    assert not out.exists() or not any(out.iterdir())
