@@ -146,3 +146,43 @@ def test_export_uff_refuses_transient(tmp_path, capsys):
     assert err == ("substruct: error: --format uff writes every mode and the receptances: no "
                    "--modes, --variant or --transient\n")
     assert not out.exists() or not any(out.iterdir())
+
+
+MODAL = THREE_DOF + """analysis:
+  frf: {omega: {start: 1, stop: 5, num: 20}, inputs: [P@q1], outputs: [P@q1], method: modal}
+"""
+
+
+@pytest.mark.parametrize("block", ["frf", "random"])
+def test_a_modal_sum_takes_a_count_or_a_cutoff_not_both(block):
+    text = MODAL if block == "frf" else case("random", "modal", "[]")
+    assert message(text, (f"analysis.{block}.modal={{count: 1, cutoff: 3}}",)) == (
+        f"c.yaml: analysis.{block}.modal.cutoff: keep the modes up to the cut-off or the "
+        f"lowest count (1), not both (set on the command line), got 3.0")
+    for modal in ("{count: 1}", "{cutoff: 3}"):
+        parse_case(text, "c.yaml", ".", (f"analysis.{block}.modal={modal}",))
+
+
+@pytest.mark.parametrize("block", ["frf", "random"])
+def test_checks_of_a_modal_sum_at_no_frequency_are_refused(block):
+    text = MODAL if block == "frf" else case("random", "modal", "[]")
+    sets = (f"analysis.{block}.modal={{check_frequencies: 0}}",)
+    assert message(text, (*sets, f"analysis.{block}.check=[kkt]")) == (
+        f"c.yaml: analysis.{block}.modal.check_frequencies: the checks kkt run at the check "
+        f"frequencies: give at least 1, or leave check out to run none (set on the command "
+        f"line), got 0")
+    parse_case(text, "c.yaml", ".", sets)  # no check at all: the sum alone
+
+
+def test_the_count_decides_the_modes_summed():
+    """With count 1 the modal sum keeps one of the two modes (the second-order residual holds
+    the other one's static part only), and its kkt check sees the difference."""
+    import substruct
+    from substruct.analysis.errors import CheckError
+
+    one = substruct.load_case(MODAL, overrides=["analysis.frf.modal={count: 1}"])
+    with pytest.raises(CheckError, match=r"modal: 1 root\(s\)"):
+        substruct.run_case(one)
+    two = substruct.run_case(substruct.load_case(MODAL,
+                                                 overrides=["analysis.frf.modal={count: 2}"]))
+    assert max(two.frf.agreement.values()) < 1e-12

@@ -185,6 +185,7 @@ class FrfAnalysis(StrictModel):
     @model_validator(mode="after")
     def _positive(self) -> "FrfAnalysis":
         refuse_idle_checks(self.method, self.check)
+        self.modal.refuse_unchecked(self.check)
         w = self.omega.grid()
         if GENERALIZED_INVERSE in (self.method, *self.check) and np.any(w <= 0):
             raise FieldError("omega", "the generalized-inverse receptance (eq 15) is singular "

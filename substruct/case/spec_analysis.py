@@ -159,6 +159,8 @@ class RandomAnalysis(BaseDrivenResponse):
         if self.modal is not None and self.method != "modal":
             raise FieldError("modal", f"the modal block is for method: modal; the method is "
                              f"{self.method}", "{...}")
+        if self.modal is not None:
+            self.modal.refuse_unchecked(self.check)
         if self.method == "modal" and self.loss_factor is not None:
             raise FieldError("method", "a loss factor is taken by the direct formulations "
                              "only (generalized-inverse, null-space, kkt)", self.method)
