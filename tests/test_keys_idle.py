@@ -186,3 +186,32 @@ def test_the_count_decides_the_modes_summed():
     two = substruct.run_case(substruct.load_case(MODAL,
                                                  overrides=["analysis.frf.modal={count: 2}"]))
     assert max(two.frf.agreement.values()) < 1e-12
+
+
+STUDY = THREE_DOF.replace("[20, -10, 0]", "[k1, -10, 0]") + """parameters: {k1: 20.0}
+analysis:
+  modes: {count: 2}
+study:
+  grid:
+    parameters:
+      - {parameter: k1, values: [20, 22]}
+"""
+
+
+@pytest.mark.parametrize("key", ["damping_ratios", "mac"])
+def test_a_study_keeping_values_of_no_mode_is_refused(key):
+    text = STUDY + f"  collect: {{{key}: true}}\n"
+    assert message(text) == (f"c.yaml: study.collect.{key}: needs collect.frequencies (the "
+                             f"modes whose values are kept), got true")
+
+
+def test_a_study_keeps_the_damping_ratios_and_mac_of_its_modes(tmp_path):
+    """With frequencies: 2 the two modes' damping ratios and MAC are collected: at k1 = 20
+    (the case as written) every MAC is 1."""
+    import substruct
+    from substruct.studies.study_run import run_study
+
+    text = STUDY + "  collect: {frequencies: 2, damping_ratios: true, mac: true}\n"
+    study = run_study(substruct.load_case(text))
+    assert study.values["damping_ratio"].shape == (2, 2)
+    np.testing.assert_allclose(study.values["mac"][0], 1.0, atol=1e-12)
