@@ -215,3 +215,31 @@ def test_a_study_keeps_the_damping_ratios_and_mac_of_its_modes(tmp_path):
     study = run_study(substruct.load_case(text))
     assert study.values["damping_ratio"].shape == (2, 2)
     np.testing.assert_allclose(study.values["mac"][0], 1.0, atol=1e-12)
+
+
+@pytest.mark.parametrize("grid,count", [("{start: 0.1, stop: 5, per_octave: 1000000000}",
+                                         5_643_856_190),
+                                        ("{start: 0.1, stop: 5, num: 1000000000}", 10**9)])
+def test_an_srs_grid_is_counted_before_it_is_built(grid, count, monkeypatch):
+    """The size check counts the frequencies; building the grid first allocated 42 GB."""
+    import substruct.case.spec_analysis as spec
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("the grid was built before its size was checked")
+
+    monkeypatch.setattr(spec.np, "arange", refuse)
+    monkeypatch.setattr(spec.np, "geomspace", refuse)
+    key = "per_octave" if "per_octave" in grid else "num"
+    assert message(TRANSIENT + f"  srs: {{frequencies: {grid}}}\n") == (
+        f"c.yaml: analysis.srs.frequencies.{key}: {count:,} frequencies from 0.1 to 5 Hz, at "
+        f"most 100,000, got 1000000000")
+
+
+@pytest.mark.parametrize("per_octave", [1, 3, 12])
+def test_an_srs_grid_per_octave_is_a_factor_two_to_the_one_over_n(per_octave):
+    srs = parse_case(TRANSIENT + f"  srs: {{frequencies: {{start: 10, stop: 2000, "
+                     f"per_octave: {per_octave}}}}}\n", "c.yaml").analysis.srs
+    f = srs.frequencies.grid()
+    assert len(f) == srs.frequencies.count() == int(np.floor(per_octave * np.log2(200))) + 1
+    np.testing.assert_allclose(f[1:] / f[:-1], 2.0 ** (1 / per_octave), rtol=1e-14)
+    assert f[0] == 10 and f[-1] <= 2000 < f[-1] * 2.0 ** (1 / per_octave)

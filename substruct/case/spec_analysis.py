@@ -253,18 +253,26 @@ class SrsFrequencies(StrictModel):
             raise FieldError("stop", f"must be > start ({self.start:g})", self.stop)
         if (self.num is None) == (self.per_octave is None):
             raise FieldError("num", "give num or per_octave, one of the two")
-        if len(self.grid()) > MAX_FREQUENCIES:
-            raise FieldError("per_octave" if self.num is None else "num",
-                             f"at most {MAX_FREQUENCIES} frequencies", len(self.grid()))
+        if self.count() > MAX_FREQUENCIES:  # counted, never allocated, before the check
+            key = "per_octave" if self.num is None else "num"
+            raise FieldError(key, f"{self.count():,} frequencies from {self.start:g} to "
+                             f"{self.stop:g} Hz, at most {MAX_FREQUENCIES:,}",
+                             getattr(self, key))
         return self
+
+    def count(self) -> int:
+        """The number of frequencies of :meth:`grid`, computed without building it."""
+        if self.num is not None:
+            return self.num
+        assert self.per_octave is not None
+        return int(np.floor(self.per_octave * np.log2(self.stop / self.start) + 1e-9)) + 1
 
     def grid(self) -> np.ndarray:
         """The natural frequencies (Hz)."""
         if self.num is not None:
             return np.geomspace(self.start, self.stop, self.num)
         assert self.per_octave is not None
-        count = int(np.floor(self.per_octave * np.log2(self.stop / self.start) + 1e-9)) + 1
-        return self.start * 2.0 ** (np.arange(count) / self.per_octave)
+        return self.start * 2.0 ** (np.arange(self.count()) / self.per_octave)
 
 
 class SrsAnalysis(StrictModel):
