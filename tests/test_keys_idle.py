@@ -243,3 +243,37 @@ def test_an_srs_grid_per_octave_is_a_factor_two_to_the_one_over_n(per_octave):
     assert len(f) == srs.frequencies.count() == int(np.floor(per_octave * np.log2(200))) + 1
     np.testing.assert_allclose(f[1:] / f[:-1], 2.0 ** (1 / per_octave), rtol=1e-14)
     assert f[0] == 10 and f[-1] <= 2000 < f[-1] * 2.0 ** (1 / per_octave)
+
+
+@pytest.mark.parametrize("key", ["parameters.k1", "parameters[k1]"])
+def test_study_refuses_a_set_of_a_varied_parameter(key, tmp_path, capsys):
+    """Every sample sets the parameters the study varies: a --set of one was replaced."""
+    case_file = tmp_path / "s.yaml"
+    case_file.write_text(STUDY + "  collect: {frequencies: 2}\n")
+    out = tmp_path / "out"
+    code = cli.main(["study", str(case_file), "--out", str(out), "--set", f"{key}=100"])
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err == (f"substruct: error: {case_file}: parameters.k1: varied by the study, so "
+                   f"every sample replaces the value given (set on the command line): set the "
+                   f"study's values of k1 instead, got '100'\n")
+    assert not out.exists() or not any(out.iterdir())
+
+
+def test_study_takes_a_set_of_a_parameter_it_does_not_vary(tmp_path):
+    """--set of another parameter reaches every sample: with m1 = 0.5 the second mode of
+    each sample is that of the case run with m1 = 0.5, not the one as written."""
+    import substruct
+    from substruct.studies.study_run import run_study
+
+    text = STUDY.replace("[1, 0, 0], [0, 2, 0]", "[m1, 0, 0], [0, 2, 0]").replace(
+        "parameters: {k1: 20.0}", "parameters: {k1: 20.0, m1: 1.0}") + \
+        "  collect: {frequencies: 2}\n"
+    plain = run_study(substruct.load_case(text))
+    light = run_study(substruct.load_case(text, overrides=["parameters.m1=0.5"]))
+    for k, k1 in enumerate([20, 22]):
+        ref = substruct.run_case(substruct.load_case(
+            text, overrides=["parameters.m1=0.5", f"parameters.k1={k1}"]))
+        np.testing.assert_allclose(light.values["frequency"][k], ref.modes.omega, rtol=1e-12)
+    assert np.all(np.abs(light.values["frequency"][:, 1] - plain.values["frequency"][:, 1])
+                  > 0.5)
