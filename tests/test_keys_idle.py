@@ -277,3 +277,19 @@ def test_study_takes_a_set_of_a_parameter_it_does_not_vary(tmp_path):
         np.testing.assert_allclose(light.values["frequency"][k], ref.modes.omega, rtol=1e-12)
     assert np.all(np.abs(light.values["frequency"][:, 1] - plain.values["frequency"][:, 1])
                   > 0.5)
+
+
+def test_compare_refuses_force_without_image(tmp_path, capsys):
+    """compare writes one file only, the --image picture: --force alone did nothing."""
+    case_file = tmp_path / "c.yaml"
+    case_file.write_text(case("modes", "generalized-inverse", "[kkt]"))
+    assert cli.main(["run", str(case_file), "--out", str(tmp_path / "r")]) == 0
+    capsys.readouterr()
+    result = str(tmp_path / "r" / "three_dof.h5")
+    assert cli.main(["compare", result, result, "--force"]) == 2
+    assert capsys.readouterr().err == (
+        "substruct: error: --force replaces the picture of --image, the only file compare "
+        "writes: give --image, or leave --force out\n")
+    image = tmp_path / "mac.png"
+    assert cli.main(["compare", result, result, "--image", str(image), "--force"]) == 0
+    assert image.stat().st_size > 0
