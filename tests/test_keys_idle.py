@@ -293,3 +293,48 @@ def test_compare_refuses_force_without_image(tmp_path, capsys):
     image = tmp_path / "mac.png"
     assert cli.main(["compare", result, result, "--image", str(image), "--force"]) == 0
     assert image.stat().st_size > 0
+
+
+SOLID = """
+name: block
+substructures:
+  - name: block
+    type: solid
+    rectangle: {lengths: [1.0, 0.2], divisions: [10, 2]}
+    E: 2.1e11
+    nu: 0.3
+    rho: 7850
+    fixed: [xmin]
+    reduce: {modes: 4}
+analysis:
+  modes: {count: 2}
+output: {pictures: false}
+"""
+
+
+def test_a_solid_takes_rayleigh_or_modal_damping_not_both():
+    sets = ("substructures.block.damping={rayleigh: [0, 1.0e-6]}",
+            "substructures.block.reduce.damping={ratio: 0.02}")
+    assert message(SOLID, sets) == (
+        "c.yaml: substructures.block.reduce.damping: the kept modes' damping replaces the "
+        "solid's damping (rayleigh), which would be ignored: give one of the two (without "
+        "reduce.damping the Rayleigh damping is projected on the modes) (set on the command "
+        "line), got '{...}'")
+
+
+def test_each_damping_of_a_reduced_solid_is_the_one_used():
+    """Modal damping gives every kept mode its ratio; Rayleigh damping projected gives mode
+    k the ratio alpha / (2 omega_k) + beta omega_k / 2 (the truncated modes are M- and
+    K-orthogonal, so the projection stays diagonal)."""
+    import substruct
+
+    def run(*sets):
+        return substruct.run_case(substruct.load_case(SOLID, overrides=list(sets))).modes
+
+    modal = run("substructures.block.reduce.damping={ratio: 0.02}")
+    np.testing.assert_allclose(modal.damping_ratio, 0.02, rtol=1e-9)
+    alpha, beta = 3.0, 2.0e-6
+    rayleigh = run(f"substructures.block.damping={{rayleigh: [{alpha}, {beta}]}}")
+    w = np.abs(rayleigh.eigenvalues)  # |lambda| = omega_n of each damped mode
+    np.testing.assert_allclose(rayleigh.damping_ratio, alpha / (2 * w) + beta * w / 2,
+                               rtol=1e-9)
