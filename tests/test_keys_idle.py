@@ -338,3 +338,23 @@ def test_each_damping_of_a_reduced_solid_is_the_one_used():
     w = np.abs(rayleigh.eigenvalues)  # |lambda| = omega_n of each damped mode
     np.testing.assert_allclose(rayleigh.damping_ratio, alpha / (2 * w) + beta * w / 2,
                                rtol=1e-9)
+
+
+def test_python_m_substruct_is_the_command_line(tmp_path):
+    """``python -m substruct`` runs the command (it said there was no ``__main__``): a bad
+    --set is its one line and exit code 2."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    case_file = tmp_path / "c.yaml"
+    case_file.write_text(case("modes", "generalized-inverse", "[kkt]"))
+    env = {**os.environ, "PYTHONPATH": str(root), "OMP_NUM_THREADS": "1"}
+    done = subprocess.run([sys.executable, "-m", "substruct", "run", str(case_file), "--out",
+                           str(tmp_path / "o"), "--set", "analysis.modes.count=0"],
+                          capture_output=True, text=True, env=env, timeout=120)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.startswith(f"substruct: error: {case_file}: analysis.modes.count: ")
+    assert done.stderr.count("\n") == 1
