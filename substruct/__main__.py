@@ -1,4 +1,4 @@
-"""``python -m substruct``: the ``substruct`` command."""
+"""``python -m substruct``: the ``substruct`` command, as ``python -m substruct.cli``."""
 
 import sys
 

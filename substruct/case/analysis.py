@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Annotated, Any, Literal, TypeAlias
 import numpy as np
 from pydantic import Field, model_validator
 
+from substruct.case.check_list import refuse_idle_checks
 from substruct.case.errors import FieldError
 from substruct.case.fields import (
     Coefficient,
@@ -148,6 +149,7 @@ class ModesAnalysis(StrictModel):
 
     @model_validator(mode="after")
     def _amls_block(self) -> "ModesAnalysis":
+        refuse_idle_checks(self.method, self.check)
         if self.amls is not None and self.solver != "amls":
             raise FieldError("amls", f"the amls block is for solver: amls; the solver is "
                              f"{self.solver}", "{...}")
@@ -182,6 +184,8 @@ class FrfAnalysis(StrictModel):
 
     @model_validator(mode="after")
     def _positive(self) -> "FrfAnalysis":
+        refuse_idle_checks(self.method, self.check)
+        self.modal.refuse_unchecked(self.check)
         w = self.omega.grid()
         if GENERALIZED_INVERSE in (self.method, *self.check) and np.any(w <= 0):
             raise FieldError("omega", "the generalized-inverse receptance (eq 15) is singular "

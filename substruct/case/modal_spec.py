@@ -4,7 +4,7 @@ modal superposition is made (``modal:`` of ``analysis.frf`` and ``analysis.rando
 
 from __future__ import annotations
 
-from typing import Annotated, Literal
+from typing import Annotated, Literal, Sequence
 
 from pydantic import Field, model_validator
 
@@ -57,7 +57,21 @@ class ModalFrf(StrictModel):
         if self.amls is not None and self.solver != "amls":
             raise FieldError("amls", f"the amls block is for solver: amls; the solver is "
                              f"{self.solver}", "{...}")
+        if self.count is not None and "cutoff" in self.model_fields_set:
+            raise FieldError("cutoff", f"keep the modes up to the cut-off or the lowest count "
+                             f"({self.count}), not both", self.cutoff)
         return self
+
+    def refuse_unchecked(self, checks: Sequence[str]) -> None:
+        """Refuse a ``check`` list beside ``check_frequencies: 0``, which runs no check.
+
+        Raises:
+            FieldError: at ``modal.check_frequencies``.
+        """
+        if checks and self.check_frequencies == 0:
+            raise FieldError(("modal", "check_frequencies"), f"the checks {', '.join(checks)} "
+                             f"run at the check frequencies: give at least 1, or leave check "
+                             f"out to run none", 0)
 
 
 class TransientModal(StrictModel):

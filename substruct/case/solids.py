@@ -280,6 +280,12 @@ class SolidSpec(StrictModel):
                              if given[1] != "mesh" else self.mesh)
         if not -1.0 < self.nu < 0.5:
             raise FieldError("nu", "Poisson's ratio must lie in (-1, 0.5)", self.nu)
+        if self.damping is not None and self.reduce is not None and \
+                self.reduce.damping is not None:
+            raise FieldError(("reduce", "damping"), "the kept modes' damping replaces the "
+                             "solid's damping (rayleigh), which would be ignored: give one of "
+                             "the two (without reduce.damping the Rayleigh damping is "
+                             "projected on the modes)", "{...}")
         if self.box is not None:
             for key in ("plane", "thickness"):
                 if getattr(self, key) is not None:

@@ -9,6 +9,7 @@ from typing import Annotated, Any, Literal, Sequence
 import numpy as np
 from pydantic import Discriminator, Field, Tag, model_validator
 
+from substruct.case.check_list import refuse_idle_checks
 from substruct.case.errors import FieldError
 from substruct.case.fields import (
     MAX_FREQUENCIES,
@@ -154,9 +155,12 @@ class RandomAnalysis(BaseDrivenResponse):
                              "(forces), a base acceleration PSD (base) or several (bases), one "
                              "of the three")
         self.check_named_once(self.bases)
+        refuse_idle_checks(self.method, self.check)
         if self.modal is not None and self.method != "modal":
             raise FieldError("modal", f"the modal block is for method: modal; the method is "
                              f"{self.method}", "{...}")
+        if self.modal is not None:
+            self.modal.refuse_unchecked(self.check)
         if self.method == "modal" and self.loss_factor is not None:
             raise FieldError("method", "a loss factor is taken by the direct formulations "
                              "only (generalized-inverse, null-space, kkt)", self.method)
@@ -209,6 +213,7 @@ class BaseFrfAnalysis(BaseDrivenResponse):
             raise FieldError("bases" if self.bases else "base", "give one base input (base) "
                              "or several (bases), one of the two")
         self.check_named_once(self.bases)
+        refuse_idle_checks(self.method, self.check)
         w = self.omega.grid()
         if np.any(w <= 0):
             raise FieldError("omega", "must be > 0 (the response per unit base acceleration "
@@ -248,18 +253,26 @@ class SrsFrequencies(StrictModel):
             raise FieldError("stop", f"must be > start ({self.start:g})", self.stop)
         if (self.num is None) == (self.per_octave is None):
             raise FieldError("num", "give num or per_octave, one of the two")
-        if len(self.grid()) > MAX_FREQUENCIES:
-            raise FieldError("per_octave" if self.num is None else "num",
-                             f"at most {MAX_FREQUENCIES} frequencies", len(self.grid()))
+        if self.count() > MAX_FREQUENCIES:  # counted, never allocated, before the check
+            key = "per_octave" if self.num is None else "num"
+            raise FieldError(key, f"{self.count():,} frequencies from {self.start:g} to "
+                             f"{self.stop:g} Hz, at most {MAX_FREQUENCIES:,}",
+                             getattr(self, key))
         return self
+
+    def count(self) -> int:
+        """The number of frequencies of :meth:`grid`, computed without building it."""
+        if self.num is not None:
+            return self.num
+        assert self.per_octave is not None
+        return int(np.floor(self.per_octave * np.log2(self.stop / self.start) + 1e-9)) + 1
 
     def grid(self) -> np.ndarray:
         """The natural frequencies (Hz)."""
         if self.num is not None:
             return np.geomspace(self.start, self.stop, self.num)
         assert self.per_octave is not None
-        count = int(np.floor(self.per_octave * np.log2(self.stop / self.start) + 1e-9)) + 1
-        return self.start * 2.0 ** (np.arange(count) / self.per_octave)
+        return self.start * 2.0 ** (np.arange(self.count()) / self.per_octave)
 
 
 class SrsAnalysis(StrictModel):

@@ -249,6 +249,10 @@ class StudySpec(StrictModel):
             raise FieldError(("study", "collect", "frequencies"), f"more than the "
                              f"{modes.count} modes of analysis.modes.count",
                              collect.frequencies)
+        for key in ("damping_ratios", "mac"):
+            if getattr(collect, key) and not collect.frequencies:
+                raise FieldError(("study", "collect", key), "needs collect.frequencies (the "
+                                 "modes whose values are kept)", True)
         for key in ("track", "derivatives"):
             if not getattr(collect, key):
                 continue

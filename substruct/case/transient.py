@@ -19,6 +19,7 @@ from typing import Annotated, Any, Literal
 import numpy as np
 from pydantic import Field, field_validator, model_validator
 
+from substruct.case.check_list import refuse_idle_checks
 from substruct.case.errors import FieldError
 from substruct.case.fields import (
     MEMORY_LIMIT,
@@ -216,10 +217,18 @@ class TransientAnalysis(StrictModel):
                              f"{gigabytes(8.0 * values)}), more than the {MAX_LOAD_VALUES:.0e} "
                              f"allowed: take a longer dt, a shorter t_end or fewer loads",
                              len(self.loads))
+        refuse_idle_checks(self.method, self.check)
         forms = {self.method, *self.check}
         if self.modal is not None and "modal" not in forms:
             raise FieldError("modal", "the modal block is for the modal form: give method: "
                              "modal or check: [modal]", "{...}")
+        if self.modal_count is not None and "modal" not in forms:
+            raise FieldError("modal_count", "the modes of the modal form, which this run does "
+                             "not use: give method: modal or check: [modal], or leave "
+                             "modal_count out", self.modal_count)
+        if self.field_every % self.every:
+            raise FieldError("field_every", f"the fields are kept at recorded steps: a "
+                             f"multiple of every ({self.every}), or 0", self.field_every)
         if self.modal is not None and self.modal.cutoff is not None and \
                 self.modal_count is not None:
             raise FieldError(("modal", "cutoff"), f"keep the modes below a cut-off or the "

@@ -110,6 +110,9 @@ def compare_command(args: argparse.Namespace) -> int:
     from substruct.cli.compare_frf import compare_frf_peaks, print_frf_comparison
     from substruct.cli.compare_recovery import compare_peaks, print_peak_comparison
 
+    if args.force and args.image is None:
+        raise InputError("--force replaces the picture of --image, the only file compare "
+                         "writes: give --image, or leave --force out")
     only = _peaks_only(args)
     if only is not None:
         return only

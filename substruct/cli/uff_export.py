@@ -37,7 +37,8 @@ def uff_target(result: Any, out: str | None, result_path: str) -> tuple[Path, st
 def export_uff_command(args: argparse.Namespace) -> int:
     """Write ``<case>.uff`` beside the result (or into ``--out``); print its path; return 0.
 
-    ``--modes`` and ``--variant`` do not apply: every mode and the receptances are written.
+    ``--modes``, ``--variant`` and ``--transient`` do not apply: every mode and the receptances
+    are written.
     The file is written under the folder's lock into a staging folder and moved into place
     (:class:`~substruct.io.file_set.OutputDir`); it is never the result read, even with
     ``--force``.
@@ -45,9 +46,9 @@ def export_uff_command(args: argparse.Namespace) -> int:
     from substruct.io.file_set import OutputDir
     from substruct.io.paths import write_errors
 
-    if args.modes is not None or args.variant is not None:
-        raise InputError("--format uff writes every mode and the receptances: no --modes or "
-                         "--variant")
+    if args.modes is not None or args.variant is not None or getattr(args, "transient", False):
+        raise InputError("--format uff writes every mode and the receptances: no --modes, "
+                         "--variant or --transient")
     result = load_result(args.result)
     uff = optional_module("io.uff")
     folder, name = uff_target(result, args.out, args.result)

@@ -10,6 +10,7 @@ message in ``errors``; the others are unaffected.
 
 from __future__ import annotations
 
+import re
 import time
 from dataclasses import dataclass, field, replace
 
@@ -90,6 +91,14 @@ def study_of(case: Case) -> StudySpec:
     """
     if case.study is None:
         raise case.error(("study",), "the case has no study: block (see docs/studies.md)")
+    varied = case.study.parameter_names()
+    for text in case.overrides:  # a --set of a varied parameter: every sample replaces it
+        key, _, value = text.partition("=")
+        parts = [p for p in re.split(r"[.\[\]]", key.strip()) if p]
+        if len(parts) == 2 and parts[0] == "parameters" and parts[1] in varied:
+            raise case.error(("parameters", parts[1]), f"varied by the study, so every sample "
+                             f"replaces the value given (set on the command line): set the "
+                             f"study's values of {parts[1]} instead", value.strip())
     return case.study
 
 
