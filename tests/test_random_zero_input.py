@@ -19,6 +19,7 @@ analysis:
     frequencies: {start: 0.1, stop: 2, num: 40}
     forces: FORCES
     outputs: [P@2, P@3]
+    rms_tolerance: 1.0     # a coarse grid: the runs are compared with each other on it
 output: {pictures: false}
 """
 ONE = "[{at: P@2, psd: [[0.1, 1], [2, 1]]}]"

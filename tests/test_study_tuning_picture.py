@@ -50,7 +50,7 @@ def closed_form():
     f = 1 / (1 + mu)
     zeta = math.sqrt(3 * mu / (8 * (1 + mu) ** 3))
     w = f * omega
-    return w * w, 2 * zeta * w
+    return w * w, 2 * zeta * omega     # Den Hartog's c_c = 2 m omega_p
 
 
 def test_absorber_tuning_is_den_hartog_for_the_shipped_case():
@@ -59,7 +59,7 @@ def test_absorber_tuning_is_den_hartog_for_the_shipped_case():
     assert name == "c"
     assert dh.k_opt == pytest.approx(k, rel=1e-12) and dh.c_opt == pytest.approx(c, rel=1e-12)
     assert dh.k_opt == pytest.approx(1154.7, abs=0.05)  # docs/studies.md
-    assert dh.c_opt == pytest.approx(3.746, abs=5e-4)
+    assert dh.c_opt == pytest.approx(3.777, abs=5e-4)
 
 
 def test_no_marker_when_the_grid_does_not_tune_an_absorber():
@@ -99,3 +99,31 @@ def test_the_command_marks_and_prints_den_hartog(tmp_path, capsys, monkeypatch):
     assert summary["den_hartog"]["cc"] == pytest.approx(c, rel=1e-12)
     assert seen["marked"][:2] == (summary["den_hartog"]["kc"], summary["den_hartog"]["cc"])
     assert (tmp_path / "tapered_rod_tuning_study_tuning.png").stat().st_size > 10_000
+
+
+def test_den_hartog_damping_is_the_peak_minimum_of_a_two_mass_system():
+    """A unit primary (M = K = 1) with an absorber of mu = 0.1 tuned to f_opt: the damping
+    that minimizes the primary's receptance peak, found by search on the exact two-DOF
+    receptance over a fine grid, is Den Hartog's c_opt = 2 zeta_opt m_a omega_p to 0.25 % (his
+    fixed-point theory is not the exact minimum); the damping ratio taken on the absorber's own
+    frequency, c = 2 zeta_opt m_a f_opt omega_p, is 9 % off and its peak 1.9 % higher."""
+    from scipy.optimize import minimize_scalar
+
+    from substruct.studies.study_tuning import den_hartog
+
+    mu = 0.1
+    dh = den_hartog(1.0, 1.0, mu)
+    w = np.linspace(0.5, 1.5, 200_001)
+
+    def peak(c: float) -> float:
+        z11 = 1.0 + dh.k_opt - w ** 2 + 1j * w * c
+        z22 = dh.k_opt - w ** 2 * mu + 1j * w * c
+        z12 = -(dh.k_opt + 1j * w * c)
+        return float(np.abs(z22 / (z11 * z22 - z12 ** 2)).max())
+
+    best = minimize_scalar(peak, bounds=(0.01, 0.08), method="bounded",
+                           options={"xatol": 1e-8})
+    assert dh.k_opt == pytest.approx(mu / (1 + mu) ** 2, rel=1e-14)
+    assert abs(dh.c_opt / best.x - 1) < 4e-3
+    assert peak(dh.c_opt) < best.fun * 1.0005
+    assert peak(dh.c_opt * dh.f_opt) > best.fun * 1.015

@@ -145,6 +145,9 @@ class RandomAnalysis(BaseDrivenResponse):
     cross: list[CrossPsd] = Field(default_factory=list)
     base: BasePsd | None = None
     bases: list[NamedBasePsd] = Field(default_factory=list)
+    #: largest estimated relative error of the trapezoid rule on a mean square (a grid that
+    #: steps over a resonance: :mod:`substruct.analysis.frf.psd_resolution`)
+    rms_tolerance: Positive = 1e-2
 
     @model_validator(mode="after")
     def _inputs(self) -> "RandomAnalysis":

@@ -33,6 +33,7 @@ from substruct.builder.drawing import Drawing
 from substruct.io.channels_hdf5 import read_channel_geometry
 from substruct.io.recovery_hdf5 import read_recovery
 from substruct.io.result_format import FORMAT, FORMAT_VERSION, RESERVED_ATTRS
+from substruct.io.spec_reader import read_random, read_srs
 from substruct.io.tpa_hdf5 import read_semm, read_tpa
 from substruct.io.transient_hdf5 import read_transient
 from substruct.io.vp_hdf5 import read_monte_carlo, read_virtual_points
@@ -341,6 +342,13 @@ def _read(f: h5py.File) -> Result:
                     base_frf=_base_frf(rd, rd.node(f, "base_frf", h5py.Group))
                     if "base_frf" in f else None,
                     attrs={k: v for k, v in root.items() if k not in RESERVED_ATTRS})
+    try:
+        if "random" in f:
+            result.random = read_random(rd, rd.node(f, "random", h5py.Group))
+        if "srs" in f:
+            result.srs = read_srs(rd, rd.node(f, "srs", h5py.Group))
+    except ValueError as exc:
+        raise _Bad(str(exc)) from None
     _testlab(rd, f, result)
     if f.get("channels", getlink=True) is not None:
         try:

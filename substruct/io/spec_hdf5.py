@@ -2,7 +2,8 @@
 
     /random    f (Hz), outputs, inputs, input_psd (n_f x p), input_csd (n_f x p x p, complex,
                only with correlated inputs), psd (n_f x q x q, complex),
-               rms (q); attrs quantity, method, tolerance, three_sigma_exceedance;
+               rms (q); attrs quantity, method, tolerance, three_sigma_exceedance,
+               inputs_kind (force or base acceleration);
                agreement/ (attrs: check -> relative difference)
     /base_frf  omega (rad/s), f (Hz), outputs, inputs, transmissibility (n_w x q x p,
                complex: output motion per base acceleration); attrs quantity, per, method,
@@ -41,7 +42,8 @@ def write_random(g: h5py.Group, r: RandomResponse) -> None:
     g.create_dataset("psd", data=r.psd)
     g.create_dataset("rms", data=r.rms)
     g.attrs.update({"quantity": r.quantity, "method": r.method, "tolerance": r.tolerance,
-                    "three_sigma_exceedance": THREE_SIGMA_EXCEEDANCE})
+                    "three_sigma_exceedance": THREE_SIGMA_EXCEEDANCE,
+                    "inputs_kind": "base acceleration" if r.base else "force"})
     agreement = g.create_group("agreement")
     for key, value in r.agreement.items():
         agreement.attrs[key] = float(value)

@@ -36,6 +36,7 @@ from substruct.analysis.api import Progress, SweepOptions, receptance_sweep
 from substruct.analysis.errors import INPUT_ERRORS, CheckError
 from substruct.analysis.frf.base_drive import base_drive_sweep
 from substruct.analysis.frf.base_modal import modal_base_drive_sweep
+from substruct.analysis.frf.psd_resolution import RMS_QUADRATURE_TOLERANCE, quadrature_error
 from substruct.analysis.frf.quantity import as_quantity
 from substruct.analysis.frf.random import (
     check_spectral_matrix,
@@ -59,7 +60,7 @@ from substruct.run.spec_results import RandomResponse, ShockSpectra
 from substruct.vocabulary import DERIVATIVE_ORDER
 
 __all__ = ["loss_parts", "loss_frf_result", "loss_rows_receptance", "grounding_column", "base_columns", "sweep_kw",
-           "random_result", "srs_result"]
+           "random_result", "check_resolution", "srs_result"]
 
 
 
@@ -267,11 +268,35 @@ def random_result(case: Case, model: Model, tasks: TaskRunner | None = None
     H = rec.H * ((1j * w) ** DERIVATIVE_ORDER[spec.quantity])[:, None, None]
     Sy = response_psd(H, S)
     auto = np.real(np.einsum("kii->ki", Sy))
+    check_resolution(f, auto, list(spec.outputs), spec.rms_tolerance)
     return RandomResponse(f=f, outputs=list(spec.outputs), inputs=list(names),
                           quantity=spec.quantity, input_psd=S_in, psd=Sy, rms=rms(f, auto),
                           input_csd=S if spec.cross else None,
                           method=rec.method, agreement=dict(rec.agreement),
                           tolerance=spec.tolerance, base=bool(bases))
+
+
+def check_resolution(f: np.ndarray, auto: np.ndarray, outputs: list[str],
+                     tolerance: float = RMS_QUADRATURE_TOLERANCE) -> None:
+    """Refuse RMS values whose grid steps over a resonance: the trapezoid rule's estimated
+    error (:func:`~substruct.analysis.frf.psd_resolution.quadrature_error`) above
+    ``tolerance`` (``analysis.random.rms_tolerance``) of a mean square.
+
+    Raises:
+        CheckError: the first output whose estimate is beyond it.
+    """
+    for name, q in zip(outputs, quadrature_error(f, auto)):
+        if min(q.error, 1.0) > tolerance:      # rms_tolerance: 1 accepts any grid
+            err = "more than 100 %" if not np.isfinite(q.error) else f"{q.error:.1e}"
+            width = ("a peak stepped over" if not q.gamma > 0 else
+                     f"half-power half-width {q.gamma:.3g} Hz")
+            raise CheckError(
+                f"analysis.random.frequencies: the grid does not resolve the response PSD of "
+                f"{name} near {q.f0:.4g} Hz ({width}, grid step {q.step:.3g} Hz there): the "
+                f"trapezoid rule's estimated error of its mean square is {err}, beyond "
+                f"analysis.random.rms_tolerance = {tolerance:g}; give the grid a step no "
+                f"larger than the half-width there (more frequencies, or a list of them), "
+                f"or raise rms_tolerance to accept it")
 
 
 def srs_result(case: Case, tr: Transient) -> ShockSpectra | None:

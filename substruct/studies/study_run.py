@@ -34,7 +34,7 @@ from substruct.studies.study_task import (
 )
 
 __all__ = ["StudyResult", "study_tasks", "gather", "run_study", "study_of",
-           "check_tracked_memory"]
+           "check_tracked_memory", "UNCOLLECTED"]
 
 
 @dataclass
@@ -83,11 +83,17 @@ class StudyResult:
         return [k for k, e in enumerate(self.errors) if e]
 
 
+#: The analyses no ``collect`` entry reads: a study refuses them rather than compute each
+#: for every sample and discard it.
+UNCOLLECTED = ("transient", "random", "base_frf", "srs", "tpa", "semm")
+
+
 def study_of(case: Case) -> StudySpec:
     """The case's ``study:`` block.
 
     Raises:
-        CaseError: the case has none.
+        CaseError: the case has none; a ``--set`` of a parameter the study varies; an
+            analysis no ``collect`` entry reads (:data:`UNCOLLECTED`).
     """
     if case.study is None:
         raise case.error(("study",), "the case has no study: block (see docs/studies.md)")
@@ -99,6 +105,12 @@ def study_of(case: Case) -> StudySpec:
             raise case.error(("parameters", parts[1]), f"varied by the study, so every sample "
                              f"replaces the value given (set on the command line): set the "
                              f"study's values of {parts[1]} instead", value.strip())
+    for key in UNCOLLECTED:
+        if getattr(case.analysis, key, None) is not None:
+            raise case.error(("analysis", key), "a study collects nothing of it (collect "
+                             "takes modes and receptances: frequencies, damping ratios, MAC, "
+                             "FRF peaks and curves), yet every sample would compute it; leave "
+                             "it out of the case the study runs", "{...}")
     return case.study
 
 

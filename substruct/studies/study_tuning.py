@@ -10,7 +10,9 @@ Den Hartog) with
            \zeta_{opt} = \sqrt{\frac{3 \mu}{8 (1 + \mu)^3}},
 
 that is :math:`k_{opt} = m_a (f_{opt} \omega_p)^2` and
-:math:`c_{opt} = 2 \zeta_{opt} m_a f_{opt} \omega_p`.
+:math:`c_{opt} = 2 \zeta_{opt} m_a \omega_p`: Den Hartog's damping ratio is
+:math:`c / c_c` with :math:`c_c = 2 m_a \omega_p`, the primary's frequency (in the absorber's
+own, :math:`c / (2 m_a f_{opt} \omega_p) = \sqrt{3\mu / (8 (1 + \mu))}`, the same ``c``).
 """
 
 from __future__ import annotations
@@ -46,7 +48,7 @@ def den_hartog(omega_p: float, modal_mass: float, absorber_mass: float) -> DenHa
     w = f * float(omega_p)
     m = float(absorber_mass)
     return DenHartog(mu=mu, f_opt=f, zeta_opt=zeta, k_opt=m * w * w,
-                     c_opt=2.0 * zeta * m * w)
+                     c_opt=2.0 * zeta * m * float(omega_p))
 
 
 def grid_optimum(peaks: Sequence[float]) -> tuple[int, float]:
