@@ -281,8 +281,9 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
         tasks: where the blocks of the reduction and the subdomains' expansions run
             (:class:`~substruct.linalg.task_runner.TaskRunner`, e.g. a Dask session);
             default: in this process.  The results do not depend on it.
-        tree: the dissection of ``K`` (:func:`~substruct.linalg.amls_tree.dissection_tree`
-            with ``leaf_size``), if already made (another wanted frequency of the same model).
+        tree: the dissection of the pencil
+            (:func:`~substruct.linalg.amls_tree.dissection_tree` of ``K`` with ``leaf_size``
+            and ``M=M``), if already made (another wanted frequency of the same model).
 
     A free body's rigid-body modes (:func:`~substruct.linalg.scaling.rigid_modes`: strain
     energy at round-off) come back at 0, their
@@ -301,7 +302,7 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
     lam_c = (cutoff * omega_max) ** 2
     times: dict[str, float] = {}
     t = time.perf_counter()
-    root = dissection_tree(K, leaf_size) if tree is None else tree
+    root = dissection_tree(K, leaf_size, M=M) if tree is None else tree
     n_blocks = len(root.postorder())
     times["tree"] = time.perf_counter() - t
     say(f"AMLS tree: {n_blocks} blocks, {max(b.level for b in root.postorder()) + 1} levels")
