@@ -55,7 +55,7 @@ from substruct.linalg.amls_reduce import ReducedModel, amls_reduce
 from substruct.linalg.amls_tree import DissectionNode, dissection_tree
 from substruct.linalg.definite import definite_factorization
 from substruct.linalg.factorize import factorizer
-from substruct.linalg.scaling import rigid_modes, stiffness_over_mass
+from substruct.linalg.scaling import rigid_eigenvalue, rigid_modes, stiffness_over_mass
 from substruct.linalg.scratch_arrays import ScratchArrays
 from substruct.linalg.task_runner import TaskRunner
 from substruct.machine import available_memory
@@ -299,7 +299,11 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
     K = sp.csr_array(K, dtype=float)
     M = sp.csr_array(M, dtype=float)
     lam_w = float(omega_max) ** 2
-    lam_c = (cutoff * omega_max) ** 2
+    # rigid-body modes come out at round-off of the stiffness's scale, of either sign: every
+    # stage keeps the eigenvalues up to that level too (a free body wanted below 1e-6 of its
+    # first flexible frequency lost some of them), and the last keeps the rigid ones
+    lam_0 = rigid_eigenvalue(K, M)
+    lam_c = max((cutoff * omega_max) ** 2, lam_0)
     times: dict[str, float] = {}
     t = time.perf_counter()
     root = dissection_tree(K, leaf_size, M=M) if tree is None else tree
@@ -312,7 +316,7 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
     times["reduce"] = time.perf_counter() - t
     say(f"AMLS reduced: {red.size} coordinates from {red.n}")
     t = time.perf_counter()
-    bound = min(ritz_ratio ** 2, cutoff ** 2) * lam_w if iterations else lam_w
+    bound = max(min(ritz_ratio ** 2, cutoff ** 2) * lam_w if iterations else lam_w, lam_0)
     lam, Y = reduced_eigenpairs(red, bound, shift)
     times["reduced"] = time.perf_counter() - t
     t = time.perf_counter()
@@ -332,15 +336,19 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
         filter_steps(M, W, solve, chebyshev_shifts(iterations, sigma, np.sqrt(bound * lam_c)),
                      say)
         del solve    # freed before the n x k modes are made: the peak is one of the two
-        lam, U = ritz_pairs(K, M, W, lam_w, scratch.empty if huge else np.empty)
+        lam, U = ritz_pairs(K, M, W, max(lam_w, lam_0), scratch.empty if huge else np.empty)
         if isinstance(W, ColumnFile):
             W.close()
             scratch.discard(W)
         del W
     times["improve"] = time.perf_counter() - t
-    found = int(np.searchsorted(lam, lam_w, side="right"))   # lam ascending
+    found = int(np.searchsorted(lam, max(lam_w, lam_0), side="right"))   # lam ascending
     lam, U = lam[:found], U[:, :found]
-    lam = np.where(rigid_modes(lam, U, K, M), 0.0, lam)
+    rigid = rigid_modes(lam, U, K, M)
+    keep = np.flatnonzero(rigid | (lam <= lam_w))
+    if keep.size < found:
+        lam, U, rigid = lam[keep], U[:, keep], rigid[keep]
+    lam = np.where(rigid, 0.0, lam)
     t = time.perf_counter()
     res = relative_residuals(K, M, lam, U)
     times["residual"] = time.perf_counter() - t
