@@ -108,7 +108,7 @@ def run(args: argparse.Namespace, tasks: object) -> None:
     _reset_peak()
     t0, c0 = time.perf_counter(), time.process_time()
     times = {}
-    tree = dissection_tree(K, args.leaf_size)
+    tree = dissection_tree(K, args.leaf_size, M=M)
     times["tree"] = time.perf_counter() - t0
     lam_w = args.omega_guess ** 2
     t = time.perf_counter()

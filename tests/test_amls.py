@@ -8,8 +8,10 @@ The reference is a dense generalized ``eigh`` of the same (small) model.  What i
   decreases monotonically as the cut-off grows (nested subspaces), at the measured rate
   (largest error of lambda ~ r^-4.7, from 1.5 to 5);
 * one subspace iteration with the full factorization: the lower modes to 1e-8;
-* the number of modes below the wanted frequency equals the exact count;
-* a free box (rigid modes from the singular root separator) and a two-part tied assembly
+* the number of modes below the wanted frequency equals the exact count; a wanted frequency
+  far above the highest mode gives every eigenvalue to round-off (clamped and free);
+* a free box (rigid modes from the singular root separator), also wanted at 1e-13 of its
+  first flexible frequency (all six rigid modes, none lost to round-off), and a two-part tied assembly
   through the null-space elimination of A, its modes checked in the stacked coordinates by
   the formulations' residuals (kkt 4e-13 and generalized-inverse 1e-11 with every mode kept;
   truncated at cut-off 3 with one iteration, 7.6e-3 and 2.4e-2 for AMLS's own 1.6e-2).
@@ -155,6 +157,40 @@ def test_free_box_rigid_modes():
     r3 = amls_modes(K, M, wmax, cutoff=4.0, leaf_size=100, iterations=1, ritz_ratio=3.0)
     assert r3.lam.size == 16
     assert np.allclose(r3.lam[6:], lam[6:16], rtol=1e-5)
+
+
+@pytest.mark.parametrize("iterations", [0, 1])
+def test_free_box_wanted_far_below_its_first_flexible_mode(iterations):
+    # rigid-body eigenvalues are round-off of the stiffness's scale, of either sign: a wanted
+    # frequency of 1e-9 (1e-13 of the first flexible one) kept 4 of the 6 (the others were
+    # above the wanted eigenvalue in the blocks, the reduced problem and the last cut)
+    K, M = box((12, 3, 3), fixed=[])
+    lam = sla.eigh(K.toarray(), M.toarray(), eigvals_only=True)
+    assert np.sqrt(lam[6]) > 1e3
+    for wmax in (1e-9, 1e-3):
+        r = amls_modes(K, M, wmax, cutoff=3.0, leaf_size=100, iterations=iterations)
+        assert r.lam.size == 6 and np.all(r.lam == 0.0)
+        rigid = np.zeros((K.shape[0], 6))
+        rigid[0::3, 0] = rigid[1::3, 1] = rigid[2::3, 2] = 1.0   # the translations at least
+        coef = np.linalg.lstsq(r.U, rigid[:, :3], rcond=None)[0]
+        assert np.abs(r.U @ coef - rigid[:, :3]).max() < 1e-8
+
+
+@pytest.mark.parametrize("fixed", [CLAMP, []])
+def test_wanted_far_above_the_highest_mode_is_exact(fixed):
+    # every mode of the model wanted (a band far above its highest frequency): with every
+    # block's modes kept, the dense eigenvalues to round-off; the shift that followed the
+    # wanted eigenvalue (-1e-3 of it) left the lowest flexible modes 1e-3 off at 1e7 x
+    K, M = box((8, 2, 2), fixed=fixed)
+    lam = sla.eigh(K.toarray(), M.toarray(), eigvals_only=True)
+    for factor in (10.0, 1e7):
+        for iterations in (0, 1):
+            r = amls_modes(K, M, factor * np.sqrt(lam[-1]), cutoff=2.0, leaf_size=40,
+                           iterations=iterations)
+            assert r.lam.size == lam.size
+            flexible = slice(0 if fixed else 6, None)
+            err = np.abs(r.lam[flexible] / lam[flexible] - 1)
+            assert err.max() < 1e-9, (factor, iterations, err.max())
 
 
 def test_tied_assembly_through_null_space():

@@ -93,6 +93,21 @@ def test_the_generalized_inverse_check_is_skipped_and_said_when_costly(coupled, 
     assert res.solver.startswith("sparse (generalized-inverse check skipped: ")
 
 
+def test_a_mass_singular_in_a_combination_skips_the_generalized_inverse_check():
+    # q1 - q2 carries no mass (no zero row): the null-space modes need no M_d, the
+    # generalized-inverse check does; its factorization failed with an internal error
+    M = sp.csr_array(np.array([[1.0, 1, 0], [1, 1, 0], [0, 0, 1]]))
+    K = sp.csr_array(np.array([[20.0, -10, 0], [-10, 30, -20], [0, -20, 40]]))
+    res = modes(M, None, K, None, 2, solver="sparse")
+    L = np.linalg.cholesky(K.toarray())
+    mu = np.linalg.eigvalsh(np.linalg.solve(L, np.linalg.solve(L, M.toarray()).T))
+    np.testing.assert_allclose(res.omega ** 2, np.sort(1.0 / mu[mu > 1e-12])[:2], rtol=1e-10)
+    assert list(res.agreement) == ["kkt-residual"]
+    assert res.solver.startswith("sparse (") and ("generalized-inverse check skipped: the "
+                                                   "mass is singular on coordinates that have "
+                                                   "mass") in res.solver
+
+
 def test_memory_is_refused_only_past_what_the_machine_has(coupled, monkeypatch):
     asm = coupled
     with pytest.raises(ValueError, match=r"needs about 2 GB; 1 GB are available"):

@@ -55,7 +55,7 @@ from substruct.linalg.amls_reduce import ReducedModel, amls_reduce
 from substruct.linalg.amls_tree import DissectionNode, dissection_tree
 from substruct.linalg.definite import definite_factorization
 from substruct.linalg.factorize import factorizer
-from substruct.linalg.scaling import rigid_modes, stiffness_over_mass
+from substruct.linalg.scaling import rigid_eigenvalue, rigid_modes, stiffness_over_mass
 from substruct.linalg.scratch_arrays import ScratchArrays
 from substruct.linalg.task_runner import TaskRunner
 from substruct.machine import available_memory
@@ -73,15 +73,24 @@ SHIFT_FRACTION = -1e-3
 #: otherwise leave ``K - sigma M`` singular to working precision on its rigid-body modes).
 SHIFT_FLOOR = 1e-5
 
+#: ... and at most this fraction of it: the eigenvalues come out as :math:`\sigma + 1/\mu`,
+#: to about :math:`\epsilon |\sigma|` absolutely, so a wanted frequency far above the model's
+#: highest mode (``band: {max: 1e12}`` on a rod whose modes end at 1.8e5 rad/s) made the
+#: lowest modes wrong (8.6e-4 with every block's modes kept) with :math:`\sigma` following it.
+SHIFT_CEILING = 1.0
+
 
 def free_shift(K: sp.sparray, M: sp.sparray, lam_w: float) -> float:
     r"""The shift :math:`\sigma` of the blocks with no boundary, the reduced pencil of a free body
-    and the subspace iteration:
-    :math:`\sigma = f \max(\omega_{max}^2, 10^{-5} \operatorname{tr} K / \operatorname{tr} M)`,
-    :math:`f` = :data:`SHIFT_FRACTION`, so that :math:`K - \sigma M` is positive definite to
-    working precision for a free body at any wanted frequency (its rigid-body modes'
-    eigenvalue :math:`-\sigma` is at least :math:`10^{-8}` of the stiffness's scale)."""
-    return SHIFT_FRACTION * max(lam_w, SHIFT_FLOOR * stiffness_over_mass(K, M))
+    and the subspace iteration: :math:`\sigma = f \min(\max(\omega_{max}^2, 10^{-5} s), s)`,
+    :math:`s = \operatorname{tr} K / \operatorname{tr} M`, :math:`f` = :data:`SHIFT_FRACTION`,
+    so that :math:`K - \sigma M` is positive definite to working precision for a free body at
+    any wanted frequency (its rigid-body modes' eigenvalue :math:`-\sigma` is at least
+    :math:`10^{-8}` of the stiffness's scale), and no larger than the stiffness's scale makes
+    it (:data:`SHIFT_CEILING`: an eigenvalue :math:`\lambda` comes out to about
+    :math:`\epsilon \max(|\sigma|, \lambda^2 / |\sigma|)`)."""
+    scale = stiffness_over_mass(K, M)
+    return SHIFT_FRACTION * min(max(lam_w, SHIFT_FLOOR * scale), SHIFT_CEILING * scale)
 
 
 @dataclass
@@ -281,8 +290,9 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
         tasks: where the blocks of the reduction and the subdomains' expansions run
             (:class:`~substruct.linalg.task_runner.TaskRunner`, e.g. a Dask session);
             default: in this process.  The results do not depend on it.
-        tree: the dissection of ``K`` (:func:`~substruct.linalg.amls_tree.dissection_tree`
-            with ``leaf_size``), if already made (another wanted frequency of the same model).
+        tree: the dissection of the pencil
+            (:func:`~substruct.linalg.amls_tree.dissection_tree` of ``K`` with ``leaf_size``
+            and ``M=M``), if already made (another wanted frequency of the same model).
 
     A free body's rigid-body modes (:func:`~substruct.linalg.scaling.rigid_modes`: strain
     energy at round-off) come back at 0, their
@@ -298,10 +308,14 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
     K = sp.csr_array(K, dtype=float)
     M = sp.csr_array(M, dtype=float)
     lam_w = float(omega_max) ** 2
-    lam_c = (cutoff * omega_max) ** 2
+    # rigid-body modes come out at round-off of the stiffness's scale, of either sign: every
+    # stage keeps the eigenvalues up to that level too (a free body wanted below 1e-6 of its
+    # first flexible frequency lost some of them), and the last keeps the rigid ones
+    lam_0 = rigid_eigenvalue(K, M)
+    lam_c = max((cutoff * omega_max) ** 2, lam_0)
     times: dict[str, float] = {}
     t = time.perf_counter()
-    root = dissection_tree(K, leaf_size) if tree is None else tree
+    root = dissection_tree(K, leaf_size, M=M) if tree is None else tree
     n_blocks = len(root.postorder())
     times["tree"] = time.perf_counter() - t
     say(f"AMLS tree: {n_blocks} blocks, {max(b.level for b in root.postorder()) + 1} levels")
@@ -311,7 +325,7 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
     times["reduce"] = time.perf_counter() - t
     say(f"AMLS reduced: {red.size} coordinates from {red.n}")
     t = time.perf_counter()
-    bound = min(ritz_ratio ** 2, cutoff ** 2) * lam_w if iterations else lam_w
+    bound = max(min(ritz_ratio ** 2, cutoff ** 2) * lam_w if iterations else lam_w, lam_0)
     lam, Y = reduced_eigenpairs(red, bound, shift)
     times["reduced"] = time.perf_counter() - t
     t = time.perf_counter()
@@ -331,15 +345,19 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
         filter_steps(M, W, solve, chebyshev_shifts(iterations, sigma, np.sqrt(bound * lam_c)),
                      say)
         del solve    # freed before the n x k modes are made: the peak is one of the two
-        lam, U = ritz_pairs(K, M, W, lam_w, scratch.empty if huge else np.empty)
+        lam, U = ritz_pairs(K, M, W, max(lam_w, lam_0), scratch.empty if huge else np.empty)
         if isinstance(W, ColumnFile):
             W.close()
             scratch.discard(W)
         del W
     times["improve"] = time.perf_counter() - t
-    found = int(np.searchsorted(lam, lam_w, side="right"))   # lam ascending
+    found = int(np.searchsorted(lam, max(lam_w, lam_0), side="right"))   # lam ascending
     lam, U = lam[:found], U[:, :found]
-    lam = np.where(rigid_modes(lam, U, K, M), 0.0, lam)
+    rigid = rigid_modes(lam, U, K, M)
+    keep = np.flatnonzero(rigid | (lam <= lam_w))
+    if keep.size < found:
+        lam, U, rigid = lam[keep], U[:, keep], rigid[keep]
+    lam = np.where(rigid, 0.0, lam)
     t = time.perf_counter()
     res = relative_residuals(K, M, lam, U)
     times["residual"] = time.perf_counter() - t

@@ -186,7 +186,9 @@ class ReducedModel:
 
 def _boundaries(P: sp.csr_array, order: list[DissectionNode]) -> list[np.ndarray]:
     """Each block's boundary (post-order): the coordinates of later blocks (its ancestors'
-    separators) coupled to its own rows or passed up by its children."""
+    separators) coupled to its own rows or passed up by its children.  A child's boundary
+    outside its parent's rows and boundary (an entry of ``P`` coupling two blocks neither of
+    which is an ancestor of the other: a tree not made from the pattern ``P``) is refused."""
     n = P.shape[0]
     pos = np.empty(n, dtype=np.int64)
     for i, b in enumerate(order):
@@ -198,6 +200,9 @@ def _boundaries(P: sp.csr_array, order: list[DissectionNode]) -> list[np.ndarray
         B = own[pos[own] > i]
         for c in b.children:
             B = np.union1d(B, out[index[id(c)]])
+        if np.any(pos[B] < i):
+            raise ValueError("the dissection tree does not separate the pencil: make it from "
+                             "the pattern of both matrices (dissection_tree(K, ..., M=M))")
         out.append(B[pos[B] > i])
     return out
 

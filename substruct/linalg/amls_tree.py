@@ -123,16 +123,22 @@ def _bisect(G: sp.csr_array) -> np.ndarray:
     return np.asarray(parts, dtype=np.int64)
 
 
-def dissection_tree(K: sp.sparray | sp.spmatrix, leaf_size: int, max_levels: int = 30) -> DissectionNode:
-    """The nested-dissection tree of the graph of ``K``: a block is split (two subdomains and
-    their vertex separator) while it has more than ``leaf_size`` rows and is less than
-    ``max_levels`` deep.
+def dissection_tree(K: sp.sparray | sp.spmatrix, leaf_size: int, max_levels: int = 30,
+                    M: sp.sparray | sp.spmatrix | None = None) -> DissectionNode:
+    """The nested-dissection tree of the graph of ``K`` (of ``|K| + |M|`` when the mass ``M``
+    is given): a block is split (two subdomains and their vertex separator) while it has
+    more than ``leaf_size`` rows and is less than ``max_levels`` deep.
 
-    Every row of ``K`` is in exactly one block; no entry of ``K`` couples two blocks of which
-    neither is an ancestor of the other.
+    Every row of ``K`` is in exactly one block; no entry of ``K`` (nor of ``M``, if given)
+    couples two blocks of which neither is an ancestor of the other.  AMLS reduces the pencil
+    ``(K, M)``, so its tree must be made with ``M``: a mass entry outside the stiffness's
+    pattern (a point mass's inertia coupling two nodes, an eliminated rigid link) would
+    otherwise couple two subdomains.
     """
     if leaf_size < 1:
         raise ValueError(f"leaf_size must be positive, got {leaf_size}")
+    if M is not None:
+        K = sp.csr_array(abs(sp.csr_array(K)) + abs(sp.csr_array(M)))
     group, G = supervariables(K)
     members = sp.csr_array((np.ones(group.size), (group, np.arange(group.size))),
                            shape=(G.shape[0], group.size))

@@ -122,7 +122,7 @@ def _solve(K: sp.csr_array, M: sp.csr_array, count: int | None, opts: AmlsOption
         if say is not None:
             say("amls", f"modes: {text}", K.shape[0])
 
-    tree = dissection_tree(K, opts.leaf_size)     # one dissection for every pass
+    tree = dissection_tree(K, opts.leaf_size, M=M)     # one dissection for every pass
 
     ritz = min(opts.cutoff, RITZ_RATIO if opts.ritz_ratio is None else opts.ritz_ratio)
 
@@ -141,12 +141,22 @@ def _solve(K: sp.csr_array, M: sp.csr_array, count: int | None, opts: AmlsOption
     # reduced eigenpair is below the wanted frequency: a model with fewer than ``count`` finite
     # modes has given them all (as the other solvers report it)
     finite = K.shape[0] - int(np.count_nonzero(massless_coordinates(M)))
+    # a mass singular in a combination of coordinates (no zero row) hides its infinite modes
+    # from that count: beyond 1/eps of the stiffness's scale an eigenvalue is a mass at
+    # round-off of the stiffness's, an infinite one, so every finite mode has been given
+    infinite = stiffness_over_mass(K, M) / np.finfo(float).eps
+    before = -1
     for _ in range(MAX_PASSES):
         r = run(w)
         m = r.lam.size
-        if m >= count or m == r.n_reduced >= finite:
+        if m >= count or m == r.n_reduced >= finite or w * w >= infinite:
             return r, w
-        w *= max(2.0, 1.2 * (count / m) ** (1 / 3)) if m else 4.0
+        grow = max(2.0, 1.2 * (count / m) ** (1 / 3)) if m else 4.0
+        # every reduced pair below the wanted frequency twice with the same basis: the blocks
+        # have no mode between, most likely none at all (to the infinite level at once)
+        stuck = m == r.n_reduced == before
+        before = r.n_reduced if m == r.n_reduced else -1
+        w = max(w * grow, np.sqrt(infinite)) if stuck else w * grow
     raise AnalysisInputError(f"AMLS found fewer than {count} modes below {w:.3g} rad/s")
 
 

@@ -46,11 +46,11 @@ from substruct.analysis.transient.integrators import (
     effective_matrix,
     integrate,
 )
-from substruct.analysis.frf.modal_basis import RIGID_ROOT_FRACTION
 from substruct.analysis.frf.modal_static import static_solver
 from substruct.analysis.transient.fields import FieldStore
 from substruct.analysis.transient.record import Physical, Recorder
 from substruct.analysis.transient.options import MODAL_CUTOFF, TransientOptions
+from substruct.linalg.scaling import rigid_modes
 
 __all__ = ["MODAL_DEFAULT_COUNT", "coupled_basis", "modal_run"]
 
@@ -85,8 +85,10 @@ def coupled_basis(phys: Physical, count: int | None, solver: str, *,
     Mr, Kr = U.T @ (phys.M @ U), U.T @ (phys.K @ U)
     w2, rot = sla.eigh((Kr + Kr.T) / 2, (Mr + Mr.T) / 2)
     Phi = U @ rot
-    scale = max(float(np.abs(w2).max(initial=0.0)), 1e-300)
-    w2 = np.where(w2 < RIGID_ROOT_FRACTION ** 2 * scale, 0.0, w2)
+    # rigid as the eigensolvers decide it, on the model's stiffness scale: against the modes
+    # kept, a basis of rigid-body modes alone (a free body, modal_count 6) read its round-off
+    # eigenvalues as elastic and divided the static correction by them
+    w2 = np.where(rigid_modes(w2, Phi, phys.K, phys.M) | (w2 < 0), 0.0, w2)
     return Phi, np.sqrt(w2), label
 
 
