@@ -19,9 +19,11 @@ restarts; one that has not converged by then starts again with a basis
 :data:`BASIS_GROWTH` times larger (up to ``n``), which holds the whole cluster and converges
 in a few restarts.  A problem that converges within the limit is solved exactly as before.
 
-The vectors are purified (:func:`purified`): one more application of the operator removes the
-part in :math:`\operatorname{null}(M)` that the iteration, orthogonalizing in the semi-inner
-product of a singular ``M``, cannot see.
+With massless coordinates (zero rows of ``M``; the sparse eigensolvers make every massless
+direction one, :func:`substruct.linalg.massless.massless_split`) the vectors are purified
+(:func:`purified`): one more application of the operator removes the part in
+:math:`\operatorname{null}(M)` that the iteration, orthogonalizing in the semi-inner product of
+a singular ``M``, cannot see.
 
 Rigid-body modes (a free model) are deflated (:func:`shift_invert_lanczos_deflated`): about a
 shift just below zero their eigenvalues of the operator, :math:`1/|\sigma|`, exceed the elastic
@@ -83,7 +85,9 @@ def shift_invert_lanczos(K: sp.sparray, M: sp.sparray, k: int, sigma: float, sol
             lam, V = spla.eigsh(K, k=k, M=M, sigma=sigma, which="LM", OPinv=op, v0=v0,
                                 ncv=ncv if first else size,
                                 maxiter=None if last else FIRST_ATTEMPT_RESTARTS)
-            return lam, purified(M, lam, V, sigma, solve)
+            if np.any(np.asarray(abs(sp.csr_array(M)).sum(axis=1)).ravel() == 0):
+                V = purified(M, lam, V, sigma, solve)  # a singular M: null(M) removed
+            return lam, V
         except spla.ArpackNoConvergence:
             if last:
                 raise
