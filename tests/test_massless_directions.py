@@ -24,6 +24,9 @@ from cli_helpers import run
 from substruct.analysis.modes.dense import coupled_modes
 from substruct.analysis.modes.sparse import sparse_coupled_modes
 from substruct.linalg.massless import massless_count, massless_directions
+from substruct.models.craig_bampton import fixed_interface_modes
+from substruct.models.reduction import undamped_modes
+from substruct.substructure import Substructure
 
 K_SPRING, MASS = 1000.0, 10.0
 NODE_2, OFFSET = np.array([1.0, 2.0, -0.5]), np.array([0.3, -0.2, 0.1])
@@ -146,3 +149,28 @@ def test_dense_and_sparse_count_agree_on_a_small_chain():
     dense = coupled_modes(M, None, K, None, method="null-space")
     assert dense.omega.size == 6 and np.all(np.isfinite(dense.omega))
     assert massless_count(M) == 48 - 6
+
+
+def test_craig_bampton_fixed_interface_modes_with_offset_masses():
+    """The sparse fixed-interface modes (interior above ``dense_limit``) of the chain held at
+    its first grid equal the dense ones; the Lanczos basis was sized by the rows with mass
+    (60, of which 30 directions have mass) and the highest modes came out 3 % off, silently."""
+    K, M = chain_with_offset_masses(520, 52)
+    interior = np.arange(6, K.shape[0])
+    _, lam, _ = fixed_interface_modes("p", K, M, interior, 20, dense_limit=100)
+    _, ref, _ = fixed_interface_modes("p", K, M, interior, 20, dense_limit=5000)
+    assert np.abs(np.sqrt(lam) - np.sqrt(ref)).max() <= 1e-9 * np.sqrt(ref[-1])
+    with pytest.raises(ValueError, match="30 directions with mass"):
+        fixed_interface_modes("p", K, M, interior, 30, dense_limit=100)
+
+
+@pytest.mark.parametrize("dense_limit", [100, 5000])
+def test_modal_truncation_refuses_a_mass_without_mass_in_combinations(dense_limit):
+    """Modal truncation needs ``M`` definite: the dense branch refused an offset mass without
+    inertia (its Cholesky failed), the sparse one computed modes of it; both refuse now."""
+    K, M = chain_with_offset_masses(400, 1)
+    sub = Substructure(name="p", M=M, K=K, C=sp.csr_array(K.shape),
+                       dof_labels=tuple(f"q{i}" for i in range(K.shape[0])),
+                       locate=lambda point: None)
+    with pytest.raises(ValueError, match="1200 combination"):
+        undamped_modes(sub, 10, dense_limit=dense_limit)
