@@ -1,7 +1,7 @@
 r"""Automated multilevel substructuring (AMLS): all eigenpairs of :math:`K u = \lambda M u`
 below a wanted frequency, for many modes of large sparse models.
 
-1. Nested dissection of the graph of ``K`` into subdomains and separators
+1. Nested dissection of the graph of ``|K| + |M|`` into subdomains and separators
    (:func:`substruct.linalg.amls_tree.dissection_tree`, METIS bisections and minimum vertex
    covers of the cuts).
 2. Bottom-up reduction (:func:`substruct.linalg.amls_reduce.amls_reduce`): in every block the
@@ -281,8 +281,11 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
         tasks: where the blocks of the reduction and the subdomains' expansions run
             (:class:`~substruct.linalg.task_runner.TaskRunner`, e.g. a Dask session);
             default: in this process.  The results do not depend on it.
-        tree: the dissection of ``K`` (:func:`~substruct.linalg.amls_tree.dissection_tree`
-            with ``leaf_size``), if already made (another wanted frequency of the same model).
+        tree: the dissection of the graph of ``K`` and ``M``
+            (:func:`~substruct.linalg.amls_tree.dissection_tree` of ``|K| + |M|`` with
+            ``leaf_size``: a mass that couples coordinates the stiffness does not, a point mass
+            off its node, must be separated too), if already made (another wanted frequency
+            of the same model).
 
     A free body's rigid-body modes (:func:`~substruct.linalg.scaling.rigid_modes`: strain
     energy at round-off) come back at 0, their
@@ -301,7 +304,7 @@ def amls_modes(K: sp.sparray | sp.spmatrix, M: sp.sparray | sp.spmatrix, omega_m
     lam_c = (cutoff * omega_max) ** 2
     times: dict[str, float] = {}
     t = time.perf_counter()
-    root = dissection_tree(K, leaf_size) if tree is None else tree
+    root = dissection_tree(abs(K) + abs(M), leaf_size) if tree is None else tree
     n_blocks = len(root.postorder())
     times["tree"] = time.perf_counter() - t
     say(f"AMLS tree: {n_blocks} blocks, {max(b.level for b in root.postorder()) + 1} levels")

@@ -121,7 +121,8 @@ def _solve(K: sp.csr_array, M: sp.csr_array, count: int | None, opts: AmlsOption
         if say is not None:
             say("amls", f"modes: {text}", K.shape[0])
 
-    tree = dissection_tree(K, opts.leaf_size)     # one dissection for every pass
+    tree = dissection_tree(abs(K) + abs(M), opts.leaf_size)  # one for every pass; M's
+    # couplings separated too (a point mass off its node couples what K may not)
 
     ritz = min(opts.cutoff, RITZ_RATIO if opts.ritz_ratio is None else opts.ritz_ratio)
 
