@@ -7,6 +7,8 @@
   solutions and the pseudo-inverse of ``A M^-1 A^T``, decided on equilibrated rows;
 * :mod:`~substruct.linalg.nullspace`: bases of ``null(A)``, dense (SVD) and sparse
   (master-slave elimination);
+* :mod:`~substruct.linalg.massless`: the massless directions ``null(M) & null(A)``, dense,
+  and block by block in a sparse mass, made coordinates for the sparse eigensolvers;
 * :mod:`~substruct.linalg.factorize`: the one registry of sparse factorizations by name;
   :mod:`~substruct.linalg.backends` its backends (PARDISO, CHOLMOD, SuperLU after METIS,
   SuperLU) and the automatic choice with fallback.

@@ -1,7 +1,7 @@
 r"""Automated multilevel substructuring (AMLS): all eigenpairs of :math:`K u = \lambda M u`
 below a wanted frequency, for many modes of large sparse models.
 
-1. Nested dissection of the graph of ``K`` into subdomains and separators
+1. Nested dissection of the graph of ``|K| + |M|`` into subdomains and separators
    (:func:`substruct.linalg.amls_tree.dissection_tree`, METIS bisections and minimum vertex
    covers of the cuts).
 2. Bottom-up reduction (:func:`substruct.linalg.amls_reduce.amls_reduce`): in every block the

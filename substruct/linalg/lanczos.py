@@ -19,6 +19,12 @@ restarts; one that has not converged by then starts again with a basis
 :data:`BASIS_GROWTH` times larger (up to ``n``), which holds the whole cluster and converges
 in a few restarts.  A problem that converges within the limit is solved exactly as before.
 
+With massless coordinates (zero rows of ``M``; the sparse eigensolvers make every massless
+direction one, :func:`substruct.linalg.massless.massless_split`) the vectors are purified
+(:func:`purified`): one more application of the operator removes the part in
+:math:`\operatorname{null}(M)` that the iteration, orthogonalizing in the semi-inner product of
+a singular ``M``, cannot see.
+
 Rigid-body modes (a free model) are deflated (:func:`shift_invert_lanczos_deflated`): about a
 shift just below zero their eigenvalues of the operator, :math:`1/|\sigma|`, exceed the elastic
 ones by the ratio :math:`\omega_1^2 / |\sigma|` (7e8 for a free-free cylinder of 2,000
@@ -36,7 +42,8 @@ import scipy.sparse.linalg as spla
 
 from substruct.linalg.factorize import Solve
 
-__all__ = ["shift_invert_lanczos", "shift_invert_lanczos_deflated", "rayleigh_ritz", "FIRST_ATTEMPT_RESTARTS", "BASIS_GROWTH"]
+__all__ = ["shift_invert_lanczos", "shift_invert_lanczos_deflated", "rayleigh_ritz", "purified",
+           "FIRST_ATTEMPT_RESTARTS", "BASIS_GROWTH"]
 
 #: ARPACK restarts (``maxiter``) of an attempt before the basis is enlarged; the last attempt
 #: (a basis of ``n``) has ARPACK's own limit.  Measured: 10 coupled superelements with a cluster
@@ -75,14 +82,37 @@ def shift_invert_lanczos(K: sp.sparray, M: sp.sparray, k: int, sigma: float, sol
     while True:
         last = size >= n
         try:
-            return spla.eigsh(K, k=k, M=M, sigma=sigma, which="LM", OPinv=op, v0=v0,
-                              ncv=ncv if first else size,
-                              maxiter=None if last else FIRST_ATTEMPT_RESTARTS)
+            lam, V = spla.eigsh(K, k=k, M=M, sigma=sigma, which="LM", OPinv=op, v0=v0,
+                                ncv=ncv if first else size,
+                                maxiter=None if last else FIRST_ATTEMPT_RESTARTS)
+            if np.any(np.asarray(abs(sp.csr_array(M)).sum(axis=1)).ravel() == 0):
+                V = purified(M, lam, V, sigma, solve)  # a singular M: null(M) removed
+            return lam, V
         except spla.ArpackNoConvergence:
             if last:
                 raise
         first = False
         size = min(n, BASIS_GROWTH * size)
+
+
+def purified(M: sp.sparray, lam: np.ndarray, V: np.ndarray, sigma: float,
+             solve: Solve) -> np.ndarray:
+    r"""The Ritz vectors ``V`` of the shift-invert operator with their part in
+    :math:`\operatorname{null}(M)` removed: one more application of the operator,
+
+    .. math::  v \leftarrow (\lambda - \sigma)\, (K - \sigma M)^{-1} M v,
+
+    which leaves an eigenvector as it is.  With a singular ``M`` (massless coordinates, a point
+    mass off its node without rotary inertia) the Lanczos iteration orthogonalizes in the
+    semi-inner product of ``M``, blind to :math:`\operatorname{null}(M)`, and its vectors pick
+    up components there of any size (an energy :math:`u^T K u` of 1e31 against
+    :math:`\omega^2 = 5` was seen with a basis nearly as large as the space that has mass);
+    :math:`M` annihilates them (Ericsson and Ruhe's purification)."""
+    if not V.shape[1]:
+        return V
+    MV = M @ V
+    W = np.column_stack([np.asarray(solve(MV[:, j])).ravel() for j in range(V.shape[1])])
+    return W * (lam - sigma)[None, :]
 
 
 def shift_invert_lanczos_deflated(K: sp.sparray, M: sp.sparray, k: int, sigma: float,

@@ -35,6 +35,7 @@ import scipy.sparse as sp
 
 from substruct.linalg.factorize import Factorize, Solve, factorizer
 from substruct.linalg.lanczos import rayleigh_ritz, shift_invert_lanczos
+from substruct.linalg.massless import massless_split
 from substruct.linalg.scaling import rigid_modes
 from substruct.substructure import Substructure, as_csr
 
@@ -118,14 +119,24 @@ def fixed_interface_modes(name: str, K: sp.csr_array, M: sp.csr_array, interior:
             raise ValueError(f"{name}: K_ii cannot be factorized ({exc}): the boundary "
                              "coordinates and the supports do not hold the interior") from None
         if g:
-            # the operator K_ii^-1 M_ii spans only the coordinates with mass: so can the basis
-            massive = int(np.count_nonzero(np.asarray(abs(Mii).sum(axis=1)).ravel()))
+            # the operator K_ii^-1 M_ii spans only the directions with mass: so can the basis
+            # (a point mass off its node without inertia: a combination of coordinates without
+            # mass, made a coordinate, u = Q p, for the Lanczos run)
+            split = massless_split(Mii)
+            massive = ni - split.count
             if g >= massive:
                 raise ValueError(f"{name}: {g} fixed-interface modes asked of an interior "
-                                 f"with {massive} coordinates with mass")
+                                 f"with {massive} directions with mass")
             size = min(ncv or max(2 * g + 1, 20), massive)
             v0 = np.random.default_rng(0).standard_normal(ni)
-            _, vecs = shift_invert_lanczos(Kii, Mii, g, 0.0, solve, v0, size)
+            if split.rotated:
+                Q = split.Q
+                Kq = sp.csc_array(Q.T @ (Kii @ Q))
+                solve_q = factorizer(factorization, spd=True)((Kq + Kq.T) / 2)
+                _, vecs = shift_invert_lanczos(Kq, split.mass(Mii), g, 0.0, solve_q, v0, size)
+                vecs = Q @ vecs
+            else:
+                _, vecs = shift_invert_lanczos(Kii, Mii, g, 0.0, solve, v0, size)
             lam, Phi = rayleigh_ritz(Kii, Mii, vecs)
         else:
             lam, Phi = np.zeros(0), np.zeros((ni, 0))

@@ -25,6 +25,7 @@ import scipy.sparse as sp
 
 from substruct.linalg.factorize import Factorize, factorizer
 from substruct.linalg.lanczos import rayleigh_ritz, shift_invert_lanczos_deflated
+from substruct.linalg.massless import massless_count
 from substruct.substructure import Substructure, as_csr
 
 __all__ = ["modal_truncation", "undamped_modes"]
@@ -48,6 +49,11 @@ def _check_mass(sub: Substructure) -> None:
         labels = [sub.dof_labels[i] for i in np.nonzero(massless)[0][:5]]
         raise ValueError(f"{sub.name}: modal truncation needs M positive definite, but "
                          f"{int(massless.sum())} coordinate(s) are massless, e.g. {labels}")
+    hidden = massless_count(as_csr(sub.M))  # combinations of coordinates without mass
+    if hidden:
+        raise ValueError(f"{sub.name}: modal truncation needs M positive definite, but "
+                         f"{hidden} combination(s) of its coordinates carry no mass (e.g. a "
+                         f"point mass off its node without rotary inertia)")
 
 
 def _mass_normalized_sorted(lam: np.ndarray, Phi: np.ndarray, M: sp.csr_array

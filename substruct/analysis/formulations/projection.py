@@ -28,6 +28,7 @@ from substruct.analysis.errors import AnalysisInputError
 from substruct.linalg.constraints import independent_rows, pinv_sym
 from substruct.linalg.dense import dense
 from substruct.linalg.factorize import Solve, factorizer
+from substruct.linalg.massless import MASSLESS_TOL
 from substruct.linalg.scaling import (
     equilibrate,
     mass_column_scale,
@@ -102,8 +103,9 @@ SINGULAR_MASS = ("mass matrix is singular on coordinates that have mass (a combi
 #: masses made comparable, :func:`substruct.linalg.scaling.mass_column_scale`), over that
 #: diagonal, below which it is singular.  Measured on the worked cases: 4.5e-4 (shells,
 #: quadratic solids) to 1 (lumped); a direction without mass is at round-off (-4e-16 for a
-#: pinned CBAR end in skew axes with coupled mass).
-SINGULAR_MASS_TOL = 1e-10
+#: pinned CBAR end in skew axes with coupled mass).  The one threshold of the massless
+#: directions the eigensolvers count (:data:`substruct.linalg.massless.MASSLESS_TOL`).
+SINGULAR_MASS_TOL = MASSLESS_TOL
 
 
 def nearly_singular(Md: sp.sparray, factor: Solve, steps: int = 3) -> bool:

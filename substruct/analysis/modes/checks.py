@@ -83,6 +83,7 @@ from typing import Any
 import numpy as np
 import scipy.sparse as sp
 
+from substruct.linalg.definite import SingularPencil, definite_factorization
 from substruct.linalg.factorize import factorizer
 from substruct.linalg.scaling import definite_mass
 
@@ -246,7 +247,12 @@ def generalized_inverse_residual(K: sp.csr_array, M: sp.csr_array, Ak: sp.csr_ar
     r"""The largest relative residual of the generalized-inverse acceleration (eqs 5, 10)
     :math:`\lambda^2 u = P a` over the modes (roots ``eigenvalues``, complex; shapes the
     columns of ``U``), in the :math:`M_d`-norm (module docstring).  ``Ak``: independent rows;
-    ``S^+`` is the pseudo-inverse of eq 5; ``C`` ``None`` for an undamped model."""
+    ``S^+`` is the pseudo-inverse of eq 5; ``C`` ``None`` for an undamped model.
+
+    Raises:
+        SingularPencil: ``M_d`` is singular (a combination of coordinates that have mass
+            carries none, e.g. a point mass off its node without rotary inertia): eqs 5 and 10
+            do not exist for the model, and the check cannot be made."""
     if U.shape[1] == 0:
         return 0.0
     lam, U = _roots_and_shapes(eigenvalues, U, C)
@@ -265,7 +271,7 @@ def generalized_inverse_residual(K: sp.csr_array, M: sp.csr_array, Ak: sp.csr_ar
         S = _jacobi(Ak @ Y) if m else None  # S = A M_d^-1 A^T, once for both projections
         correction = Y @ S.solve(Ak @ a) if S is not None else 0.0
     else:
-        solve = factorizer("auto", spd=True)(sp.csc_array(Md))
+        solve = definite_factorization(factorizer("auto", spd=True), sp.csc_array(Md))
         a = _solve_real(solve, rhs)
         if m:
             Yd = np.asarray(solve(Ak.T.toarray()))

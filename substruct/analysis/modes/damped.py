@@ -27,6 +27,7 @@ from substruct.analysis.modes.krylov import (
     check_inputs,
     constraint_residuals,
     eliminate,
+    free_coordinates,
     krylov_size,
 )
 from substruct.analysis.modes.pencil import rayleigh_root
@@ -34,7 +35,6 @@ from substruct.analysis.results import Modes
 from substruct.analysis.modes.roots import REAL_TOL
 from substruct.linalg.factorize import factorizer
 from substruct.linalg.nullspace import Elimination
-from substruct.linalg.scaling import massless_coordinates
 from substruct.vocabulary import KKT, NULL_SPACE
 
 __all__ = ["damped_sparse_modes", "DAMPED_SHIFT", "ZERO_ROOT"]
@@ -254,8 +254,8 @@ def damped_sparse_modes(M: sp.sparray, C: sp.sparray | None, K: sp.sparray,
     Ms, Cs, Ks = delta * gamma**2 * M, delta * gamma * C, delta * K
     s = DAMPED_SHIFT if sigma is None else float(sigma)
     el = elimination or eliminate(M, A)
-    # the roots the first-order pencil has: two per free coordinate that has mass
-    finite = 2 * (el.T.shape[1] - int(np.count_nonzero(massless_coordinates(M)[el.masters])))
+    # the roots the first-order pencil has: two per free direction that has mass
+    finite = 2 * free_coordinates(el, M)
     if formulation == NULL_SPACE:
         T = sp.csc_array(el.T)
         r = T.shape[1]

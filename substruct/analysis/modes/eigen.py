@@ -58,7 +58,6 @@ from substruct.analysis.system import ConstrainedSystem, ModesOptions
 from substruct.linalg.system import Matrix
 from substruct.analysis.modes.sparse import has_damping, sparse_coupled_modes
 from substruct.linalg.nullspace import Elimination
-from substruct.linalg.scaling import massless_coordinates
 from substruct.vocabulary import GENERALIZED_INVERSE, NULL_SPACE, SOLVERS
 
 __all__ = ["SOLVERS", "SPARSE_ABOVE", "SolverChoice", "choose_solver", "modes", "system_modes"]
@@ -122,7 +121,7 @@ def choose_solver(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
         return SolverChoice("sparse-damped")
     Ms, _, As, k = check_inputs(M, M, A, count)
     el = eliminate(Ms, As)
-    free = free_coordinates(el, massless_coordinates(Ms))
+    free = free_coordinates(el, Ms)
     try:
         krylov_size(k, free)
     except AnalysisInputError:

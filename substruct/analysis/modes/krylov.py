@@ -6,11 +6,13 @@ work on the coordinates the constraints leave free.  Their Krylov basis must fit
 ARPACK fails ("error -9999") when asked for a basis larger than the invariant subspace the
 operator spans, which is
 
-.. math::  n_{free} = n - \operatorname{rank}(A) - \#\{\text{massless masters}\}
+.. math::  n_{free} = n - \operatorname{rank}(A) - \dim(\operatorname{null}(M) \cap
+           \operatorname{null}(A))
 
-for the undamped pencils (the massless coordinates that no constraint eliminates carry infinite
-roots, outside the reach of the shift-invert operator) and twice that for the first-order
-pencils of damped models.  :func:`krylov_size` caps the basis by it.
+for the undamped pencils (the massless directions that the constraints leave free carry
+infinite roots, outside the reach of the shift-invert operator: a massless coordinate, or a
+combination of coordinates without mass such as the rotations of a node carrying a point mass
+off it without rotary inertia) and twice that for the first-order pencils of damped models.  :func:`krylov_size` caps the basis by it.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from substruct.analysis.errors import AnalysisInputError
+from substruct.linalg.massless import massless_count
 from substruct.linalg.nullspace import Elimination, master_slave
 from substruct.linalg.scaling import (
     equilibrate,
@@ -85,10 +88,12 @@ def eliminate(M: sp.sparray, A: sp.sparray) -> Elimination:
     return master_slave(A, prefer=massless_coordinates(M), col_scale=mass_column_scale(M))
 
 
-def free_coordinates(el: Elimination, massless: np.ndarray) -> int:
-    r""":math:`n - \operatorname{rank}(A)` less the massless coordinates left as masters: the
-    dimension of the space the shift-invert operator of the undamped pencil spans."""
-    return int(el.T.shape[1] - np.count_nonzero(np.asarray(massless)[el.masters]))
+def free_coordinates(el: Elimination, M: sp.sparray) -> int:
+    r""":math:`n - \operatorname{rank}(A)` less the massless directions of the reduced mass
+    :math:`T^T M T` (:func:`substruct.linalg.massless.massless_count`): the dimension of the
+    space the shift-invert operator of the undamped pencil spans."""
+    T = sp.csc_array(el.T)
+    return int(T.shape[1] - massless_count(sp.csr_array(T.T @ (sp.csr_array(M) @ T))))
 
 
 #: A null-space pencil (``n - rank(A)`` coordinates) too small for a Krylov basis around the

@@ -41,6 +41,7 @@ from substruct.analysis.results import Modes
 from substruct.analysis.modes.damped import damped_sparse_modes
 from substruct.analysis.modes.sparse import null_space_modes
 from substruct.linalg.backends import BACKENDS, auto_backend
+from substruct.linalg.definite import SingularPencil
 from substruct.linalg.memory import factor_memory
 from substruct.linalg.nullspace import Elimination
 from substruct.vocabulary import NULL_SPACE
@@ -101,11 +102,12 @@ def production_modes(M: sp.sparray, K: sp.sparray, A: sp.sparray | None, count: 
     agreement = {KKT_CHECK: kkt_residual(Ks, Ms, Ak, roots, U, Cs)}
     note = ""
     if generalized_inverse_affordable(Ms, Ak.shape[0]):
-        try:   # it needs M positive definite off its zero rows; the main solve does not
+        try:
             agreement[GI_CHECK] = generalized_inverse_residual(Ks, Ms, Ak, roots, U, Cs)
-        except (RuntimeError, np.linalg.LinAlgError):   # M_d exactly singular
+        except (SingularPencil, RuntimeError, np.linalg.LinAlgError):   # M_d singular
             note = ("generalized-inverse check skipped: the mass is singular on coordinates "
-                    "that have mass (a combination of them carries none)")
+                    "that have mass (a combination of them carries none), where eqs 5 and 10 "
+                    "do not exist")
     else:
         note = (f"generalized-inverse check skipped: {Ak.shape[0]} constraint rows on a "
                 f"consistent mass of {Ks.shape[0]} coordinates")

@@ -24,7 +24,7 @@ from substruct.analysis.errors import AnalysisInputError
 from substruct.analysis.modes.pencil import Refine
 from substruct.analysis.results import Modes
 from substruct.linalg.constraints import independent_rows
-from substruct.linalg.nullspace import null_space_basis
+from substruct.linalg.massless import massless_directions
 from substruct.linalg.scaling import RIGID_ENERGY_TOL, mass_column_scale, rigid_eigenvalue
 from substruct.vocabulary import GENERALIZED_INVERSE
 
@@ -68,8 +68,8 @@ DAMPING_RANK_TOL = 1e-10
 SPURIOUS_ZERO = ("zero root of the projected operator M*K: its vector violates A u = 0 "
                  "(artifact of eqs 30/34, one pair per independent constraint)")
 #: Reason given for an infinite root.
-INFINITE_ROOT = ("infinite root: a massless coordinate or a Lagrange multiplier with no mass "
-                 "attached")
+INFINITE_ROOT = ("infinite root: a massless coordinate or direction (a combination of "
+                 "coordinates with no mass) or a Lagrange multiplier with no mass attached")
 
 
 def root_scale(M: np.ndarray, C: np.ndarray, K: np.ndarray) -> float:
@@ -201,14 +201,7 @@ def root_structure(M: np.ndarray, C: np.ndarray, K: np.ndarray,
         rates = np.abs(np.linalg.eigvalsh((Cr + Cr.T) / 2))
         n_undamped = int(np.sum(rates <= RIGID_DAMPING_TOL * root_scale(M, C, K)))
         n_zero = rigid.shape[1] + n_undamped
-    massless = np.flatnonzero(np.abs(M).sum(axis=1) == 0)
-    if massless.size:
-        As = A[:, massless] if A.size else np.zeros((0, massless.size))
-        S = null_space_basis(As) if As.size and np.any(As) else np.eye(massless.size)
-        S0 = np.zeros((n, S.shape[1]))
-        S0[massless] = S
-    else:
-        S0 = np.zeros((n, 0))
+    S0 = massless_directions(M, A)
     n_first = 0
     if S0.shape[1] and np.any(C):
         C0 = S0.T @ C @ S0

@@ -45,6 +45,7 @@ basis is capped by the coordinates the constraints leave free
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import numpy as np
@@ -67,6 +68,7 @@ from substruct.analysis.modes.damped import damped_sparse_modes
 from substruct.linalg.definite import SingularPencil, definite_factorization
 from substruct.linalg.factorize import Factorize, Solve, factorizer
 from substruct.linalg.lanczos import shift_invert_lanczos_deflated
+from substruct.linalg.massless import massless_split
 from substruct.linalg.nullspace import Elimination
 from substruct.linalg.scaling import massless_coordinates, rigid_modes
 from substruct.vocabulary import FORMULATIONS, GENERALIZED_INVERSE, KKT, NULL_SPACE
@@ -141,11 +143,15 @@ def null_space_modes(M: sp.sparray, K: sp.sparray, A: sp.sparray | None, n_modes
     M, K, A, k = check_inputs(M, K, A, n_modes)
     el = elimination or eliminate(M, A)
     T = sp.csc_array(el.T)
-    Kt = sp.csc_array(T.T @ (K @ T))
     Mt = sp.csc_array(T.T @ (M @ T))
+    split = massless_split(Mt)
+    if split.rotated:  # massless combinations of coordinates made coordinates: u = T Q p
+        Mt = sp.csc_array(split.mass(Mt))
+        T = sp.csc_array(T @ split.Q)
+    Kt = sp.csc_array(T.T @ (K @ T))
     Kt, Mt = (Kt + Kt.T) / 2, (Mt + Mt.T) / 2
     try:
-        size = krylov_size(k, free_coordinates(el, massless_coordinates(M)), ncv)
+        size = krylov_size(k, Kt.shape[0] - split.count, ncv)
     except AnalysisInputError:
         if Kt.shape[0] > DENSE_FREE:
             raise
@@ -226,10 +232,18 @@ def generalized_inverse_modes(M: sp.sparray, K: sp.sparray, A: sp.sparray | None
             mass nor stiffness, which would enter every mode shape unseen.
     """
     M, K, A, k = check_inputs(M, K, A, n_modes)
+    split = massless_split(M)
+    if split.rotated:  # massless combinations of coordinates made coordinates: u = Q p
+        Q = split.Q
+        rot = generalized_inverse_modes(split.mass(M), sp.csr_array(Q.T @ (K @ Q)),
+                                        sp.csr_array(A @ Q), k, sigma=sigma, project=project,
+                                        ncv=ncv)
+        U = Q @ rot.shapes
+        return dataclasses.replace(rot, shapes=U, residual=constraint_residuals(A, U))
     n = K.shape[0]
     massless = massless_coordinates(M)
     el = elimination or eliminate(M, A)
-    size = krylov_size(k, free_coordinates(el, massless), ncv)
+    size = krylov_size(k, free_coordinates(el, M), ncv)
     Ak = sp.csr_array(A[el.kept_rows])  # rows of unit 2-norm (check_inputs)
     kscale = float(np.mean(abs(K.diagonal()))) or 1.0
     s = default_shift(K, M) if sigma is None else float(sigma)
