@@ -217,6 +217,9 @@ class TransientAnalysis(StrictModel):
                              f"allowed: take a longer dt, a shorter t_end or fewer loads",
                              len(self.loads))
         forms = {self.method, *self.check}
+        if self.modal_count is not None and "modal" not in forms:
+            raise FieldError("modal_count", "the modes of the modal form: give method: modal or "
+                             "check: [modal]", self.modal_count)
         if self.modal is not None and "modal" not in forms:
             raise FieldError("modal", "the modal block is for the modal form: give method: "
                              "modal or check: [modal]", "{...}")
