@@ -20,6 +20,7 @@ from substruct.case.loader import Case
 from substruct.case.study import StudySpec
 from substruct.run.runner import build_model, run_case
 from substruct.studies.study_backend import Backend, Session, Tick
+from substruct.studies.study_inputs import check_study_parameters
 from substruct.studies.study_plan import overrides_of, samples
 from substruct.studies.study_shared import shared_parts
 from substruct.studies.study_tracking import TrackedStudy, track_study
@@ -86,10 +87,12 @@ def study_of(case: Case) -> StudySpec:
     """The case's ``study:`` block.
 
     Raises:
-        CaseError: the case has none.
+        CaseError: the case has none, or its parameters are set by --set too or reach
+            nothing (:func:`substruct.studies.study_inputs.check_study_parameters`).
     """
     if case.study is None:
         raise case.error(("study",), "the case has no study: block (see docs/studies.md)")
+    check_study_parameters(case, case.study.parameter_names())
     return case.study
 
 
