@@ -87,6 +87,9 @@ def coupled_basis(phys: Physical, count: int | None, solver: str, *,
     Phi = U @ rot
     scale = max(float(np.abs(w2).max(initial=0.0)), 1e-300)
     w2 = np.where(w2 < RIGID_ROOT_FRACTION ** 2 * scale, 0.0, w2)
+    # the eigen solver's rigid-body modes (omega 0, judged on the whole pencil) stay rigid
+    # when they are all that is kept (the scale of the kept modes is then their rounding)
+    w2[:int(np.sum(np.asarray(md.omega) == 0.0))] = 0.0  # eigh: ascending
     return Phi, np.sqrt(w2), label
 
 
