@@ -217,6 +217,11 @@ class TransientAnalysis(StrictModel):
                              f"allowed: take a longer dt, a shorter t_end or fewer loads",
                              len(self.loads))
         forms = {self.method, *self.check}
+        if self.method == "modal" and self.constraint_forces and \
+                "constraint_forces" in self.model_fields_set:
+            raise FieldError("constraint_forces", "the modal form records no constraint forces "
+                             "(its modes hold the constraints): give method: "
+                             "generalized-inverse or null-space, with check: [modal]", True)
         if self.modal_count is not None and "modal" not in forms:
             raise FieldError("modal_count", "the modes of the modal form: give method: modal or "
                              "check: [modal]", self.modal_count)
