@@ -139,6 +139,12 @@ def _loads(case: Case, t: np.ndarray, steps: int
             columns.append(step_pairs(wave.values, wave.breaks, spec.dt, steps))
         except ExpressionError as err:
             raise case.error(loc, " ".join(str(err).split()), shown) from None
+        if load.amplitude != 0 and not np.any(f[:, j]) and \
+                not any(np.any(pair) for pair in columns[-1].values()):
+            where = ("analysis", "transient", "loads", j,
+                     "start" if hasattr(load, "start") else field)
+            raise case.error(where, f"the load is 0 over the whole run (t = 0 to {t[-1]:g}): "
+                             f"it never acts", getattr(load, where[-1], shown))
     return f, merge_pairs(columns, f)
 
 
