@@ -234,3 +234,26 @@ def test_initial_acceleration_by_sparse_kkt_when_the_dense_gain_is_refused(monke
                                atol=1e-12 * np.abs(ref.acceleration).max())
     # at rest with g''(0) = 1: the ground accelerates, the mass (its spring relaxed) does not
     np.testing.assert_allclose(low.acceleration[0], [1.0, 0.0], atol=1e-14)
+
+
+def test_initial_state_with_a_moving_ground_is_relative_to_it(tmp_path, capsys):
+    """The ground at g(0) = 0.01: a point's initial displacement is measured from the
+    pseudo-static position (the mass starts at 0.01 + 0.02); the absolute state (which the
+    constraint check then sees shifted by r g(0)) is refused with that said."""
+    from cli_helpers import assert_one_line_error
+    base = "{at: [o@boundary], displacement: {shape: harmonic, amplitude: 0.01, omega: 13}}"
+    text = _case(tmp_path, base).read_text().replace(
+        "    check: [null-space, modal]\n",
+        "    check: [null-space, modal]\n    initial: {displacement: {o@mass: 0.02}}\n")
+    case = tmp_path / "initial.yaml"
+    case.write_text(text)
+    code, _, err = run(capsys, "run", case, "--out", tmp_path / "out")
+    assert code == 0, err
+    tr = results.load(tmp_path / "out" / "sdof_base.h5").transient
+    np.testing.assert_allclose(tr.displacement[0], [0.03, 0.01], rtol=1e-14)
+    np.testing.assert_allclose(tr.relative("displacement")[0], [0.02, 0.0], atol=1e-15)
+    case.write_text(text.replace("{o@mass: 0.02}", "{o@mass: 0.02, o@boundary: 0.01}"))
+    code, out, err = run(capsys, "run", case, "--out", tmp_path / "out2")
+    assert_one_line_error(code, out, err, "the initial displacement violates the constraints",
+                          "with a moving ground the initial state is measured from the "
+                          "pseudo-static position r g(0)")

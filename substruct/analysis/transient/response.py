@@ -346,7 +346,14 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
         d0, v0 = d0 + motion.r * g[0, 0], v0 + motion.r * g[0, 1]
     bt = be if motion is None else be + motion.e * motion.g[0, 0]
     vt = 0.0 * be if motion is None else motion.e * motion.g[0, 1]
-    check_initial(Ae, d0, v0, bt, vt)
+    try:
+        check_initial(Ae, d0, v0, bt, vt)
+    except InitialStateError as err:
+        if motion is None:
+            raise
+        raise InitialStateError(f"{err}; with a moving ground the initial state is measured "
+                                f"from the pseudo-static position r g(0), r g'(0) (give it "
+                                f"relative to the ground)") from None
     qp = particular_solution(Ae, be) if np.any(be) else None
     qp = None if qp is None else np.asarray(qp).ravel()
     def force0(d: np.ndarray) -> np.ndarray:
