@@ -302,3 +302,17 @@ def test_second_writer_into_one_out_is_refused(tmp_path, capsys):
     assert run(capsys, *args)[0] == 0
     assert sorted(p.name for p in tmp_path.iterdir()) == ["tapered_rod_convergence.h5",
                                                          "tapered_rod_convergence.png"]
+
+
+def test_a_limit_of_one_level_is_not_called_richardson(tmp_path, capsys):
+    """One P2 level has no Richardson estimate: the errors are against that level, and the
+    table says so (it said 'errors against Richardson' over a row of '-')."""
+    code, out, err = run(capsys, "converge", ROD, "--levels", "assumed=4,8; enriched=; p1=8; "
+                         "p2=3; g=none", "--variants", "bare", "--out", tmp_path)
+    assert code == 0, err
+    assert ("limit: fe-p2 n_el=3; errors against the finest level (no Richardson estimate: "
+            "the limit series has one level)") in out
+    code, out, err = run(capsys, "converge", ROD, "--levels", "assumed=4,8; enriched=; p1=8; "
+                         "p2=3,6; g=none", "--variants", "bare", "--out", tmp_path, "--force")
+    assert code == 0, err
+    assert "limit: fe-p2 n_el=6 (Richardson with n_el=3, order 4); errors against Richardson" in out

@@ -254,9 +254,9 @@ def test_study_refuses_a_set_of_a_varied_parameter(key, tmp_path, capsys):
     code = cli.main(["study", str(case_file), "--out", str(out), "--set", f"{key}=100"])
     err = capsys.readouterr().err
     assert code == 2
-    assert err == (f"substruct: error: {case_file}: parameters.k1: varied by the study, so "
-                   f"every sample replaces the value given (set on the command line): set the "
-                   f"study's values of k1 instead, got '100'\n")
+    assert err == (f"substruct: error: {case_file}: parameters.k1: the study varies this "
+                   f"parameter: its values replace the one of --set in every sample (leave it "
+                   f"out of --set), got '100'\n")
     assert not out.exists() or not any(out.iterdir())
 
 

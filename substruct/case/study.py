@@ -87,6 +87,12 @@ class GridAxis(StrictModel):
                     raise FieldError(key, "a range needs start, stop and num")
             if self.spacing == "log" and (self.start or 0) <= 0:
                 raise FieldError("start", "a log range starts above 0", self.start)
+            if self.spacing == "log" and (self.stop or 0) <= 0:
+                raise FieldError("stop", "a log range ends above 0", self.stop)
+            if self.num == 1 and self.start != self.stop:
+                raise FieldError("num", f"a range of one value is start ({self.start:g}) alone "
+                                 f"and would leave stop ({self.stop:g}) out: give values: "
+                                 f"[{self.start:g}] or num >= 2", self.num)
             if (self.num or 0) > MAX_SAMPLES:
                 raise FieldError("num", f"at most {MAX_SAMPLES:,} values", self.num)
         elif len(self.values) > MAX_SAMPLES:

@@ -219,6 +219,11 @@ class TransientAnalysis(StrictModel):
                              len(self.loads))
         refuse_idle_checks(self.method, self.check)
         forms = {self.method, *self.check}
+        if self.method == "modal" and self.constraint_forces and \
+                "constraint_forces" in self.model_fields_set:
+            raise FieldError("constraint_forces", "the modal form records no constraint forces "
+                             "(its modes hold the constraints): give method: "
+                             "generalized-inverse or null-space, with check: [modal]", True)
         if self.modal is not None and "modal" not in forms:
             raise FieldError("modal", "the modal block is for the modal form: give method: "
                              "modal or check: [modal]", "{...}")

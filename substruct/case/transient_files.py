@@ -6,7 +6,9 @@ An NPZ member is read only after its header: a 1-D array of real numbers, of a l
 caller accepts (at most :data:`MAX_TABLE_ROWS` rows of a table, exactly ``n`` entries of a
 state vector), whose data the archive's member really holds.  A header that declares 6 GB, a
 member that decompresses past what it declares (a zip bomb) or a 2-D array is refused before
-anything is allocated.  Files must be regular files (not FIFOs or devices).
+anything is allocated.  Files must be regular files (not FIFOs or devices).  A member of
+another name is refused (:func:`npz_only`): a misspelt ``velocty`` would otherwise leave the
+velocity at zero without a word.
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ import numpy as np
 
 from substruct.case.npz_files import npz_members, read_npz
 
-__all__ = ["MAX_TABLE_ROWS", "npz_vector", "read_table"]
+__all__ = ["MAX_TABLE_ROWS", "npz_only", "npz_vector", "read_table"]
 
 #: The most rows a load table may have.
 MAX_TABLE_ROWS = 1_000_000
@@ -33,6 +35,19 @@ def _regular(path: Path, what: str) -> None:
         raise ValueError(f"no such {what} file {path.name!r}") from None
     if not stat.S_ISREG(mode):
         raise ValueError(f"{path.name!r} is not a regular file")
+
+
+def npz_only(path: Path, keys: tuple[str, ...]) -> None:
+    """Refuse an ``.npz`` archive with a member other than ``keys`` (from its directory only).
+
+    Raises:
+        ValueError: not a readable archive, or a member that is not read, named.
+    """
+    _regular(path, "NPZ")
+    other = sorted(set(npz_members(path)) - set(keys))
+    if other:
+        raise ValueError(f"{path.name}: member {other[0][:80]!r} is not read (the members are "
+                         f"{' and '.join(keys)})")
 
 
 def npz_vector(path: Path, key: str, max_len: int, exact: int | None = None
@@ -72,6 +87,7 @@ def read_table(path: Path) -> tuple[np.ndarray, np.ndarray]:
     """
     _regular(path, "table")
     if path.suffix == ".npz":
+        npz_only(path, ("t", "value"))
         t_arr = npz_vector(path, "t", MAX_TABLE_ROWS)
         v_arr = npz_vector(path, "value", MAX_TABLE_ROWS)
         if t_arr is None or v_arr is None:

@@ -60,7 +60,10 @@ def print_table(result: ConvergenceResult, tol: float = 1e-6, file: Any = None) 
     modes = "".join(f"{'mode ' + str(j + 1):>{W}}" for j in range(k))
     lines = [f"Convergence study: {result.name}   ({k} modes, total {result.seconds:.1f} s)"]
     for v in result.variants.values():
-        ref = "Richardson" if result.attrs.get("reference") == "richardson" else "finest"
+        ref = ("Richardson" if result.attrs.get("reference") == "richardson"
+               and np.all(np.isfinite(v.limit_richardson)) else "the finest level")
+        if result.attrs.get("reference") == "richardson" and ref != "Richardson":
+            ref += " (no Richardson estimate: the limit series has one level)"
         lines += ["", f"== {v.label} ==  ({v.seconds:.1f} s)",
                   f"limit: {v.limit_source}; errors against {ref}",
                   f"{'':{P}}{modes}",

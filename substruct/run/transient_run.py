@@ -42,7 +42,7 @@ from substruct.case.loader import Case
 from substruct.analysis.transient.loads import merge_pairs, step_pairs
 from substruct.case.modal_spec import TransientModal
 from substruct.case.transient import load_values
-from substruct.case.transient_files import npz_vector
+from substruct.case.transient_files import npz_only, npz_vector
 from substruct.case.transient_signals import waveform
 from substruct.linalg.task_runner import TaskRunner
 from substruct.run.modal_options import amls_options
@@ -139,6 +139,12 @@ def _loads(case: Case, t: np.ndarray, steps: int
             columns.append(step_pairs(wave.values, wave.breaks, spec.dt, steps))
         except ExpressionError as err:
             raise case.error(loc, " ".join(str(err).split()), shown) from None
+        if load.amplitude != 0 and not np.any(f[:, j]) and \
+                not any(np.any(pair) for pair in columns[-1].values()):
+            where = ("analysis", "transient", "loads", j,
+                     "start" if hasattr(load, "start") else field)
+            raise case.error(where, f"the load is 0 over the whole run (t = 0 to {t[-1]:g}): "
+                             f"it never acts", getattr(load, where[-1], shown))
     return f, merge_pairs(columns, f)
 
 
@@ -173,6 +179,10 @@ def _from_file(case: Case, n: int) -> tuple[np.ndarray | None, np.ndarray | None
     if path.suffix.lower() != ".npz":
         raise case.error(loc, "an initial state file is an .npz file with arrays "
                          "displacement and/or velocity", name)
+    try:
+        npz_only(path, ("displacement", "velocity"))
+    except ValueError as err:
+        raise case.error(loc, " ".join(str(err).split()), name) from None
     try:
         d = npz_vector(path, "displacement", n, exact=n)
         v = npz_vector(path, "velocity", n, exact=n)

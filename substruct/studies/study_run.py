@@ -21,6 +21,7 @@ from substruct.case.loader import Case
 from substruct.case.study import StudySpec
 from substruct.run.runner import build_model, run_case
 from substruct.studies.study_backend import Backend, Session, Tick
+from substruct.studies.study_inputs import check_study_parameters
 from substruct.studies.study_plan import overrides_of, samples
 from substruct.studies.study_shared import shared_parts
 from substruct.studies.study_tracking import TrackedStudy, track_study
@@ -92,19 +93,14 @@ def study_of(case: Case) -> StudySpec:
     """The case's ``study:`` block.
 
     Raises:
-        CaseError: the case has none; a ``--set`` of a parameter the study varies; an
-            analysis no ``collect`` entry reads (:data:`UNCOLLECTED`).
+        CaseError: the case has none; a ``--set`` of a parameter the study varies, or a
+            varied parameter that reaches nothing
+            (:func:`substruct.studies.study_inputs.check_study_parameters`); an analysis no
+            ``collect`` entry reads (:data:`UNCOLLECTED`).
     """
     if case.study is None:
         raise case.error(("study",), "the case has no study: block (see docs/studies.md)")
-    varied = case.study.parameter_names()
-    for text in case.overrides:  # a --set of a varied parameter: every sample replaces it
-        key, _, value = text.partition("=")
-        parts = [p for p in re.split(r"[.\[\]]", key.strip()) if p]
-        if len(parts) == 2 and parts[0] == "parameters" and parts[1] in varied:
-            raise case.error(("parameters", parts[1]), f"varied by the study, so every sample "
-                             f"replaces the value given (set on the command line): set the "
-                             f"study's values of {parts[1]} instead", value.strip())
+    check_study_parameters(case, case.study.parameter_names())
     for key in UNCOLLECTED:
         if getattr(case.analysis, key, None) is not None:
             raise case.error(("analysis", key), "a study collects nothing of it (collect "

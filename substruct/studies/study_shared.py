@@ -25,19 +25,19 @@ from substruct.case.fields import parse_point
 from substruct.case.loader import Case
 from substruct.case.yaml_io import load_yaml
 
-__all__ = ["varied_parameters", "shared_parts"]
+__all__ = ["identifiers", "varied_parameters", "shared_parts"]
 
 _NAME = re.compile(r"[A-Za-z_][A-Za-z_0-9]*")
 
 
-def _names(value: Any) -> set[str]:
+def identifiers(value: Any) -> set[str]:
     """Every identifier of every string in ``value`` (nested lists and mappings)."""
     if isinstance(value, str):
         return set(_NAME.findall(value))
     if isinstance(value, dict):
-        return set().union(*(_names(v) for v in value.values())) if value else set()
+        return set().union(*(identifiers(v) for v in value.values())) if value else set()
     if isinstance(value, (list, tuple)):
-        return set().union(*(_names(v) for v in value)) if value else set()
+        return set().union(*(identifiers(v) for v in value)) if value else set()
     return set()
 
 
@@ -48,7 +48,7 @@ def varied_parameters(raw: dict, study: Iterable[str]) -> set[str]:
     params = raw.get("parameters") or {}
     if isinstance(params, dict):
         for name, value in params.items():
-            if _names(value) & varied:
+            if identifiers(value) & varied:
                 varied.add(str(name))
     return varied
 
@@ -69,6 +69,6 @@ def shared_parts(case: Case, study: Iterable[str]) -> list[str]:
         made_of: list[Any] = [raw.get("interfaces") or []] if name in tied else []
         for part in parts:
             made_of += [entries.get(part, {}), points.get(part, [])]
-        if not _names(made_of) & varied:
+        if not identifiers(made_of) & varied:
             out.append(name)
     return out

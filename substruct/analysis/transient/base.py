@@ -30,6 +30,16 @@ influence vector: the static displacement of a unit ground motion,
 :math:`q = r g + w` with :math:`A w = b` and
 :math:`M \ddot w + C \dot w + K w = P - M r \ddot g - C r \dot g + Q^c`: the relative-motion
 form with the effective load :math:`-M r \ddot g`, which the null-space and modal forms integrate.
+
+That load is a load like any other, which generalized-alpha takes at the shifted instant
+:math:`t_{k+1-\alpha_f}`, while the generalized-inverse step puts the ground's acceleration
+variable at :math:`t_{k+1-\alpha_m}`.  The two forms integrate the same motion only if the load's
+values :math:`p_k` satisfy :math:`(1 - \alpha_f) p_{k+1} + \alpha_f p_k = (1 - \alpha_m) \ddot
+g_{k+1} + \alpha_m \ddot g_k`, :math:`p_0 = \ddot g_0` (:func:`load_acceleration`): the physical
+acceleration :math:`\ddot g(t_k)` (the accelerogram itself, or the displacement's second
+derivative to second order), not the scheme's variable, which generalized-alpha puts
+:math:`O(h)` away from it (with :math:`\ddot g_k` as the load the relative forms are first
+order).  For Newmark :math:`p_k = \ddot g_k`.
 """
 
 from __future__ import annotations
@@ -45,7 +55,7 @@ from substruct.analysis.transient.integrators import Scheme
 from substruct.linalg.constraints import independent_rows
 from substruct.linalg.factorize import factorizer
 
-__all__ = ["BaseMotion", "Motion", "ground_history", "influence"]
+__all__ = ["BaseMotion", "Motion", "ground_history", "influence", "load_acceleration"]
 
 
 @dataclass(frozen=True)
@@ -76,11 +86,21 @@ class Motion:
         e: ``m``, the equilibrated rows' coefficients of :math:`g`.
         g: ``(n_steps + 1) x 3``: :math:`g, \dot g, \ddot g` at every step.
         r: ``n``, the influence vector (module docstring).
+        load: ``(n_steps + 1) x 3``: :math:`p_k, g_k, \dot g_k`, the ground's factors of the
+            effective loads :math:`-M r \ddot g`, :math:`-K r g`, :math:`-C r \dot g` of the
+            relative-motion form (:func:`load_acceleration`); ``g`` when not given.
     """
 
     e: np.ndarray
     g: np.ndarray
     r: np.ndarray
+    load: np.ndarray | None = None
+
+    def load_columns(self, count: int) -> np.ndarray:
+        r"""``(n_steps + 1) x count``: the first ``count`` of :math:`p, g, \dot g`, the factors
+        of the effective loads :math:`-M r \ddot g, -K r g, -C r \dot g`."""
+        cols = self.g[:, [2, 0, 1]] if self.load is None else self.load
+        return np.asarray(cols[:, :count])
 
 
 def ground_history(kind: str, values: np.ndarray, s: Scheme, h: float, rate0: float = 0.0,
@@ -111,6 +131,32 @@ def ground_history(kind: str, values: np.ndarray, s: Scheme, h: float, rate0: fl
         out[k + 1, 1] = gv + c2 * ga + s.gamma * h * a
         out[k + 1, 2] = a
     return out
+
+
+def load_acceleration(g: np.ndarray, s: Scheme) -> np.ndarray:
+    r"""``(n_steps + 1) x 3``: :math:`p_k, g_k, \dot g_k`, the ground history ``g``
+    (:func:`ground_history`) as the factors of the relative-motion form's effective loads, with
+    :math:`(1 - \alpha_f) p_{k+1} + \alpha_f p_k = (1 - \alpha_m) \ddot g_{k+1} + \alpha_m
+    \ddot g_k` and :math:`p_0 = \ddot g_0` (module docstring): the scheme's balance at the
+    shifted instants then sees the same ground acceleration in both forms.
+
+    Examples:
+        From an accelerogram the load is the accelerogram itself:
+
+        >>> import numpy as np
+        >>> from substruct.analysis.transient.integrators import scheme
+        >>> s, x = scheme("generalized-alpha", 0.5), np.array([1.0, 3.0, -2.0, 0.5])
+        >>> p = load_acceleration(ground_history("acceleration", x, s, 0.1), s)
+        >>> bool(np.allclose(p[:, 0], x))
+        True
+    """
+    g = np.asarray(g, dtype=float)
+    a = g[:, 2]
+    p = np.empty_like(a)
+    p[0] = a[0]
+    for k in range(a.size - 1):
+        p[k + 1] = ((1 - s.alpha_m) * a[k + 1] + s.alpha_m * a[k] - s.alpha_f * p[k]) / (1 - s.alpha_f)
+    return np.column_stack([p, g[:, 0], g[:, 1]])
 
 
 def influence(K: sp.sparray, A: sp.csr_array, e: np.ndarray) -> np.ndarray:

@@ -108,7 +108,7 @@ def modal_run(phys: Physical, s: Scheme, h: float, n_steps: int, d0: np.ndarray,
     if mo is not None:  # q = r g + w: the effective loads -M r g'' - K r g - C r g'
         extra = [X @ mo.r for X in (M, K, phys.C) if X is not None]
         Bd = np.hstack([Bd, -np.column_stack(extra)])
-        loads = loads.widened(mo.g[:, [2, 0, 1][:len(extra)]])
+        loads = loads.widened(mo.load_columns(len(extra)))
         f = loads.f
         d0, v0 = d0 - mo.r * mo.g[0, 0], v0 - mo.r * mo.g[0, 1]
     qp = phys.qp if phys.qp is not None else np.zeros(M.shape[0])

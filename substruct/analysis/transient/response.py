@@ -53,7 +53,8 @@ from substruct.analysis.transient.integrators import (
 )
 from substruct.analysis.modes.krylov import eliminate
 from substruct.analysis.formulations.projection import constrained_acceleration
-from substruct.analysis.transient.base import BaseMotion, Motion, ground_history, influence
+from substruct.analysis.transient.base import (BaseMotion, Motion, ground_history, influence,
+                                               load_acceleration)
 from substruct.analysis.transient.effective import (
     constraint_correction,
     effective_solver,
@@ -232,7 +233,7 @@ def direct_run(phys: Physical, form: str, s: Scheme, h: float, n_steps: int, d0:
     extra = [np.ones((phys.f.shape[0], 1))]
     if mo is not None:  # q = T p + q_p + r g: the effective loads -M r g'' - C r g' - K r g
         cols += [sp.csc_array(-(T.T @ (X @ mo.r))[:, None]) for X in (M, K, C) if X is not None]
-        extra.append(mo.g[:, [2, 0, 1][:len(cols) - 2]])
+        extra.append(mo.load_columns(len(cols) - 2))
         d0, v0, a0 = (x - mo.r * mo.g[0, k] for k, x in enumerate((d0, v0, a0)))
     loads = phys.loads.widened(np.hstack(extra))
     ft = loads.f
@@ -341,11 +342,18 @@ def transient(M: sp.sparray | np.ndarray, C: sp.sparray | np.ndarray | None,
         if g.shape[0] != n_steps + 1 or e.shape != be.shape:
             raise ValueError(f"the ground motion has {g.shape[0]} samples and {e.size} rows "
                              f"for {n_steps + 1} instants and {be.size} constraint rows")
-        motion = Motion(e=e, g=g, r=influence(Ks, Ae, e))
+        motion = Motion(e=e, g=g, r=influence(Ks, Ae, e), load=load_acceleration(g, s))
         d0, v0 = d0 + motion.r * g[0, 0], v0 + motion.r * g[0, 1]
     bt = be if motion is None else be + motion.e * motion.g[0, 0]
     vt = 0.0 * be if motion is None else motion.e * motion.g[0, 1]
-    check_initial(Ae, d0, v0, bt, vt)
+    try:
+        check_initial(Ae, d0, v0, bt, vt)
+    except InitialStateError as err:
+        if motion is None:
+            raise
+        raise InitialStateError(f"{err}; with a moving ground the initial state is measured "
+                                f"from the pseudo-static position r g(0), r g'(0) (give it "
+                                f"relative to the ground)") from None
     qp = particular_solution(Ae, be) if np.any(be) else None
     qp = None if qp is None else np.asarray(qp).ravel()
     def force0(d: np.ndarray) -> np.ndarray:
