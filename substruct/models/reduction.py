@@ -26,6 +26,7 @@ import scipy.sparse as sp
 from substruct.linalg.factorize import Factorize, factorizer
 from substruct.linalg.lanczos import rayleigh_ritz, shift_invert_lanczos_deflated
 from substruct.linalg.massless import massless_count
+from substruct.linalg.scaling import rigid_modes
 from substruct.substructure import Substructure, as_csr
 
 __all__ = ["modal_truncation", "undamped_modes"]
@@ -90,8 +91,9 @@ def undamped_modes(sub: Substructure, n_modes: int, *, dense_limit: int = 2000,
             ``"superlu"``, ``"cholmod"``) or a callable ``A -> (b -> A^{-1} b)``.
 
     Returns:
-        ``(omega, Phi)``: circular frequencies ``(g,)`` (rad/s; round-off negative eigenvalues
-        of rigid-body modes are set to zero) and the ``n x g`` modal matrix.
+        ``(omega, Phi)``: circular frequencies ``(g,)`` (rad/s; the round-off eigenvalues of
+        rigid-body modes, :func:`substruct.linalg.scaling.rigid_modes`, of either sign, are
+        set to zero) and the ``n x g`` modal matrix.
 
     Raises:
         ValueError: bad ``n_modes``, massless coordinates, ``M`` not positive definite, or ``K``
@@ -117,7 +119,11 @@ def undamped_modes(sub: Substructure, n_modes: int, *, dense_limit: int = 2000,
     if lam[0] < -1e-8 * scale:
         raise ValueError(f"{sub.name}: K has a negative eigenvalue {lam[0]:.6g} "
                          f"(relative to {scale:.6g}); it must be positive semidefinite")
-    lam, Phi = _mass_normalized_sorted(np.maximum(lam, 0.0), Phi, M)
+    # a rigid-body mode's computed eigenvalue is round-off of either sign (2.7e-5 or -5.5e-5
+    # for a free steel plate, as the BLAS's threads fall): exactly 0, or the coupled model
+    # gets a soft spring in its place, and modal damping a dashpot on it
+    lam = np.where(rigid_modes(lam, Phi, K, M) | (lam < 0), 0.0, lam)
+    lam, Phi = _mass_normalized_sorted(lam, Phi, M)
     return np.sqrt(lam), Phi
 
 
