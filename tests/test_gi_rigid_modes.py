@@ -124,3 +124,43 @@ def test_chain_on_a_free_body_rigid_count(grounded, units, damp):
         assert res[m].eigenvalues.size == ref.size
         assert np.abs(res[m].eigenvalues - ref).max() <= 1e-9 * np.abs(ref).max(), m
     assert res["generalized-inverse"].spurious_reason.count(SPURIOUS_ZERO) == 2 * 3
+
+
+def modal_body_on_a_support(delta: float, mass: float, stiff: float,
+                            damp: float) -> tuple[np.ndarray, ...]:
+    """A supplier's modal model whose three rigid-body modes come with ``omega^2 = delta``
+    instead of 0 (M = I, K diagonal up to 4.2e9), one point of it (a combination of its first,
+    second and fourth modal coordinates) tied to a mass of 2 on a spring of 2e6 to the ground
+    and a dashpot.  Two motions keep ``K u = delta M u`` under the tie (the third coordinate,
+    and the first minus the second in the ratio that leaves the tie unmoved): two suspension
+    modes at ``sqrt(delta)`` exactly."""
+    k = np.array([delta, delta, delta, 3.5e7, 1.9e8, 2.6e8, 5.4e8, 1.0e9, 4.2e9])
+    n = k.size + 1
+    M = np.diag(np.r_[np.ones(k.size), 2.0]) * mass
+    K = np.diag(np.r_[k, 2e6]) * stiff
+    C = np.zeros((n, n))
+    C[-1, -1] = damp * np.sqrt(stiff * mass)
+    A = np.zeros((1, n))
+    A[0, [0, 1, 3, n - 1]] = [0.2, 0.13, -0.23, -0.5]
+    return M, C, K, A
+
+
+@pytest.mark.parametrize("delta", [2.7e-5, 1e-5, 1e-6])
+@pytest.mark.parametrize("units", [(1.0, 1.0), (1e-3, 1e6)])
+@pytest.mark.parametrize("damp", [0.0, 200.0])
+def test_suspension_modes_beside_the_spurious_zeros(delta, units, damp):
+    """All nine modes by every method (the generalized inverse dropped a suspension mode with
+    the dashpot); the two suspension modes at ``omega^2 = delta`` within what the dense
+    pencils resolve, ``10 eps s^2`` (``s^2`` = 4.2e9 in these units, so 3 % of ``delta =
+    2.7e-5``), the other roots the same by all three to 1e-9."""
+    mass, stiff = units
+    w2 = stiff / mass
+    M, C, K, A = modal_body_on_a_support(delta, mass, stiff, damp)
+    res = {m: coupled_modes(M, C, K, A, m) for m in METHODS}
+    for m, r in res.items():
+        assert r.omega.size == 9, (m, r.omega[:3], r.spurious_reason)
+        assert np.abs(r.omega[:2] ** 2 / w2 - delta).max() <= 10 * EPS * 4.2e9, (m, r.omega[:2])
+    ref = res["null-space"].eigenvalues[2:]
+    for m in ("generalized-inverse", "kkt"):
+        assert np.abs(res[m].eigenvalues[2:] - ref).max() <= 1e-9 * np.abs(ref).max(), m
+    assert res["generalized-inverse"].spurious_reason == [SPURIOUS_ZERO] * 2

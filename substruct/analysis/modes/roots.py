@@ -30,6 +30,7 @@ from substruct.vocabulary import GENERALIZED_INVERSE
 
 __all__ = [
     "RESIDUAL_TOL",
+    "MIXING_TOL",
     "REAL_TOL",
     "RIGID_SINGULAR_TOL",
     "RIGID_ENERGY_TOL",
@@ -51,6 +52,13 @@ __all__ = [
 #: computed vector has one of order ``eps`` times its condition number (``1e-6`` for a slow root
 #: next to the spurious zeros of eqs 30/34, which must not be dropped for it).
 RESIDUAL_TOL = 1e-3
+#: Eqs (30)/(34) only: a root ``lambda`` beside the spurious zeros has a vector mixed with
+#: theirs, to a part of about ``0.1 eps s^2 / |lambda|^2`` (``s`` of :func:`root_scale`;
+#: measured on a free plate's suspension modes of ``1e-14 s^2``, |A u| of 3e-3, and of
+#: ``2e-16 s^2``, 0.2).  A root kept by the counts is set aside only when its residual is
+#: above :data:`RESIDUAL_TOL` *and* above ``MIXING_TOL eps s^2 / |lambda|^2``: the mixing
+#: the pencil can explain, with a margin of 100.
+MIXING_TOL = 10.0
 #: A root with ``|Im lambda| <= REAL_TOL |lambda|`` is real (over- or critically damped).  Near
 #: critical damping the double root splits by about ``sqrt(eps)``; this tolerance lies above that
 #: noise so the three formulations report the same number of roots.
@@ -222,14 +230,18 @@ def classify_roots(lam: np.ndarray, U: np.ndarray, A: np.ndarray, M: np.ndarray,
     * the largest ``2n - n_finite`` roots (``n_finite`` plus ``2 rank(A)`` for eqs 30/34) are
       infinite roots: massless coordinates, Lagrange multipliers (higher-index infinite roots
       come out as large finite numbers, near ``eps^{-1/2}`` or ``eps^{-1/3}`` times the scale);
-    * of the finite roots the smallest ``n_zero`` (plus ``2 rank(A)`` for eqs 30/34) are zero
-      roots; the ``2 rank(A)`` of eqs (30)/(34) are artifacts whose vectors violate
-      ``A u = 0``; rigid-body modes (``K u = 0``, ``A u = 0``) are reported as physical zeros
-      with their vectors taken from ``null(K) & null(A)``, because a zero root shared with
-      spurious ones has no meaningful vector;
-    * the other finite roots must satisfy ``A u = 0`` (checked against :data:`RESIDUAL_TOL`; a
-      root that does not is set aside with its residual as the reason); ``refine(j,
-      lambda_j)``, given by each formulation, polishes them
+    * for eqs (30)/(34), the ``2 rank(A)`` artifacts are the roots whose vectors violate
+      ``A u = 0`` most, among the smallest ``n_zero + 2 rank(A)`` finite roots and any other
+      finite root above :data:`RESIDUAL_TOL` (a suspension mode softer than the round-off
+      split of the spurious zeros comes before them in magnitude);
+    * of the remaining finite roots the smallest ``n_zero`` are the zero roots: rigid-body
+      modes (``K u = 0``, ``A u = 0``) are reported as physical zeros with their vectors taken
+      from ``null(K) & null(A)``, because a zero root shared with spurious ones has no
+      meaningful vector;
+    * the other finite roots must satisfy ``A u = 0`` (checked against :data:`RESIDUAL_TOL`,
+      and for eqs 30/34 against the mixing with the spurious zeros' vectors that a root of
+      that size has, :data:`MIXING_TOL`; a root that does not is set aside with its residual
+      as the reason); ``refine(j, lambda_j)``, given by each formulation, polishes them
       (:func:`substruct.analysis.modes.pencil.rayleigh_root`) and may return a better vector.
 
     Reporting is that of :class:`~substruct.analysis.results.Modes`: one root of each complex
@@ -251,21 +263,29 @@ def classify_roots(lam: np.ndarray, U: np.ndarray, A: np.ndarray, M: np.ndarray,
     mag = np.where(np.isfinite(lam), np.abs(lam), np.inf)
     order = np.argsort(mag, kind="stable")
     n_fin = min(st.n_finite + extra, lam.size)
-    n_zero = min(st.n_zero + extra, n_fin)
-    zero_idx, rest_idx, inf_idx = order[:n_zero], order[n_zero:n_fin], order[n_fin:]
+    fin_idx, inf_idx = order[:n_fin], order[n_fin:]
 
     def residual(u: np.ndarray) -> float:
         if not A.size:
             return 0.0
         return float(np.linalg.norm(A @ u) / (An * max(float(np.linalg.norm(u)), 1e-300)))
 
+    res_of = {int(j): residual(U[:, j]) for j in fin_idx}
     spurious: list[complex] = []
     reasons: list[str] = []
-    # the 2 rank(A) artifacts of eqs 30/34 among the zero roots: those that violate A u = 0 most
-    zres = np.array([residual(U[:, j]) for j in zero_idx])
-    for j in zero_idx[np.argsort(-zres, kind="stable")][:extra]:
+    # the 2 rank(A) artifacts of eqs 30/34: of the smallest n_zero + extra roots and of any
+    # other finite root that violates A u = 0, those that violate it most.  A suspension mode
+    # softer than the round-off split of the spurious zeros (|lambda| of sqrt(eps) s) comes
+    # before them in magnitude; by magnitude alone it was taken for one and an artifact kept
+    window = [int(j) for j in fin_idx[:min(st.n_zero + extra, n_fin)]]
+    suspects = window + [j for j in res_of if j not in window and res_of[j] > RESIDUAL_TOL]
+    artifacts = sorted(suspects, key=lambda j: -res_of[j])[:extra]
+    for j in artifacts:
         spurious.append(complex(lam[j]))
         reasons.append(SPURIOUS_ZERO)
+    kept = np.array([j for j in fin_idx if int(j) not in artifacts], dtype=int)
+    rest_idx = kept[st.n_zero:]  # the smallest n_zero: the rigid-body modes, from their basis
+    mixing = MIXING_TOL * np.finfo(float).eps * root_scale(M, C, K) ** 2 if extra else 0.0
     phys_lam: list[complex] = [0j] * st.rigid.shape[1]
     phys_u: list[np.ndarray] = [st.rigid[:, j].astype(complex) for j in range(st.rigid.shape[1])]
     # undamped: a real pair of roots (omega^2 < 0, which no stiffness gives) with |omega^2| at
@@ -277,8 +297,8 @@ def classify_roots(lam: np.ndarray, U: np.ndarray, A: np.ndarray, M: np.ndarray,
     near_rigid: list[np.ndarray] = []
     for j in rest_idx:
         lj, u = complex(lam[j]), U[:, j]
-        r = residual(u)
-        if r > RESIDUAL_TOL:
+        r = res_of[int(j)]
+        if r > RESIDUAL_TOL and r * abs(lj) ** 2 > mixing:
             spurious.append(lj)
             reasons.append(f"violates the constraints: |A u|/(|A||u|) = {r:.2e}")
             continue
