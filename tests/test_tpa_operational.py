@@ -239,9 +239,6 @@ def test_pseudo_forces_from_a_case_file(tmp_path, capsys):
         assert code == 0
         assert res.tpa.method == "pseudo_forces" and res.tpa.interface == pts
         errs[name] = res.tpa.error
-    with capsys.disabled():
-        print("door: spanning max", errs["spanning"].max(), "one point median",
-              np.median(errs["one"]))
     assert errs["spanning"].max() < EXACT
     assert np.median(errs["one"]) > 1e-2
     capsys.readouterr()
