@@ -132,7 +132,8 @@ def test_the_zero_receptance_holds_at_any_scale_and_method(method, scale):
             if key in part:
                 part[key] = [[v * scale for v in row] for row in part[key]]
     case["analysis"]["frf"]["method"] = method
-    case["analysis"]["frf"]["check"] = ["generalized-inverse", "null-space", "kkt"]
+    case["analysis"]["frf"]["check"] = [m for m in ("generalized-inverse", "null-space", "kkt")
+                                        if m != method]
     frf = substruct.run_case(substruct.load_case(case)).frf
     assert not np.any(frf.H)
     assert max(frf.agreement.values()) <= 64 * 2 * EPS, frf.agreement
