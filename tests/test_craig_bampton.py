@@ -113,6 +113,24 @@ def test_fe_rods_tied_and_reduced():
     np.testing.assert_allclose(ref, exact, rtol=1e-5)
 
 
+def test_every_fixed_interface_mode_kept_is_the_full_model():
+    """With every fixed-interface mode kept (``n_modes`` = the interior's size) the basis
+    spans the whole space: the coupled frequencies are the unreduced model's to 1e-10 (a
+    few ulps of the eigenvalue solve), the ones above the lowest included."""
+    left = rod_fe("left", 1.0, 200.0, 1.0, 8, support="fixed-free", order=2)
+    right = rod_fe("right", 1.0, 200.0, 1.0, 8, support="free-free", order=2)
+    ties = [Connection(PointRef("left", 1.0), PointRef("right", 0.0))]
+    ref = null_space_modes(*_mka(assemble([left, right], ties)), 12).omega
+    bl, br = [left.row(1.0).indices[0]], [right.row(0.0).indices[0]]
+    rl = craig_bampton(left, bl, left.n_dof - 1)
+    rr = craig_bampton(right, br, right.n_dof - 1)
+    assert rl.n_dof == left.n_dof and rr.n_dof == right.n_dof
+    omega = null_space_modes(*_mka(assemble([rl, rr], ties)), 12).omega
+    np.testing.assert_allclose(omega, ref, rtol=1e-10)
+    with pytest.raises(ValueError, match="n_modes"):
+        craig_bampton(left, bl, left.n_dof)
+
+
 def _mka(asm):
     return asm.M, asm.K, asm.A
 

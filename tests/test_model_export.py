@@ -128,3 +128,42 @@ output: {matrices: true, pictures: false}
     assert code == 0, err
     code, out, err = run(capsys, "export", tmp_path / "rod.h5", "--format", "npz")
     assert_one_line_error(code, out, err, "is neither <grid>:<component> nor a mode")
+
+
+def test_units_travel_with_an_npz_export(tmp_path: Path, coupled: Path, capsys) -> None:
+    """A case that declares ``units`` writes them into its NPZ export (member ``units``); a
+    case reading the file back must declare the same units (commas and spaces aside): other
+    units, or none, are refused at the superelement's ``file`` rather than silently mixed.
+    The part read back in the same units is the part written: its matrices ``==``."""
+    text = (coupled / "case.yaml").read_text().replace("file: ", f"file: {coupled}/")
+    (tmp_path / "case.yaml").write_text('units: "N, mm, t, s"\n' + text)
+    code, _, err = run(capsys, "run", tmp_path / "case.yaml", "--out", tmp_path, "--force")
+    assert code == 0, err
+    code, _, err = run(capsys, "export", tmp_path / "coupled.h5", "--format", "npz",
+                       "--part", "b")
+    assert code == 0, err
+    with np.load(tmp_path / "coupled_b.npz") as z:
+        assert str(z["units"]) == "N, mm, t, s"
+    body = """substructures:
+  - {name: b, type: superelement, file: coupled_b.npz, M: M, K: K, C: C, dofs: {key: DOFS},
+     free: false}
+analysis: {modes: {count: 3}}
+output: {pictures: false}
+"""
+    for k, (units, problem) in enumerate((('"N,mm,t,s"', None),
+                           ('"N, m, kg, s"', "declares its units 'N, mm, t, s' (member "
+                            "'units'), not the case's 'N, m, kg, s'"),
+                           (None, "declares its units 'N, mm, t, s' (member 'units') and the "
+                            "case none"))):
+        head = "name: back\n" + (f"units: {units}\n" if units else "")
+        (tmp_path / "back.yaml").write_text(head + body)
+        code, out, err = run(capsys, "run", tmp_path / "back.yaml", "--out",
+                             tmp_path / f"back{k}", "--force")
+        if problem is None:
+            assert code == 0, err
+            spec = load_case(tmp_path / "back.yaml").substructures[0]
+            assert np.array_equal(spec.matrix("K"), _op4(coupled / "b.op4")["KAA"])
+        else:
+            assert_one_line_error(code, out, err, "substructures.b.file: coupled_b.npz",
+                                  problem)
+            assert not (tmp_path / f"back{k}" / "back.h5").exists()

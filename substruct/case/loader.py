@@ -352,7 +352,7 @@ def parse_case(text: str, source: str = "<string>", base_dir: str | Path = ".",
     set_paths = apply_overrides(data, overrides, source)
     _check_numbers(data, source, set_paths)
     context = {"parameters": _parameters(data.get("parameters")), "base_dir": Path(base_dir),
-               "source": source}
+               "source": source, "units": data.get("units")}
     try:
         case = Case.model_validate(data, context=context)
     except ValidationError as exc:

@@ -24,11 +24,11 @@ from substruct.case.errors import CaseError, FieldError
 from substruct.case.fields import MEMORY_LIMIT
 from substruct.case.numbers import entry_problem
 from substruct.machine import gigabytes
-from substruct.case.npz_files import read_npz
+from substruct.case.npz_files import npz_members, read_npz
 from substruct.case.op4 import Op4Error, read_op4
 
 __all__ = ["MatrixFile", "read_matrix_file", "read_abaqus_files", "MATRIX_SUFFIXES",
-           "BULK_SUFFIXES", "ABAQUS_SUFFIXES", "FULL_SUFFIXES"]
+           "UNITS_MEMBER", "BULK_SUFFIXES", "ABAQUS_SUFFIXES", "FULL_SUFFIXES"]
 
 #: Endings of the bulk data files read for DMIG entries.
 BULK_SUFFIXES = (".bdf", ".dat", ".nas", ".blk", ".pch")
@@ -38,6 +38,8 @@ FULL_SUFFIXES = (".full",)
 MATRIX_SUFFIXES = (".op4", ".npz") + BULK_SUFFIXES + FULL_SUFFIXES
 #: Endings of Abaqus matrix files (one matrix a file).
 ABAQUS_SUFFIXES = (".mtx",)
+#: The NPZ member that declares the units of the matrices (``substruct export`` writes it).
+UNITS_MEMBER = "units"
 
 
 @dataclass
@@ -52,6 +54,8 @@ class MatrixFile:
             strings).
         dofs: the ``(grid, component)`` of each coordinate, from DMIG entries or an Ansys
             FULL file; ``None`` otherwise.
+        units: the units an NPZ archive declares in its member ``units`` (one string, as
+            ``substruct export`` writes the case's), ``None`` if it declares none.
     """
 
     path: Path
@@ -59,6 +63,7 @@ class MatrixFile:
     nbytes: int
     members: dict[str, np.ndarray] = field(default_factory=dict)
     dofs: list[tuple[int, int]] | None = None
+    units: str | None = None
 
 
 def _path(file: str, base: Path, loc: Any, suffixes: Sequence[str]) -> Path:
@@ -117,9 +122,12 @@ def read_matrix_file(file: str, base: Path, loc: Any, names: Mapping[str, str],
             extra = {m: got[m.upper()].dense() for m in members}
             return MatrixFile(path, out, nbytes, extra)
         if suffix == ".npz":
-            arrays = read_npz(path, wanted, {n: np.float64 for n in names.values()})
+            declared = UNITS_MEMBER in npz_members(path) and UNITS_MEMBER not in wanted
+            arrays = read_npz(path, wanted + [UNITS_MEMBER] * declared,
+                              {n: np.float64 for n in names.values()})
+            units = _npz_units(path, arrays[UNITS_MEMBER]) if declared else None
             return MatrixFile(path, {k: arrays[n] for k, n in names.items()}, 8,
-                              {m: arrays[m] for m in members})
+                              {m: arrays[m] for m in members}, units=units)
     except (Op4Error, ValueError) as err:
         if isinstance(err, FieldError):
             raise
@@ -134,6 +142,13 @@ def read_matrix_file(file: str, base: Path, loc: Any, names: Mapping[str, str],
     except CaseError as err:
         raise FieldError(loc, str(err)) from None
     return MatrixFile(path, {k: mats[n] for k, n in names.items()}, nbytes, {}, dofs)
+
+
+def _npz_units(path: Path, value: np.ndarray) -> str:
+    if value.dtype.kind != "U" or value.ndim != 0 or len(str(value)) > 200:
+        raise ValueError(f"{path.name}: member {UNITS_MEMBER!r} (the units of the matrices) is "
+                         f"one string, got {value.dtype} {' x '.join(map(str, value.shape))}")
+    return str(value).strip()
 
 
 def _read_full(path: Path, file: str, loc: Any, names: Mapping[str, str],

@@ -107,8 +107,8 @@ class SuperelementSpec(StrictModel):
 
     # ----------------------------------------------------------------- reading
 
-    def _read(self, base: Path) -> tuple[dict[str, np.ndarray], int, Any,
-                                         list[tuple[int, int]] | None]:
+    def _read(self, base: Path, case_units: str
+              ) -> tuple[dict[str, np.ndarray], int, Any, list[tuple[int, int]] | None]:
         """The named matrices (dense float64), the bytes per number of the data, the DOF-map
         member if ``dofs: {key: ...}`` and the DOF map of DMIG entries."""
         from substruct.case.superelement_files import BULK_SUFFIXES, read_matrix_file
@@ -129,7 +129,23 @@ class SuperelementSpec(StrictModel):
             raise FieldError("dofs", "a DOF map is required for matrices from an OP4 or NPZ "
                              "file ({file: map.csv}, {key: <member>} or a list)")
         extra = got.members[member] if isinstance(member, str) else None
+        if got.units is not None:
+            self._check_units(got.path.name, got.units, case_units)
         return got.matrices, got.nbytes, extra, got.dofs
+
+    def _check_units(self, file: str, units: str, case_units: str) -> None:
+        """The units an NPZ file declares must be the case's (nothing converts them)."""
+        def norm(text: str) -> list[str]:
+            return [u.strip() for u in text.split(",")]
+
+        if not case_units.strip():
+            raise FieldError("file", f"{file} declares its units {units!r} (member 'units') "
+                             f"and the case none: declare the case's units: (the same) so that "
+                             f"they are not mixed", self.file)
+        if norm(units) != norm(case_units):
+            raise FieldError("file", f"{file} declares its units {units!r} (member 'units'), "
+                             f"not the case's {case_units!r}: nothing converts them (convert "
+                             f"the matrices, or use the units of the file)", self.file)
 
     def _read_abaqus(self, base: Path, names: dict[str, str]
                      ) -> tuple[dict[str, np.ndarray], int, Any, list[tuple[int, int]] | None]:
@@ -282,7 +298,8 @@ class SuperelementSpec(StrictModel):
                              "damping) and W4 (rad/s) go together: K4 enters as the viscous "
                              "damping K4 / W4 (Nastran's PARAM,W4)",
                              self.K4 if self.K4 is not None else self.W4)
-        mats, nbytes, member, dmig = self._read(base)
+        units = (info.context or {}).get("units")
+        mats, nbytes, member, dmig = self._read(base, units if isinstance(units, str) else "")
         self._check_matrices(mats, nbytes)
         n = mats["M"].shape[0]
         dofs = [(0, 0) if c == 0 else (g, c) for g, c in dmig] if dmig is not None else \

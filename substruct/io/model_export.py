@@ -15,8 +15,10 @@ The DOF map gives each coordinate's ``(grid, component)``: a label ``<grid>:<ux.
 digit 1-6) is that grid's component; ``mode:<k>`` or ``eta<k>`` a modal coordinate (component
 0, grid 0); any other label cannot be mapped and is refused, as is one grid component held by
 two parts of a coupled model.  Members: OP4 ``MAA``, ``KAA``, ``BAA`` (if damped), ``DOFS``
-(``n x 2``); NPZ ``M``, ``K``, ``C`` (if damped), ``DOFS`` and ``labels`` (the full labels).
-Read back by ``type: superelement`` with ``dofs: {key: DOFS}``.
+(``n x 2``); NPZ ``M``, ``K``, ``C`` (if damped), ``DOFS``, ``labels`` (the full labels) and,
+when the case declares its ``units``, ``units`` (that text), which a case reading the file back
+must declare alike (:mod:`substruct.case.superelements`).  Read back by ``type: superelement``
+with ``dofs: {key: DOFS}``.
 """
 
 from __future__ import annotations
@@ -29,12 +31,14 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
+from substruct.case.errors import CaseError
+from substruct.case.yaml_io import load_yaml
 from substruct.io.op4 import write_op4
 from substruct.io.paths import safe_stem
 from substruct.linalg.nullspace import master_slave
 from substruct.run.result import Result
 
-__all__ = ["ExportedModel", "exported_model", "dof_map", "model_path", "write_model",
+__all__ = ["ExportedModel", "exported_model", "case_units", "dof_map", "model_path", "write_model",
            "MODEL_FORMATS"]
 
 #: The formats a model is written in.
@@ -51,6 +55,7 @@ class ExportedModel:
     C: sp.csr_array
     labels: list[str]
     dofs: np.ndarray
+    units: str = ""
 
 
 def dof_map(labels: list[str]) -> np.ndarray:
@@ -80,6 +85,16 @@ def dof_map(labels: list[str]) -> np.ndarray:
     return np.array(out, dtype=np.int64).reshape(-1, 2)
 
 
+def case_units(case_yaml: str) -> str:
+    """The ``units`` a result's case file declares (``""`` if none or unreadable)."""
+    try:
+        data = load_yaml(case_yaml, "<case>")
+    except CaseError:
+        return ""
+    units = data.get("units") if isinstance(data, dict) else None
+    return units.strip() if isinstance(units, str) else ""
+
+
 def exported_model(result: Result, part: str | None = None) -> ExportedModel:
     """The part ``part`` of ``result`` (its block), or the coupled model (constraints
     eliminated) if ``None``.
@@ -103,7 +118,8 @@ def exported_model(result: Result, part: str | None = None) -> ExportedModel:
         labels = [lab.split(".", 1)[1] if lab.startswith(part + ".") else lab
                   for lab in model.dof_labels[blk]]
         return ExportedModel(sp.csr_array(M[blk][:, blk]), sp.csr_array(K[blk][:, blk]),
-                             sp.csr_array(C[blk][:, blk]), labels, dof_map(labels))
+                             sp.csr_array(C[blk][:, blk]), labels, dof_map(labels),
+                             case_units(result.case_yaml))
     if model.A.shape[0] and np.any(np.asarray(model.b) != 0):
         raise ValueError("the constraints have a non-zero right-hand side b: the coupled "
                          "model is not linear in its coordinates; export a part (--part)")
@@ -119,7 +135,7 @@ def exported_model(result: Result, part: str | None = None) -> ExportedModel:
 
         M, K, C = project(M), project(K), project(C)
     return ExportedModel(sp.csr_array(M), sp.csr_array(K), sp.csr_array(C), labels,
-                         dof_map(labels))
+                         dof_map(labels), case_units(result.case_yaml))
 
 
 def model_path(result: Result, out: str | os.PathLike, fmt: str, part: str | None) -> Path:
@@ -144,5 +160,7 @@ def write_model(model: ExportedModel, path: str | os.PathLike, fmt: str) -> None
               "labels": np.array(model.labels, dtype=str)}
     if damped:
         arrays["C"] = model.C.toarray()
+    if model.units:
+        arrays["units"] = np.array(model.units, dtype=str)
     with open(path, "wb") as fp:
         np.savez(fp, **arrays)

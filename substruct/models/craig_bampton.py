@@ -165,7 +165,8 @@ def craig_bampton(sub: Substructure, boundary_dofs: Sequence[int] | np.ndarray, 
             together hold the interior; ``M_ii`` positive definite).
         boundary_dofs: indices (or a boolean mask) of the boundary coordinates, e.g.
             :func:`substruct.assembly.interfaces.node_dofs` of an interface.
-        n_modes: number of fixed-interface normal modes kept (``0 <= n_modes < n_i``).
+        n_modes: number of fixed-interface normal modes kept (``0 <= n_modes <= n_i``; all of them: the
+            reduction is exact).
         factorization: of ``K_ii`` (:func:`substruct.linalg.factorize.factorizer`; SPD; ``"auto"``:
             CHOLMOD if scikit-sparse is installed, else SuperLU).
         dense_limit: interiors up to this size are solved densely.
@@ -187,9 +188,9 @@ def craig_bampton(sub: Substructure, boundary_dofs: Sequence[int] | np.ndarray, 
     interior = np.setdiff1d(np.arange(n), b)
     ni = interior.size
     g = int(n_modes)
-    if g != n_modes or not 0 <= g < ni:
+    if g != n_modes or not 0 <= g <= ni:
         raise ValueError(f"{sub.name}: n_modes = {n_modes!r}, but the interior has {ni} "
-                         f"coordinates (need 0 <= n_modes < {ni})")
+                         f"coordinates (need 0 <= n_modes <= {ni})")
     K, M = as_csr(sub.K), as_csr(sub.M)
     Kib = K[interior][:, b].toarray()
     solve, lam, Phi = fixed_interface_modes(sub.name, K, M, interior, g,

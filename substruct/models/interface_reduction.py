@@ -127,9 +127,9 @@ def reduce_part(sub: Substructure, interfaces: Sequence[InterfaceBasis], n_modes
     mask[b] = False
     interior = np.flatnonzero(mask)
     ni, g = interior.size, int(n_modes)
-    if g != n_modes or not 0 <= g < ni:
+    if g != n_modes or not 0 <= g <= ni:
         raise ValueError(f"{sub.name}: n_modes = {n_modes!r}, but the interior has {ni} "
-                         f"coordinates (need 0 <= n_modes < {ni})")
+                         f"coordinates (need 0 <= n_modes <= {ni})")
     r_each = [f.r for f in interfaces]
     Rb = np.zeros((b.size, sum(r_each)))
     row = col = 0
