@@ -51,7 +51,7 @@ from substruct.analysis.results import Modes
 from substruct.linalg.amls import AMLSModes, amls_modes
 from substruct.linalg.task_runner import TaskRunner
 from substruct.linalg.amls_tree import dissection_tree
-from substruct.linalg.scaling import massless_coordinates
+from substruct.linalg.massless import massless_count
 from substruct.linalg.system import Matrix
 
 __all__ = ["AMLS_CHECK", "AmlsOptions", "CHECKED_MODES", "amls_coupled_modes",
@@ -139,24 +139,18 @@ def _solve(K: sp.csr_array, M: sp.csr_array, count: int | None, opts: AmlsOption
     w = FIRST_GUESS * np.sqrt(stiffness_over_mass(K, M))
     # every block kept every one of its modes (the basis spans every finite mode) and every
     # reduced eigenpair is below the wanted frequency: a model with fewer than ``count`` finite
-    # modes has given them all (as the other solvers report it)
-    finite = K.shape[0] - int(np.count_nonzero(massless_coordinates(M)))
-    # a mass singular in a combination of coordinates (no zero row) hides its infinite modes
-    # from that count: beyond 1/eps of the stiffness's scale an eigenvalue is a mass at
-    # round-off of the stiffness's, an infinite one, so every finite mode has been given
+    # modes has given them all (as the other solvers report it).  The finite modes are the
+    # coordinates less the massless directions, combinations of coordinates included
+    # (:func:`~substruct.linalg.massless.massless_count`); beyond 1/eps of the stiffness's
+    # scale an eigenvalue is a mass at round-off of the stiffness's, an infinite one
+    finite = K.shape[0] - massless_count(M)
     infinite = stiffness_over_mass(K, M) / np.finfo(float).eps
-    before = -1
     for _ in range(MAX_PASSES):
         r = run(w)
         m = r.lam.size
         if m >= count or m == r.n_reduced >= finite or w * w >= infinite:
             return r, w
-        grow = max(2.0, 1.2 * (count / m) ** (1 / 3)) if m else 4.0
-        # every reduced pair below the wanted frequency twice with the same basis: the blocks
-        # have no mode between, most likely none at all (to the infinite level at once)
-        stuck = m == r.n_reduced == before
-        before = r.n_reduced if m == r.n_reduced else -1
-        w = max(w * grow, np.sqrt(infinite)) if stuck else w * grow
+        w *= max(2.0, 1.2 * (count / m) ** (1 / 3)) if m else 4.0
     raise AnalysisInputError(f"AMLS found fewer than {count} modes below {w:.3g} rad/s")
 
 
